@@ -1,0 +1,271 @@
+//! Real-time compensation of every sample by method 1 or method 2 (model.md section 6).
+//!
+//! Per sample the work is fixed: a finiteness check, one 3x3 product (method 1) or two
+//! (method 2), and the range flags. The temperature-dependent matrices are cached and
+//! recomputed only when the temperature has moved by more than the blob's update step.
+use crate::error::Error;
+use crate::model::{
+    add3, all_finite, apply, diagonal, invert, mat_mul, mat_sub, mat_vec, sub3, Coeffs, Mat3, Vec3,
+};
+use crate::real::Real;
+use crate::temperature::Calibration;
+
+/// Which temperature-error model method 2 subtracts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ErrorModel {
+    /// Formulas (6)/(7): `N(T0)(dK a + dU0)`.
+    Full,
+    /// Formula (8): only the diagonal of `N(T0)`.
+    Simplified,
+}
+
+/// The compensation method, chosen at run time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Method {
+    /// Method 1: coefficients at the current temperature, `a = N(T)(U - U0(T))`.
+    CorrectConstants,
+    /// Method 2: T0 constants, then subtract the temperature error.
+    CorrectResult(ErrorModel),
+}
+
+/// Status flags of one compensated sample (a bit set; 0 = all good).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status(u8);
+
+impl Status {
+    /// The temperature is outside the blob's valid range (extrapolated or clamped).
+    pub const TEMP_OUT_OF_RANGE: Status = Status(1);
+    /// The temperature was clamped to the valid range (blob option `clamp`).
+    pub const TEMP_CLAMPED: Status = Status(2);
+    /// The temperature input is NaN or infinite: the last good temperature was used
+    /// (T0 if there was none).
+    pub const TEMP_NON_FINITE: Status = Status(4);
+    /// A voltage input is NaN or infinite: the acceleration is NaN in all axes.
+    pub const INPUT_NON_FINITE: Status = Status(8);
+    /// K(T) was singular at the new temperature: the last good matrices were kept.
+    pub const SINGULAR: Status = Status(16);
+    /// The result overflowed (huge inputs): it is not finite.
+    pub const OUTPUT_NON_FINITE: Status = Status(32);
+
+    /// No flag set.
+    pub const fn is_ok(self) -> bool {
+        self.0 == 0
+    }
+    /// All flags of `other` are set.
+    pub const fn contains(self, other: Status) -> bool {
+        self.0 & other.0 == other.0
+    }
+    /// The raw bits.
+    pub const fn bits(self) -> u8 {
+        self.0
+    }
+    /// Set the flags of `other`.
+    #[inline]
+    pub fn insert(&mut self, other: Status) {
+        self.0 |= other.0;
+    }
+}
+
+/// One compensated sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Output<R> {
+    /// Specific force in g along the unit's axes (NaN when the input was not finite).
+    pub accel: Vec3<R>,
+    /// What happened on the way.
+    pub status: Status,
+}
+
+/// The compensator: borrows the calibration (in flash or a static), holds only the
+/// cached matrices (state of about 150 bytes in f32).
+#[derive(Clone, Debug)]
+pub struct Compensator<'a, R: Real = f32> {
+    cal: &'a Calibration<R>,
+    method: Method,
+    /// N(T0), U0(T0): the passport constants.
+    n0: Mat3<R>,
+    u00: Vec3<R>,
+    /// Temperature of the cached matrices (the raw input, before any clamping).
+    t_cached: R,
+    /// Method 1: N(T), U0(T). Method 2: `delta = m a_hat + e`.
+    n: Mat3<R>,
+    u0: Vec3<R>,
+    singular: bool,
+}
+
+impl<'a, R: Real> Compensator<'a, R> {
+    /// Build a compensator; the cache starts at T0.
+    pub fn new(cal: &'a Calibration<R>, method: Method) -> Result<Self, Error> {
+        cal.validate()?;
+        let c0 = Coeffs::from_array(&cal.at_t0());
+        let n0 = invert(&c0.k).ok_or(Error::Singular)?;
+        let mut s = Compensator {
+            cal,
+            method,
+            n0,
+            u00: c0.u0,
+            t_cached: cal.t0_c,
+            n: n0,
+            u0: c0.u0,
+            singular: false,
+        };
+        s.update(cal.t0_c);
+        Ok(s)
+    }
+
+    /// The method in use.
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
+    /// Switch method at run time (recomputes the cache at the cached temperature).
+    pub fn set_method(&mut self, method: Method) {
+        self.method = method;
+        self.update(self.t_cached);
+    }
+
+    /// The temperature the cached matrices were computed for.
+    pub fn cached_temperature(&self) -> R {
+        self.t_cached
+    }
+
+    fn effective_temperature(&self, t: R) -> R {
+        if !self.cal.clamp {
+            t
+        } else if t < self.cal.t_min_c {
+            self.cal.t_min_c
+        } else if t > self.cal.t_max_c {
+            self.cal.t_max_c
+        } else {
+            t
+        }
+    }
+
+    /// Recompute the cached matrices for temperature `t` (finite).
+    fn update(&mut self, t: R) {
+        let te = self.effective_temperature(t);
+        let c = Coeffs::from_array(&self.cal.model.eval(self.cal.t0_c, te));
+        self.t_cached = t;
+        match self.method {
+            Method::CorrectConstants => match invert(&c.k) {
+                Some(n) => {
+                    self.n = n;
+                    self.u0 = c.u0;
+                    self.singular = false;
+                }
+                None => self.singular = true,
+            },
+            Method::CorrectResult(em) => {
+                let dk = mat_sub(&c.k, &self.cal_k0());
+                let du0 = sub3(c.u0, self.u00);
+                // delta = N0 (dK a + dU0) = (N0 dK) a + N0 dU0; the simplified model
+                // uses diag(N0) in place of N0.
+                let left = match em {
+                    ErrorModel::Full => self.n0,
+                    ErrorModel::Simplified => {
+                        let [d0, d1, d2] = diagonal(&self.n0);
+                        let z = R::ZERO;
+                        [[d0, z, z], [z, d1, z], [z, z, d2]]
+                    }
+                };
+                self.n = mat_mul(&left, &dk);
+                self.u0 = mat_vec(&left, du0);
+                self.singular = false;
+            }
+        }
+    }
+
+    fn cal_k0(&self) -> Mat3<R> {
+        Coeffs::from_array(&self.cal.at_t0()).k
+    }
+
+    /// Compensate one sample: output voltages `u` at sensor temperature `temp_c`.
+    ///
+    /// Never panics. Non-finite voltages give NaN acceleration with
+    /// [`Status::INPUT_NON_FINITE`]; a non-finite temperature keeps the last good one
+    /// and sets [`Status::TEMP_NON_FINITE`].
+    pub fn compensate(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
+        let mut status = Status::default();
+        if !temp_c.is_finite() {
+            status.insert(Status::TEMP_NON_FINITE);
+        } else {
+            if (temp_c - self.t_cached).abs() > self.cal.update_step_c {
+                self.update(temp_c);
+            }
+            if temp_c < self.cal.t_min_c || temp_c > self.cal.t_max_c {
+                status.insert(Status::TEMP_OUT_OF_RANGE);
+                if self.cal.clamp {
+                    status.insert(Status::TEMP_CLAMPED);
+                }
+            }
+        }
+        if self.singular {
+            status.insert(Status::SINGULAR);
+        }
+        if !all_finite(&u) {
+            status.insert(Status::INPUT_NON_FINITE);
+            return Output {
+                accel: [R::NAN; 3],
+                status,
+            };
+        }
+        let accel = match self.method {
+            Method::CorrectConstants => apply(&self.n, u, self.u0),
+            Method::CorrectResult(_) => {
+                let a_hat = apply(&self.n0, u, self.u00);
+                sub3(a_hat, add3(mat_vec(&self.n, a_hat), self.u0))
+            }
+        };
+        if !all_finite(&accel) {
+            status.insert(Status::OUTPUT_NON_FINITE);
+        }
+        Output { accel, status }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blob::example_blob;
+
+    #[test]
+    fn method1_inverts_forward_model_at_calibration_temperatures() {
+        let blob = example_blob();
+        let cal: Calibration<f64> = blob.calibration.convert();
+        let mut comp = Compensator::new(&cal, Method::CorrectConstants).unwrap();
+        for t in [-40.0, -10.0, 20.0, 45.0, 70.0] {
+            let c = Coeffs::from_array(&cal.model.eval(cal.t0_c, t));
+            let a = [0.42261826, 0.0, 0.90630779];
+            let out = comp.compensate(c.forward(a), t);
+            assert!(out.status.is_ok());
+            for (x, y) in out.accel.iter().zip(a.iter()) {
+                assert!((x - y).abs() < 1e-12, "{t}: {x} vs {y}");
+            }
+        }
+    }
+
+    #[test]
+    fn cache_is_kept_within_step_and_flags_are_set() {
+        let blob = example_blob();
+        let mut comp = Compensator::new(&blob.calibration, Method::CorrectConstants).unwrap();
+        comp.compensate([0.0, 0.0, -0.55], 25.0);
+        assert_eq!(comp.cached_temperature(), 25.0);
+        comp.compensate([0.0, 0.0, -0.55], 25.05);
+        assert_eq!(comp.cached_temperature(), 25.0);
+        comp.compensate([0.0, 0.0, -0.55], 25.2);
+        assert_eq!(comp.cached_temperature(), 25.2);
+        let o = comp.compensate([0.0, 0.0, -0.55], 90.0);
+        assert!(o.status.contains(Status::TEMP_OUT_OF_RANGE));
+        assert!(!o.status.contains(Status::TEMP_CLAMPED));
+        let o = comp.compensate([0.0, f32::NAN, -0.55], f32::NAN);
+        assert!(o.status.contains(Status::INPUT_NON_FINITE));
+        assert!(o.status.contains(Status::TEMP_NON_FINITE));
+        assert!(o.accel.iter().all(|v| v.is_nan()));
+        assert_eq!(comp.cached_temperature(), 90.0);
+        let o = comp.compensate([3e38, 3e38, 3e38], 20.0);
+        assert!(o.status.contains(Status::OUTPUT_NON_FINITE));
+    }
+}

@@ -1,0 +1,41 @@
+//! Temperature compensation of a triaxial accelerometer, for the unit's MCU.
+//!
+//! The metrological model `U = K a + U0` (model.md, formula (1)), its temperature
+//! dependence (formulas (3), (4), (12)), the temperature error (formulas (5)-(8)) and
+//! the two compensation methods (section 6) live here once. They are generic over
+//! [`Real`], so the host tool evaluates the very same code in `f64` while the MCU runs
+//! it in `f32`.
+//!
+//! ```
+//! use firmware_core::{blob::Blob, compensate::{Compensator, Method}};
+//! # let bytes = firmware_core::blob::example_blob_bytes();
+//! // `bytes` is the coefficient blob flashed beside the firmware.
+//! let blob = Blob::decode(&bytes).expect("a valid blob");
+//! let mut comp = Compensator::new(&blob.calibration, Method::CorrectConstants)
+//!     .expect("K(T0) invertible");
+//! let out = comp.compensate([0.0045, -0.0044, -0.5521], 21.3);
+//! assert!(out.status.is_ok());
+//! assert!((out.accel[2] - 1.0).abs() < 0.01);
+//! ```
+#![cfg_attr(not(any(test, feature = "std")), no_std)]
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+// `clippy::arithmetic_side_effects` is denied in the modules with integer arithmetic
+// (`blob`, `crc`); in the generic float modules it would flag every `R + R`.
+
+pub mod blob;
+pub mod compensate;
+mod crc;
+pub mod error;
+pub mod model;
+pub mod real;
+pub mod temperature;
+
+pub use error::Error;
+pub use real::Real;

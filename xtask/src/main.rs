@@ -1,1 +1,146 @@
-fn main() {}
+//! Project tasks: `cargo xtask test | demo`. Each task runs every step, collects the
+//! failures and exits non-zero at the end if any step failed.
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default()
+}
+
+fn cargo() -> Command {
+    let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    c.current_dir(root());
+    c
+}
+
+struct Steps {
+    passed: Vec<String>,
+    failed: Vec<String>,
+}
+
+impl Steps {
+    fn new() -> Self {
+        Steps {
+            passed: Vec::new(),
+            failed: Vec::new(),
+        }
+    }
+
+    fn run(&mut self, name: &str, mut cmd: Command) {
+        eprintln!("\n==> {name}");
+        match cmd.status() {
+            Ok(s) if s.success() => self.passed.push(name.to_string()),
+            Ok(s) => {
+                eprintln!("xtask: step `{name}` failed ({s})");
+                self.failed.push(name.to_string());
+            }
+            Err(e) => {
+                eprintln!("xtask: step `{name}` could not start: {e}");
+                self.failed.push(name.to_string());
+            }
+        }
+    }
+
+    fn finish(self) -> ExitCode {
+        eprintln!();
+        for f in &self.failed {
+            eprintln!("FAILED: {f}");
+        }
+        println!(
+            "xtask: {} passed, {} failed",
+            self.passed.len(),
+            self.failed.len()
+        );
+        if self.failed.is_empty() {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn args(c: &mut Command, a: &[&str]) -> Command {
+    let mut n = std::mem::replace(c, cargo());
+    n.args(a);
+    n
+}
+
+fn test() -> ExitCode {
+    let mut s = Steps::new();
+    let mut c = cargo();
+    s.run("fmt", args(&mut c, &["fmt", "--all", "--", "--check"]));
+    s.run(
+        "clippy (workspace)",
+        args(
+            &mut c,
+            &[
+                "clippy",
+                "--workspace",
+                "--all-targets",
+                "--",
+                "-D",
+                "warnings",
+            ],
+        ),
+    );
+    s.run(
+        "clippy (firmware-core, no default features)",
+        args(
+            &mut c,
+            &[
+                "clippy",
+                "-p",
+                "firmware-core",
+                "--no-default-features",
+                "--",
+                "-D",
+                "warnings",
+            ],
+        ),
+    );
+    s.run(
+        "build firmware-core alone, no default features",
+        args(
+            &mut c,
+            &["build", "-p", "firmware-core", "--no-default-features"],
+        ),
+    );
+    s.run(
+        "tests (workspace)",
+        args(&mut c, &["test", "--workspace", "--release"]),
+    );
+    s.finish()
+}
+
+fn demo(rest: &[String]) -> ExitCode {
+    let mut c = cargo();
+    c.args([
+        "run",
+        "--quiet",
+        "--release",
+        "-p",
+        "host-fit",
+        "--",
+        "demo",
+    ])
+    .args(rest);
+    match c.status() {
+        Ok(s) if s.success() => ExitCode::SUCCESS,
+        _ => ExitCode::FAILURE,
+    }
+}
+
+fn main() -> ExitCode {
+    let argv: Vec<String> = std::env::args().skip(1).collect();
+    match argv.first().map(String::as_str) {
+        Some("test") => test(),
+        Some("demo") => demo(&argv[1..]),
+        _ => {
+            eprintln!("usage: cargo xtask <test | demo [args]>");
+            ExitCode::FAILURE
+        }
+    }
+}

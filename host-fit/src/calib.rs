@@ -1,0 +1,81 @@
+//! From a fitted model to a flashed blob: f32 tables, the f32-vs-f64 check, encoding.
+use crate::error::{HostError, Result};
+use firmware_core::blob::{Blob, MAX_BLOB_LEN, MAX_SERIAL_LEN};
+use firmware_core::compensate::{Compensator, ErrorModel, Method};
+use firmware_core::model::Coeffs;
+use firmware_core::temperature::Calibration;
+
+/// Documented bound: the firmware's f32 path (f32 tables, f32 arithmetic) stays within
+/// this many g of the f64 evaluation of the unrounded model, for |a| <= 1 g, inside the
+/// valid range and 10 C beyond it. Held by `check_f32` on every blob built.
+pub const F32_BOUND_G: f64 = 2e-6;
+
+/// Largest |a_f32 - a_f64| (g) over a grid of temperatures (valid range +- 10 C, 0.5 C
+/// steps) and 26 directions, for method 1 and method 2 (full).
+pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Result<f64> {
+    let mut c64 = cal64.clone();
+    c64.update_step_c = 0.0;
+    let mut c32 = cal32.clone();
+    c32.update_step_c = 0.0;
+    let mut dirs = Vec::new();
+    for x in -1i32..=1 {
+        for y in -1i32..=1 {
+            for z in -1i32..=1 {
+                let v = [f64::from(x), f64::from(y), f64::from(z)];
+                let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                if n > 0.0 {
+                    dirs.push(v.map(|c| c / n));
+                }
+            }
+        }
+    }
+    let mut worst: f64 = 0.0;
+    for method in [
+        Method::CorrectConstants,
+        Method::CorrectResult(ErrorModel::Full),
+    ] {
+        let mut m64 = Compensator::new(&c64, method).map_err(|e| HostError::msg(e.to_string()))?;
+        let mut m32 = Compensator::new(&c32, method).map_err(|e| HostError::msg(e.to_string()))?;
+        let mut t = cal64.t_min_c - 10.0;
+        while t <= cal64.t_max_c + 10.0 {
+            let t32 = t as f32;
+            let coeffs = Coeffs::from_array(&cal64.model.eval(cal64.t0_c, f64::from(t32)));
+            for a in &dirs {
+                let u = coeffs.forward(*a).map(|v| f64::from(v as f32));
+                let r64 = m64.compensate(u, f64::from(t32)).accel;
+                let r32 = m32.compensate(u.map(|v| v as f32), t32).accel;
+                for (x, y) in r64.iter().zip(r32.iter()) {
+                    worst = worst.max((x - f64::from(*y)).abs());
+                }
+            }
+            t += 0.5;
+        }
+    }
+    Ok(worst)
+}
+
+/// Build and encode the blob for `serial` from an f64 calibration; checks the f32 path
+/// against [`F32_BOUND_G`]. Returns the blob, its bytes and the measured departure.
+pub fn build_blob(serial: &str, cal64: &Calibration<f64>) -> Result<(Blob, Vec<u8>, f64)> {
+    let mut s = heapless::String::<MAX_SERIAL_LEN>::new();
+    s.push_str(serial).map_err(|_| {
+        HostError::msg(format!(
+            "unit serial `{serial}` is longer than {MAX_SERIAL_LEN} bytes"
+        ))
+    })?;
+    let blob = Blob {
+        serial: s,
+        calibration: cal64.convert(),
+    };
+    let mut buf = [0u8; MAX_BLOB_LEN];
+    let n = blob
+        .encode(&mut buf)
+        .map_err(|e| HostError::msg(format!("cannot build the blob: {e}")))?;
+    let dep = f32_departure(cal64, &blob.calibration)?;
+    if dep.is_nan() || dep > F32_BOUND_G {
+        return Err(HostError::msg(format!(
+            "the f32 firmware path departs from the f64 model by {dep:.3e} g, over the bound {F32_BOUND_G:.1e} g: the unit's K is too ill-conditioned for f32"
+        )));
+    }
+    Ok((blob, buf[..n].to_vec(), dep))
+}

@@ -1,0 +1,298 @@
+//! Identification of the 12 coefficients: in-dwell noise, observation windows, stops,
+//! and the per-stop least squares that reduces to the paper's formula (10).
+use crate::error::{HostError, Result};
+use crate::linalg::weighted_lsq;
+use crate::recording::Recording;
+use nalgebra::{DMatrix, DVector};
+
+/// Canonical index (model::COEFF_NAMES) of `K[i][j]`.
+pub const K_INDEX: [[usize; 3]; 3] = [[0, 3, 4], [5, 1, 6], [7, 8, 2]];
+/// Canonical index of `U0[i]`.
+pub const U0_INDEX: [usize; 3] = [9, 10, 11];
+/// Axis names.
+pub const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// Measurement noise per axis, from the scatter inside dwells.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Noise {
+    /// Standard deviation of one sample, output units.
+    pub sigma: [f64; 3],
+    /// Degrees of freedom behind the estimate (0: unknown, unit weights used).
+    pub dof: usize,
+}
+
+/// Estimate the per-sample noise from successive differences inside dwells: half the
+/// mean squared difference is the variance, and a slow drift (temperature settling)
+/// barely touches it, unlike the plain in-dwell variance.
+pub fn noise(rec: &Recording) -> Noise {
+    let mut ss = [0.0; 3];
+    let mut dof = 0usize;
+    for d in &rec.dwells {
+        for w in rec.dwell_rows(d).windows(2) {
+            if let [a, b] = w {
+                for (s, (x, y)) in ss.iter_mut().zip(a.u.iter().zip(b.u.iter())) {
+                    *s += (y - x) * (y - x);
+                }
+                dof += 1;
+            }
+        }
+    }
+    if dof == 0 {
+        return Noise {
+            sigma: [1.0; 3],
+            dof: 0,
+        };
+    }
+    Noise {
+        sigma: ss.map(|s| (s / (2.0 * dof as f64)).sqrt().max(1e-15)),
+        dof,
+    }
+}
+
+/// One observation for a static fit: the mean of a window of a dwell.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Obs {
+    /// Position index.
+    pub position: usize,
+    /// Specific force (unit vector, g).
+    pub a: [f64; 3],
+    /// Mean sensor temperature of the window, C.
+    pub temp_c: f64,
+    /// Mean outputs.
+    pub u: [f64; 3],
+    /// Samples in the window.
+    pub n: usize,
+    /// Index of the dwell it came from.
+    pub dwell: usize,
+    /// Mean time, s.
+    pub t_s: f64,
+}
+
+/// Split every selected dwell into windows whose temperature spans at most `span_c`, so
+/// a dwell through a ramp is used at its own temperatures, never as one mean.
+pub fn observations(rec: &Recording, select: &dyn Fn(usize) -> bool, span_c: f64) -> Vec<Obs> {
+    let mut out = Vec::new();
+    for (di, d) in rec.dwells.iter().enumerate() {
+        if !select(d.position) {
+            continue;
+        }
+        let a = rec.positions.vector(d.position);
+        let rows = rec.dwell_rows(d);
+        let mut start = 0;
+        while start < rows.len() {
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            let mut end = start;
+            while let Some(r) = rows.get(end) {
+                let (l, h) = (lo.min(r.temp_c), hi.max(r.temp_c));
+                if end > start && h - l > span_c {
+                    break;
+                }
+                (lo, hi) = (l, h);
+                end += 1;
+            }
+            let w = rows.get(start..end).unwrap_or(&[]);
+            let n = w.len() as f64;
+            let mut u = [0.0; 3];
+            let (mut t, mut ts) = (0.0, 0.0);
+            for r in w {
+                for (s, v) in u.iter_mut().zip(r.u) {
+                    *s += v / n;
+                }
+                t += r.temp_c / n;
+                ts += r.t_s / n;
+            }
+            out.push(Obs {
+                position: d.position,
+                a,
+                temp_c: t,
+                u,
+                n: w.len(),
+                dwell: di,
+                t_s: ts,
+            });
+            start = end;
+        }
+    }
+    out
+}
+
+/// A calibration stop: consecutive static dwells at one chamber temperature.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stop {
+    /// Dwell indices.
+    pub dwells: Vec<usize>,
+    /// Sample-weighted mean temperature, C.
+    pub temp_c: f64,
+}
+
+/// Group the selected static dwells (temperature span <= 0.5 C) into stops: a new stop
+/// starts when a dwell is more than `tol_c` from the first dwell of the current one, or
+/// after a dwell that drifted (a ramp).
+pub fn stops(rec: &Recording, select: &dyn Fn(usize) -> bool, tol_c: f64) -> Vec<Stop> {
+    let mut out: Vec<Stop> = Vec::new();
+    let mut cur: Vec<usize> = Vec::new();
+    let mut first_t = f64::NAN;
+    let close = |cur: &mut Vec<usize>, out: &mut Vec<Stop>| {
+        if !cur.is_empty() {
+            let (mut s, mut n) = (0.0, 0.0);
+            for &i in cur.iter() {
+                if let Some(d) = rec.dwells.get(i) {
+                    s += d.temp_c * d.len() as f64;
+                    n += d.len() as f64;
+                }
+            }
+            out.push(Stop {
+                dwells: std::mem::take(cur),
+                temp_c: s / n,
+            });
+        }
+    };
+    for (i, d) in rec.dwells.iter().enumerate() {
+        if d.temp_span_c > crate::recording::MAX_DWELL_DRIFT_C {
+            close(&mut cur, &mut out);
+            continue;
+        }
+        if !select(d.position) {
+            continue;
+        }
+        if !cur.is_empty() && (d.temp_c - first_t).abs() > tol_c {
+            close(&mut cur, &mut out);
+        }
+        if cur.is_empty() {
+            first_t = d.temp_c;
+        }
+        cur.push(i);
+    }
+    close(&mut cur, &mut out);
+    out
+}
+
+/// The coefficients identified at one stop.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StopCoeffs {
+    /// Stop temperature, C.
+    pub temp_c: f64,
+    /// The 12 coefficients (canonical order).
+    pub coeffs: [f64; 12],
+    /// Their standard errors from the in-dwell noise.
+    pub stderr: [f64; 12],
+    /// Per axis: the even-order (K2) term when the positions determine it.
+    pub k2: [Option<f64>; 3],
+    /// Names of the positions used.
+    pub positions: Vec<String>,
+}
+
+/// One axis's identified row: `(K row, U0, K2, stderr of K row and U0)`.
+pub type AxisFit = ([f64; 3], f64, Option<f64>, [f64; 4]);
+
+/// One axis's static least squares over observations `(a, u_i, weight)`: columns
+/// `a_x, a_y, a_z, 1` and, when the positions determine it, `a_i^2`. With TP1..TP6 and
+/// equal dwell lengths the solution is exactly the paper's formula (10): the even term
+/// makes the offset the mean of the four readings where the axis is level, and the
+/// scale and cross terms half-differences of opposite positions.
+pub fn axis_lsq(axis: usize, rows: &[([f64; 3], f64, f64)]) -> Option<AxisFit> {
+    let build = |with_k2: bool| {
+        let p = if with_k2 { 5 } else { 4 };
+        let mut a = DMatrix::zeros(rows.len(), p);
+        let mut b = DVector::zeros(rows.len());
+        let mut w = Vec::with_capacity(rows.len());
+        for (r, (v, u, wt)) in rows.iter().enumerate() {
+            a[(r, 0)] = v[0];
+            a[(r, 1)] = v[1];
+            a[(r, 2)] = v[2];
+            a[(r, 3)] = 1.0;
+            if with_k2 {
+                a[(r, 4)] = v[axis] * v[axis];
+            }
+            b[r] = *u;
+            w.push(*wt);
+        }
+        weighted_lsq(&a, &b, &w)
+    };
+    let (s, with_k2) = if rows.len() > 5 {
+        match build(true) {
+            Some(s) => (s, true),
+            None => (build(false)?, false),
+        }
+    } else {
+        (build(false)?, false)
+    };
+    let se = |j: usize| s.cov[(j, j)].max(0.0).sqrt();
+    Some((
+        [s.x[0], s.x[1], s.x[2]],
+        s.x[3],
+        with_k2.then(|| s.x[4]),
+        [se(0), se(1), se(2), se(3)],
+    ))
+}
+
+/// Identify the 12 coefficients at one stop from its dwell means.
+pub fn identify_stop(rec: &Recording, stop: &Stop, noise: &Noise) -> Result<StopCoeffs> {
+    let dwells: Vec<_> = stop
+        .dwells
+        .iter()
+        .filter_map(|&i| rec.dwells.get(i))
+        .collect();
+    let mut names: Vec<String> = dwells
+        .iter()
+        .map(|d| rec.positions.name(d.position).to_string())
+        .collect();
+    names.dedup();
+    let mut coeffs = [0.0; 12];
+    let mut stderr = [0.0; 12];
+    let mut k2 = [None; 3];
+    for axis in 0..3 {
+        let var = noise.sigma[axis] * noise.sigma[axis];
+        let rows: Vec<_> = dwells
+            .iter()
+            .map(|d| {
+                (
+                    rec.positions.vector(d.position),
+                    d.u_mean[axis],
+                    d.len() as f64 / var,
+                )
+            })
+            .collect();
+        let (k, u0, e2, se) = axis_lsq(axis, &rows).ok_or_else(|| {
+            HostError::in_file(
+                &rec.path,
+                format!(
+                    "at the stop at {:.2} C the positions present ({}) do not determine the coefficients: need at least 4 positions not in one plane (e.g. TP1..TP6)",
+                    stop.temp_c,
+                    names.join(", ")
+                ),
+            )
+        })?;
+        for j in 0..3 {
+            coeffs[K_INDEX[axis][j]] = k[j];
+            stderr[K_INDEX[axis][j]] = se[j];
+        }
+        coeffs[U0_INDEX[axis]] = u0;
+        stderr[U0_INDEX[axis]] = se[3];
+        k2[axis] = e2;
+    }
+    Ok(StopCoeffs {
+        temp_c: stop.temp_c,
+        coeffs,
+        stderr,
+        k2,
+        positions: names,
+    })
+}
+
+/// The paper's formula (10) from the six TP readings `u[m]` (m = TP1..TP6), for tests
+/// and for comparison with the paper.
+pub fn formula_10(u: &[[f64; 3]; 6]) -> [f64; 12] {
+    let [u1, u2, u3, u4, u5, u6] = *u;
+    let h = 0.5;
+    let mut c = [0.0; 12];
+    for i in 0..3 {
+        c[K_INDEX[i][0]] = h * (u6[i] - u5[i]);
+        c[K_INDEX[i][1]] = h * (u4[i] - u2[i]);
+        c[K_INDEX[i][2]] = h * (u1[i] - u3[i]);
+    }
+    c[9] = 0.25 * (u1[0] + u2[0] + u3[0] + u4[0]);
+    c[10] = 0.25 * (u1[1] + u3[1] + u5[1] + u6[1]);
+    c[11] = 0.25 * (u2[2] + u4[2] + u5[2] + u6[2]);
+    c
+}

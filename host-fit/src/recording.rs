@@ -1,0 +1,409 @@
+//! The recording reader, exactly per recording-format.md (version 1), and its dwells.
+use crate::error::{HostError, Result};
+use crate::positions::Positions;
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+
+/// One sample row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Row {
+    /// Time, s.
+    pub t_s: f64,
+    /// Index into [`Positions`], `None` for `-` (moving / unknown).
+    pub position: Option<usize>,
+    /// Unit temperature sensor, C.
+    pub temp_c: f64,
+    /// Chamber air / set point, C, when the column exists.
+    pub chamber_c: Option<f64>,
+    /// The three outputs (V, or the recording's `output_unit`).
+    pub u: [f64; 3],
+    /// 1-based line number in the file.
+    pub line: usize,
+}
+
+/// A maximal run of consecutive rows with the same (known) position.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dwell {
+    /// Position index.
+    pub position: usize,
+    /// Row range `[start, end)` in [`Recording::rows`].
+    pub start: usize,
+    /// End (exclusive).
+    pub end: usize,
+    /// Mean temperature, C.
+    pub temp_c: f64,
+    /// Temperature span (max - min), C.
+    pub temp_span_c: f64,
+    /// Mean outputs.
+    pub u_mean: [f64; 3],
+}
+
+impl Dwell {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.end.saturating_sub(self.start)
+    }
+    /// True when the dwell has no samples (never for a dwell built by the reader).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A parsed recording.
+#[derive(Debug, Clone)]
+pub struct Recording {
+    /// Where it was read from.
+    pub path: PathBuf,
+    /// All metadata (`# key=value`), known and unknown.
+    pub metadata: BTreeMap<String, String>,
+    /// Unit serial (`unit`), empty if absent.
+    pub unit: String,
+    /// Reference temperature (`t0_c`, default 20).
+    pub t0_c: f64,
+    /// Output unit (`output_unit`, default `V`).
+    pub output_unit: String,
+    /// The positions in use (built-in + positions file).
+    pub positions: Positions,
+    /// Samples in time order.
+    pub rows: Vec<Row>,
+    /// Dwells in time order.
+    pub dwells: Vec<Dwell>,
+    /// Warnings (unknown columns/metadata, short dwells, drifting dwells).
+    pub warnings: Vec<String>,
+}
+
+/// Dwells shorter than this are warned about.
+pub const MIN_DWELL_SAMPLES: usize = 3;
+/// A dwell whose temperature moves more than this (C) is warned about.
+pub const MAX_DWELL_DRIFT_C: f64 = 0.5;
+
+const KNOWN_META: [&str; 5] = ["unit", "t0_c", "g_local", "format", "output_unit"];
+const REQUIRED: [&str; 6] = ["t_s", "position", "temp_c", "ux_v", "uy_v", "uz_v"];
+
+fn parse_num(path: &Path, line: usize, field: &str, s: &str) -> Result<f64> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(HostError::at_field(
+            path,
+            line,
+            field,
+            format!("`{s}` is not a finite number"),
+        )),
+    }
+}
+
+impl Recording {
+    /// Read a recording file.
+    pub fn read(path: &Path, positions: Positions) -> Result<Recording> {
+        let f = std::fs::File::open(path).map_err(|e| HostError::io(path, &e))?;
+        Self::from_reader(path, f, positions)
+    }
+
+    /// Read a recording from any reader (`path` is used in messages).
+    pub fn from_reader(path: &Path, reader: impl Read, positions: Positions) -> Result<Recording> {
+        let mut rec = Recording {
+            path: path.to_path_buf(),
+            metadata: BTreeMap::new(),
+            unit: String::new(),
+            t0_c: 20.0,
+            output_unit: "V".into(),
+            positions,
+            rows: Vec::new(),
+            dwells: Vec::new(),
+            warnings: Vec::new(),
+        };
+        let mut reader = BufReader::new(reader);
+        let mut buf = Vec::new();
+        let mut line_no = 0usize;
+        let mut cols: Option<Columns> = None;
+        let mut last_t = f64::NEG_INFINITY;
+        loop {
+            buf.clear();
+            let n = reader
+                .read_until(b'\n', &mut buf)
+                .map_err(|e| HostError::io(path, &e))?;
+            if n == 0 {
+                break;
+            }
+            line_no += 1;
+            let mut text = std::str::from_utf8(&buf)
+                .map_err(|_| HostError::at(path, line_no, "is not valid UTF-8 text"))?;
+            if line_no == 1 {
+                text = text.strip_prefix('\u{feff}').unwrap_or(text);
+            }
+            let line = text.trim_end_matches(['\n', '\r']);
+            if line.trim().is_empty() {
+                continue;
+            }
+            if let Some(comment) = line.strip_prefix('#') {
+                rec.metadata_line(comment, line_no)?;
+                continue;
+            }
+            match &cols {
+                None => {
+                    cols = Some(Columns::from_header(
+                        path,
+                        line_no,
+                        line,
+                        &mut rec.warnings,
+                    )?)
+                }
+                Some(c) => {
+                    let row = c.parse_row(path, line_no, line, &rec.positions)?;
+                    if row.t_s < last_t {
+                        return Err(HostError::at_field(
+                            path,
+                            line_no,
+                            "t_s",
+                            format!("time goes backwards ({} after {})", row.t_s, last_t),
+                        ));
+                    }
+                    last_t = row.t_s;
+                    rec.rows.push(row);
+                }
+            }
+        }
+        if cols.is_none() {
+            return Err(HostError::in_file(
+                path,
+                "no header row: the file is empty or holds only comments (need t_s,position,temp_c,ux_v,uy_v,uz_v)",
+            ));
+        }
+        if rec.rows.is_empty() {
+            return Err(HostError::at(
+                path,
+                line_no,
+                "no data rows after the header",
+            ));
+        }
+        rec.build_dwells();
+        Ok(rec)
+    }
+
+    fn metadata_line(&mut self, comment: &str, line: usize) -> Result<()> {
+        let Some((k, v)) = comment.split_once('=') else {
+            return Ok(());
+        };
+        let (k, v) = (k.trim().to_string(), v.trim().to_string());
+        if k.is_empty() || k.contains(' ') {
+            return Ok(()); // prose that happens to contain '='
+        }
+        match k.as_str() {
+            "format" if v != "at-recording/1" => {
+                return Err(HostError::at_field(
+                    &self.path,
+                    line,
+                    "format",
+                    format!("`{v}` is not a supported format (expected at-recording/1)"),
+                ))
+            }
+            "t0_c" => self.t0_c = parse_num(&self.path, line, "t0_c", &v)?,
+            "unit" => self.unit = v.clone(),
+            "output_unit" => self.output_unit = v.clone(),
+            _ => {}
+        }
+        if !KNOWN_META.contains(&k.as_str()) {
+            self.warnings.push(format!(
+                "{}:{line}: unknown metadata key `{k}` kept ({k}={v})",
+                self.path.display()
+            ));
+        }
+        self.metadata.insert(k, v);
+        Ok(())
+    }
+
+    fn build_dwells(&mut self) {
+        let mut i = 0;
+        while i < self.rows.len() {
+            let Some(pos) = self.rows.get(i).and_then(|r| r.position) else {
+                i += 1;
+                continue;
+            };
+            let start = i;
+            while self.rows.get(i).is_some_and(|r| r.position == Some(pos)) {
+                i += 1;
+            }
+            let slice = self.rows.get(start..i).unwrap_or(&[]);
+            let n = slice.len() as f64;
+            let mut u = [0.0; 3];
+            let (mut lo, mut hi, mut tsum) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
+            for r in slice {
+                for (a, b) in u.iter_mut().zip(r.u) {
+                    *a += b;
+                }
+                lo = lo.min(r.temp_c);
+                hi = hi.max(r.temp_c);
+                tsum += r.temp_c;
+            }
+            let d = Dwell {
+                position: pos,
+                start,
+                end: i,
+                temp_c: tsum / n,
+                temp_span_c: hi - lo,
+                u_mean: u.map(|x| x / n),
+            };
+            let first = slice.first().map(|r| r.line).unwrap_or(0);
+            let last = slice.last().map(|r| r.line).unwrap_or(0);
+            let name = self.positions.name(pos).to_string();
+            if d.len() < MIN_DWELL_SAMPLES {
+                self.warnings.push(format!(
+                    "{}:{first}-{last}: dwell in {name} has {} samples (< {MIN_DWELL_SAMPLES}); used anyway",
+                    self.path.display(),
+                    d.len()
+                ));
+            }
+            if d.temp_span_c > MAX_DWELL_DRIFT_C {
+                self.warnings.push(format!(
+                    "{}:{first}-{last}: temperature drifts {:.2} C within the dwell in {name} (> {MAX_DWELL_DRIFT_C} C); used as windows at their own temperatures",
+                    self.path.display(),
+                    d.temp_span_c
+                ));
+            }
+            self.dwells.push(d);
+        }
+    }
+
+    /// Rows of a dwell.
+    pub fn dwell_rows(&self, d: &Dwell) -> &[Row] {
+        self.rows.get(d.start..d.end).unwrap_or(&[])
+    }
+
+    /// The line numbers a dwell spans.
+    pub fn dwell_lines(&self, d: &Dwell) -> (usize, usize) {
+        let rows = self.dwell_rows(d);
+        (
+            rows.first().map(|r| r.line).unwrap_or(0),
+            rows.last().map(|r| r.line).unwrap_or(0),
+        )
+    }
+}
+
+struct Columns {
+    n: usize,
+    t: usize,
+    pos: usize,
+    temp: usize,
+    u: [usize; 3],
+    chamber: Option<usize>,
+}
+
+impl Columns {
+    fn from_header(
+        path: &Path,
+        line: usize,
+        text: &str,
+        warnings: &mut Vec<String>,
+    ) -> Result<Columns> {
+        if !text.contains(',') && text.contains(';') {
+            return Err(HostError::at(
+                path,
+                line,
+                "the header is separated by semicolons; recordings are comma-separated (recording-format.md), convert the file",
+            ));
+        }
+        let names: Vec<String> = text
+            .split(',')
+            .map(|s| s.trim().to_ascii_lowercase())
+            .collect();
+        for (i, n) in names.iter().enumerate() {
+            if names.iter().take(i).any(|m| m == n) {
+                return Err(HostError::at_field(
+                    path,
+                    line,
+                    n,
+                    "column appears twice in the header",
+                ));
+            }
+        }
+        let find = |want: &str| -> Result<usize> {
+            names.iter().position(|n| n == want).ok_or_else(|| {
+                HostError::at_field(
+                    path,
+                    line,
+                    want,
+                    format!(
+                        "required column `{want}` missing from the header (have: {})",
+                        names.join(",")
+                    ),
+                )
+            })
+        };
+        let idx: Vec<usize> = REQUIRED.iter().map(|r| find(r)).collect::<Result<_>>()?;
+        let chamber = names.iter().position(|n| n == "chamber_c");
+        for n in &names {
+            if !REQUIRED.contains(&n.as_str()) && n != "chamber_c" {
+                warnings.push(format!(
+                    "{}:{line}: unknown column `{n}` ignored",
+                    path.display()
+                ));
+            }
+        }
+        let g = |k: usize| idx.get(k).copied().unwrap_or(0);
+        Ok(Columns {
+            n: names.len(),
+            t: g(0),
+            pos: g(1),
+            temp: g(2),
+            u: [g(3), g(4), g(5)],
+            chamber,
+        })
+    }
+
+    fn parse_row(
+        &self,
+        path: &Path,
+        line: usize,
+        text: &str,
+        positions: &Positions,
+    ) -> Result<Row> {
+        let fields: Vec<&str> = text.split(',').map(str::trim).collect();
+        if fields.len() != self.n {
+            let hint = if fields.len() > self.n {
+                " (a comma used as decimal separator? use a point: 0.5, not 0,5)"
+            } else {
+                ""
+            };
+            return Err(HostError::at(
+                path,
+                line,
+                format!(
+                    "has {} fields, the header has {}{hint}",
+                    fields.len(),
+                    self.n
+                ),
+            ));
+        }
+        let get = |k: usize| fields.get(k).copied().unwrap_or("");
+        let num = |k: usize, name: &str| parse_num(path, line, name, get(k));
+        let pname = get(self.pos);
+        let position = if pname == "-" {
+            None
+        } else {
+            Some(positions.index(pname).ok_or_else(|| {
+                HostError::at_field(
+                    path,
+                    line,
+                    "position",
+                    format!("unknown position name `{pname}` (not built in and not in a positions file)"),
+                )
+            })?)
+        };
+        Ok(Row {
+            t_s: num(self.t, "t_s")?,
+            position,
+            temp_c: num(self.temp, "temp_c")?,
+            chamber_c: match self.chamber {
+                Some(k) => Some(num(k, "chamber_c")?),
+                None => None,
+            },
+            u: [
+                num(self.u[0], "ux_v")?,
+                num(self.u[1], "uy_v")?,
+                num(self.u[2], "uz_v")?,
+            ],
+            line,
+        })
+    }
+}

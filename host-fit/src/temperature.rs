@@ -1,0 +1,505 @@
+//! Temperature models of the 12 coefficients: fitted jointly from all dwells, or from
+//! per-stop coefficient tables (the paper's route, formulas (11), (12)).
+use crate::error::{HostError, Result};
+use crate::identify::{Noise, Obs, K_INDEX, U0_INDEX};
+use crate::linalg::weighted_lsq;
+use firmware_core::model::COEFF_NAMES;
+use firmware_core::temperature::{Calibration, TempModel, MAX_BREAKPOINTS, MAX_POLY_ORDER};
+use nalgebra::{DMatrix, DVector};
+use serde_json::{json, Map, Value};
+use std::path::Path;
+
+/// Polynomial fits work in `dT / POLY_SCALE_C` for conditioning.
+const POLY_SCALE_C: f64 = 50.0;
+
+/// The shape of a temperature model.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Basis {
+    /// Polynomial of `dT = T - T0`.
+    Poly {
+        /// Order 1..=5.
+        order: usize,
+    },
+    /// Piecewise-linear through strictly increasing breakpoints (C).
+    Pwl {
+        /// Breakpoints.
+        breakpoints: Vec<f64>,
+    },
+}
+
+impl Basis {
+    /// Number of parameters per coefficient.
+    pub fn len(&self) -> usize {
+        match self {
+            Basis::Poly { order } => order + 1,
+            Basis::Pwl { breakpoints } => breakpoints.len(),
+        }
+    }
+
+    /// True for a basis with no functions (never valid).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Check the order / breakpoints fit a firmware table.
+    pub fn check(&self) -> Result<()> {
+        match self {
+            Basis::Poly { order } if (1..=MAX_POLY_ORDER).contains(order) => Ok(()),
+            Basis::Poly { order } => Err(HostError::msg(format!(
+                "polynomial order {order} is outside 1..={MAX_POLY_ORDER}"
+            ))),
+            Basis::Pwl { breakpoints } => {
+                if !(2..=MAX_BREAKPOINTS).contains(&breakpoints.len()) {
+                    return Err(HostError::msg(format!(
+                        "a piecewise-linear model needs 2..={MAX_BREAKPOINTS} breakpoints, got {}",
+                        breakpoints.len()
+                    )));
+                }
+                if breakpoints.windows(2).any(|w| w[0] >= w[1])
+                    || breakpoints.iter().any(|b| !b.is_finite())
+                {
+                    return Err(HostError::msg(format!(
+                        "breakpoints must be finite and strictly increasing: {breakpoints:?}"
+                    )));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The basis functions at temperature `t` (poly: powers of the scaled dT; pwl: hat
+    /// functions, the end segments extrapolated as the firmware does).
+    pub fn eval(&self, t0: f64, t: f64) -> Vec<f64> {
+        match self {
+            Basis::Poly { order } => {
+                let x = (t - t0) / POLY_SCALE_C;
+                (0..=*order).map(|k| x.powi(k as i32)).collect()
+            }
+            Basis::Pwl { breakpoints } => {
+                let n = breakpoints.len();
+                let mut out = vec![0.0; n];
+                // the last segment whose lower end is <= t (the first one below)
+                let s = breakpoints[1..n - 1].iter().filter(|b| t >= **b).count();
+                let (b0, b1) = (breakpoints[s], breakpoints[s + 1]);
+                let f = (t - b0) / (b1 - b0);
+                out[s] = 1.0 - f;
+                out[s + 1] = f;
+                out
+            }
+        }
+    }
+
+    /// Short text, e.g. `poly3` or `pwl[-40,20,70]`.
+    pub fn describe(&self) -> String {
+        match self {
+            Basis::Poly { order } => format!("poly{order}"),
+            Basis::Pwl { breakpoints } => format!(
+                "pwl[{}]",
+                breakpoints
+                    .iter()
+                    .map(|b| format!("{b}"))
+                    .collect::<Vec<_>>()
+                    .join(",")
+            ),
+        }
+    }
+}
+
+/// A fitted temperature model of the 12 coefficients, in f64.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelFit {
+    /// The basis.
+    pub basis: Basis,
+    /// Reference temperature, C.
+    pub t0_c: f64,
+    /// Per coefficient: absolute parameters (poly: coefficient of dT^k; pwl: value at
+    /// breakpoint k).
+    pub params: [Vec<f64>; 12],
+    /// Their standard errors.
+    pub stderr: [Vec<f64>; 12],
+    /// Per axis: the even-order term, temperature-independent, when determined.
+    pub k2: [Option<f64>; 3],
+    /// Temperature range of the data, C.
+    pub t_range: (f64, f64),
+}
+
+impl ModelFit {
+    /// The coefficients at temperature `t`.
+    pub fn eval(&self, t: f64) -> [f64; 12] {
+        self.calibration(0.0, false).model.eval(self.t0_c, t)
+    }
+
+    /// As a firmware calibration (f64 tables; `convert::<f32>()` for the blob). The
+    /// valid range is the data's, widened to the breakpoints of a pwl model.
+    pub fn calibration(&self, update_step_c: f64, clamp: bool) -> Calibration<f64> {
+        let (mut lo, mut hi) = self.t_range;
+        let model = match &self.basis {
+            Basis::Poly { order } => TempModel::Poly {
+                terms: (0..=*order)
+                    .map(|k| std::array::from_fn(|c| self.params[c][k]))
+                    .collect(),
+            },
+            Basis::Pwl { breakpoints } => {
+                lo = lo.min(breakpoints[0]);
+                hi = hi.max(breakpoints[breakpoints.len() - 1]);
+                TempModel::Pwl {
+                    breakpoints: breakpoints.iter().copied().collect(),
+                    values: (0..breakpoints.len())
+                        .map(|k| std::array::from_fn(|c| self.params[c][k]))
+                        .collect(),
+                }
+            }
+        };
+        if hi <= lo {
+            hi = lo + 1.0;
+        }
+        Calibration {
+            t0_c: self.t0_c,
+            t_min_c: lo,
+            t_max_c: hi,
+            clamp,
+            update_step_c,
+            model,
+        }
+    }
+}
+
+fn unscale(basis: &Basis, k: usize, v: f64) -> f64 {
+    match basis {
+        Basis::Poly { .. } => v / POLY_SCALE_C.powi(k as i32),
+        Basis::Pwl { .. } => v,
+    }
+}
+
+/// Distinct temperatures (clusters more than 2 C apart) in `temps`.
+pub fn temperature_clusters(temps: &[f64]) -> Vec<f64> {
+    let mut t: Vec<f64> = temps.to_vec();
+    t.sort_by(f64::total_cmp);
+    let mut out: Vec<Vec<f64>> = Vec::new();
+    for v in t {
+        match out.last_mut() {
+            Some(c) if v - c[c.len() - 1] <= 2.0 => c.push(v),
+            _ => out.push(vec![v]),
+        }
+    }
+    out.iter()
+        .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+        .collect()
+}
+
+fn check_coverage(basis: &Basis, temps: &[f64]) -> Result<()> {
+    let clusters = temperature_clusters(temps);
+    let list = clusters
+        .iter()
+        .map(|t| format!("{t:.1}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    match basis {
+        Basis::Poly { order } if clusters.len() < order + 1 => Err(HostError::msg(format!(
+            "a polynomial of order {order} needs data at {} or more temperatures; there are {} ({list} C)",
+            order + 1,
+            clusters.len()
+        ))),
+        Basis::Pwl { breakpoints } => {
+            for (j, b) in breakpoints.iter().enumerate() {
+                let lo = if j == 0 { f64::NEG_INFINITY } else { breakpoints[j - 1] };
+                let hi = breakpoints.get(j + 1).copied().unwrap_or(f64::INFINITY);
+                if !temps.iter().any(|t| *t > lo && *t < hi) {
+                    return Err(HostError::msg(format!(
+                        "no data between {lo} and {hi} C to determine the breakpoint at {b} C (data at {list} C)"
+                    )));
+                }
+            }
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Fit all observations jointly, each at its own temperature: for every axis the four
+/// temperature models of its K row and offset (and a constant even term where the
+/// positions determine it) in one weighted least squares.
+pub fn fit_joint(
+    obs: &[Obs],
+    noise: &Noise,
+    basis: &Basis,
+    t0: f64,
+    path: &Path,
+) -> Result<ModelFit> {
+    basis.check()?;
+    let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
+    check_coverage(basis, &temps).map_err(|e| HostError::in_file(path, e.message))?;
+    let nb = basis.len();
+    let phis: Vec<Vec<f64>> = obs.iter().map(|o| basis.eval(t0, o.temp_c)).collect();
+    let mut params: [Vec<f64>; 12] = Default::default();
+    let mut stderr: [Vec<f64>; 12] = Default::default();
+    let mut k2 = [None; 3];
+    for axis in 0..3 {
+        let var = noise.sigma[axis].powi(2);
+        let w: Vec<f64> = obs.iter().map(|o| o.n as f64 / var).collect();
+        let b = DVector::from_iterator(obs.len(), obs.iter().map(|o| o.u[axis]));
+        let build = |with_k2: bool| {
+            let p = 4 * nb + usize::from(with_k2);
+            let mut a = DMatrix::zeros(obs.len(), p);
+            for (r, (o, phi)) in obs.iter().zip(&phis).enumerate() {
+                let g = [o.a[0], o.a[1], o.a[2], 1.0];
+                for (j, gj) in g.iter().enumerate() {
+                    for (k, f) in phi.iter().enumerate() {
+                        a[(r, j * nb + k)] = gj * f;
+                    }
+                }
+                if with_k2 {
+                    a[(r, 4 * nb)] = o.a[axis] * o.a[axis];
+                }
+            }
+            weighted_lsq(&a, &b, &w)
+        };
+        let (s, with_k2) = match build(true) {
+            Some(s) => (s, true),
+            None => (
+                build(false).ok_or_else(|| rank_error(obs, path, basis))?,
+                false,
+            ),
+        };
+        let slots = [
+            K_INDEX[axis][0],
+            K_INDEX[axis][1],
+            K_INDEX[axis][2],
+            U0_INDEX[axis],
+        ];
+        for (j, c) in slots.iter().enumerate() {
+            params[*c] = (0..nb)
+                .map(|k| unscale(basis, k, s.x[j * nb + k]))
+                .collect();
+            stderr[*c] = (0..nb)
+                .map(|k| unscale(basis, k, s.cov[(j * nb + k, j * nb + k)].max(0.0).sqrt()))
+                .collect();
+        }
+        if with_k2 {
+            k2[axis] = Some(s.x[4 * nb]);
+        }
+    }
+    let lo = temps.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = temps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Ok(ModelFit {
+        basis: basis.clone(),
+        t0_c: t0,
+        params,
+        stderr,
+        k2,
+        t_range: (lo, hi),
+    })
+}
+
+fn rank_error(obs: &[Obs], path: &Path, basis: &Basis) -> HostError {
+    let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
+    let mut parts = Vec::new();
+    for c in temperature_clusters(&temps) {
+        let mut names: Vec<usize> = obs
+            .iter()
+            .filter(|o| (o.temp_c - c).abs() <= 2.0)
+            .map(|o| o.position)
+            .collect();
+        names.sort_unstable();
+        names.dedup();
+        parts.push(format!("{c:.1} C: {} positions", names.len()));
+    }
+    HostError::in_file(
+        path,
+        format!(
+            "the data do not determine the {} model of the 12 coefficients (need >= 4 positions not in one plane at enough temperatures); have {}",
+            basis.describe(),
+            parts.join("; ")
+        ),
+    )
+}
+
+/// One row of a coefficient table (COEFFS.csv / per-stop identification).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TableRow {
+    /// Temperature, C.
+    pub temp_c: f64,
+    /// The 12 coefficients.
+    pub coeffs: [f64; 12],
+    /// Their standard errors, when known (weights of the fit).
+    pub stderr: Option<[f64; 12]>,
+}
+
+/// Fit a temperature model to a coefficient table, coefficient by coefficient. Order n
+/// through exactly n+1 temperatures interpolates, which is the paper's Cramer solution
+/// (11); with more temperatures it is weighted least squares (weights 1/stderr^2 when
+/// known). A pwl through the table's own temperatures reproduces the table.
+pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> {
+    basis.check()?;
+    let temps: Vec<f64> = rows.iter().map(|r| r.temp_c).collect();
+    if rows.len() < basis.len() {
+        return Err(HostError::msg(format!(
+            "the {} model needs coefficients at {} or more temperatures; the table has {}",
+            basis.describe(),
+            basis.len(),
+            rows.len()
+        )));
+    }
+    check_coverage(basis, &temps)?;
+    let nb = basis.len();
+    let mut a = DMatrix::zeros(rows.len(), nb);
+    for (r, row) in rows.iter().enumerate() {
+        for (k, f) in basis.eval(t0, row.temp_c).iter().enumerate() {
+            a[(r, k)] = *f;
+        }
+    }
+    let mut params: [Vec<f64>; 12] = Default::default();
+    let mut stderr: [Vec<f64>; 12] = Default::default();
+    for c in 0..12 {
+        let b = DVector::from_iterator(rows.len(), rows.iter().map(|r| r.coeffs[c]));
+        let w: Vec<f64> = rows
+            .iter()
+            .map(|r| match r.stderr {
+                Some(se) if se.iter().all(|s| *s > 0.0) => 1.0 / (se[c] * se[c]),
+                _ => 1.0,
+            })
+            .collect();
+        let s = weighted_lsq(&a, &b, &w).ok_or_else(|| {
+            HostError::msg(format!(
+                "the table does not determine the {} model",
+                basis.describe()
+            ))
+        })?;
+        params[c] = (0..nb).map(|k| unscale(basis, k, s.x[k])).collect();
+        stderr[c] = (0..nb)
+            .map(|k| unscale(basis, k, s.cov[(k, k)].max(0.0).sqrt()))
+            .collect();
+    }
+    let lo = temps.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = temps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Ok(ModelFit {
+        basis: basis.clone(),
+        t0_c: t0,
+        params,
+        stderr,
+        k2: [None; 3],
+        t_range: (lo, hi),
+    })
+}
+
+/// Read a coefficient table in the format of paper-tables.csv.
+pub fn read_table(path: &Path) -> Result<Vec<TableRow>> {
+    let text = std::fs::read_to_string(path).map_err(|e| HostError::io(path, &e))?;
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    let mut cols: Option<Vec<usize>> = None;
+    let mut rows = Vec::new();
+    let want: Vec<&str> = std::iter::once("temp_c").chain(COEFF_NAMES).collect();
+    for (i, raw) in text.lines().enumerate() {
+        let line_no = i + 1;
+        let line = raw.trim_end_matches('\r').trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let f: Vec<&str> = line.split(',').map(str::trim).collect();
+        match &cols {
+            None => {
+                let lower: Vec<String> = f.iter().map(|s| s.to_ascii_lowercase()).collect();
+                let idx = want
+                    .iter()
+                    .map(|w| {
+                        lower.iter().position(|c| c == w).ok_or_else(|| {
+                            HostError::at_field(
+                                path,
+                                line_no,
+                                w,
+                                "required column missing from the header",
+                            )
+                        })
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                cols = Some(idx);
+            }
+            Some(idx) => {
+                let mut v = [0.0; 13];
+                for (slot, (k, name)) in v.iter_mut().zip(idx.iter().zip(&want)) {
+                    let s = f.get(*k).copied().unwrap_or("");
+                    *slot = s
+                        .parse::<f64>()
+                        .ok()
+                        .filter(|x| x.is_finite())
+                        .ok_or_else(|| {
+                            HostError::at_field(
+                                path,
+                                line_no,
+                                name,
+                                format!("`{s}` is not a finite number"),
+                            )
+                        })?;
+                }
+                rows.push(TableRow {
+                    temp_c: v[0],
+                    coeffs: std::array::from_fn(|c| v[c + 1]),
+                    stderr: None,
+                });
+            }
+        }
+    }
+    if rows.is_empty() {
+        return Err(HostError::in_file(path, "no coefficient rows"));
+    }
+    rows.sort_by(|a, b| a.temp_c.total_cmp(&b.temp_c));
+    Ok(rows)
+}
+
+/// The paper's name of a relative coefficient: beta_xx, gamma_xy, alpha_x.
+pub fn relative_name(c: usize) -> String {
+    let n = COEFF_NAMES[c];
+    if let Some(ax) = n.strip_prefix("u0") {
+        format!("alpha_{ax}")
+    } else {
+        let ij = &n[1..];
+        if ij.as_bytes()[0] == ij.as_bytes()[1] {
+            format!("beta_{ij}")
+        } else {
+            format!("gamma_{ij}")
+        }
+    }
+}
+
+/// The temp-fit JSON: intervals (pwl) or polynomial terms; with `relative`, K terms as
+/// the paper's beta/gamma relative to the value at T0, offsets always absolute (alpha).
+pub fn report_json(fit: &ModelFit, relative: bool) -> Value {
+    let at_t0 = fit.eval(fit.t0_c);
+    let name = |c: usize| {
+        if relative {
+            relative_name(c)
+        } else {
+            COEFF_NAMES[c].to_string()
+        }
+    };
+    let rel = |c: usize, v: f64| if relative && c < 9 { v / at_t0[c] } else { v };
+    let mut t0 = Map::new();
+    for (c, v) in at_t0.iter().enumerate() {
+        t0.insert(COEFF_NAMES[c].to_string(), json!(v));
+    }
+    match &fit.basis {
+        Basis::Pwl { breakpoints } => {
+            let intervals: Vec<Value> = breakpoints
+                .windows(2)
+                .enumerate()
+                .map(|(k, w)| {
+                    let mut m = Map::new();
+                    for c in 0..12 {
+                        let slope = (fit.params[c][k + 1] - fit.params[c][k]) / (w[1] - w[0]);
+                        m.insert(name(c), json!(rel(c, slope)));
+                    }
+                    json!({"from_c": w[0], "to_c": w[1], "coefficients": m})
+                })
+                .collect();
+            json!({"model": "pwl", "t0_c": fit.t0_c, "relative": relative, "at_t0": t0, "intervals": intervals})
+        }
+        Basis::Poly { order } => {
+            let mut m = Map::new();
+            for c in 0..12 {
+                let terms: Vec<f64> = (1..=*order).map(|k| rel(c, fit.params[c][k])).collect();
+                m.insert(name(c), json!(terms));
+            }
+            json!({"model": "poly", "order": order, "t0_c": fit.t0_c, "relative": relative, "at_t0": t0, "coefficients": m})
+        }
+    }
+}

@@ -1,0 +1,266 @@
+//! Every error and warning of recording-format.md: a tiny file that triggers it, and the
+//! message names the file, the line and the field; errors exit non-zero without a panic.
+use std::path::PathBuf;
+use std::process::Command;
+
+fn dir() -> PathBuf {
+    let d = std::env::temp_dir().join(format!("hf-cat-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn write(name: &str, text: &str) -> PathBuf {
+    let p = dir().join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_host-fit"))
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(
+        !err.contains("panicked") && !err.contains("RUST_BACKTRACE"),
+        "panic: {err}"
+    );
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        err,
+    )
+}
+
+const HEAD: &str = "t_s,position,temp_c,ux_v,uy_v,uz_v\n";
+
+/// Six static TP dwells of 3 samples at 20 C (identifiable).
+fn good_rows(t0: usize) -> String {
+    let u = [
+        ("TP1", "0.0045,-0.0044,-0.5521"),
+        ("TP2", "0.0050,0.5441,-0.0031"),
+        ("TP3", "0.0045,-0.0044,0.5451"),
+        ("TP4", "0.0040,-0.5530,-0.0038"),
+        ("TP5", "0.5551,0.0088,0.0112"),
+        ("TP6", "-0.5461,-0.0177,-0.0181"),
+    ];
+    let mut s = String::new();
+    let mut t = t0;
+    for (p, v) in u {
+        for k in 0..3 {
+            s.push_str(&format!("{t},{p},20.0{k},{v}\n"));
+            t += 1;
+        }
+    }
+    s
+}
+
+fn expect_error(name: &str, text: &str, line: usize, field: Option<&str>, words: &str) {
+    let p = write(name, text);
+    let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
+    assert_eq!(code, 1, "{name}: {err}");
+    assert!(
+        err.contains(&format!("{name}:{line}:")),
+        "{name}: no file:line {line} in `{err}`"
+    );
+    if let Some(f) = field {
+        assert!(
+            err.contains(&format!("field `{f}`")),
+            "{name}: no field {f} in `{err}`"
+        );
+    }
+    assert!(err.contains(words), "{name}: `{words}` not in `{err}`");
+}
+
+#[test]
+fn missing_required_column() {
+    expect_error(
+        "missing.csv",
+        "# unit=A\nt_s,position,temp_c,ux_v,uy_v\n0,TP1,20,0,0\n",
+        2,
+        Some("uz_v"),
+        "missing",
+    );
+}
+
+#[test]
+fn value_not_a_finite_number() {
+    for (i, bad) in ["abc", "NaN", "inf", ""].iter().enumerate() {
+        let text = format!("{HEAD}{}21,TP1,20.0,0.1,{bad},0.3\n", good_rows(0));
+        expect_error(
+            &format!("nan{i}.csv"),
+            &text,
+            20,
+            Some("uy_v"),
+            "not a finite number",
+        );
+    }
+}
+
+#[test]
+fn time_going_backwards() {
+    let text = format!("{HEAD}{}5,TP6,20.0,0.1,0.2,0.3\n", good_rows(0));
+    expect_error("back.csv", &text, 20, Some("t_s"), "backwards");
+}
+
+#[test]
+fn unknown_position_name() {
+    let text = format!("{HEAD}0,TP7,20,0.1,0.2,0.3\n");
+    expect_error(
+        "unknownpos.csv",
+        &text,
+        2,
+        Some("position"),
+        "unknown position name `TP7`",
+    );
+}
+
+#[test]
+fn positions_file_zero_vector_and_bad_number() {
+    let rec = write("rec-ok.csv", &format!("{HEAD}{}", good_rows(0)));
+    let pos = write("pos-zero.csv", "name,fx,fy,fz\nA,1,0,0\nB,0,0,0\n");
+    let (code, _, err) = run(&[
+        "identify",
+        rec.to_str().unwrap(),
+        "--positions",
+        pos.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("pos-zero.csv:3:") && err.contains("zero-length"),
+        "{err}"
+    );
+    let pos = write("pos-nan.csv", "name,fx,fy,fz\nA,1,x,0\n");
+    let (code, _, err) = run(&[
+        "identify",
+        rec.to_str().unwrap(),
+        "--positions",
+        pos.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("pos-nan.csv:2:") && err.contains("field `fy`"),
+        "{err}"
+    );
+}
+
+#[test]
+fn positions_file_normalises_with_a_warning_and_adds_names() {
+    let pos = write("pos-warn.csv", "name,fx,fy,fz\nSIDE,2,0,0\n");
+    let rec = write(
+        "rec-side.csv",
+        &format!("{HEAD}{}100,SIDE,20,0.1,0.2,0.3\n", good_rows(0)),
+    );
+    let (code, _, err) = run(&[
+        "identify",
+        rec.to_str().unwrap(),
+        "--positions",
+        pos.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("pos-warn.csv:2:") && err.contains("normalised"),
+        "{err}"
+    );
+}
+
+#[test]
+fn warnings_name_the_lines() {
+    // unknown column, unknown metadata, a short dwell, a drifting dwell
+    let mut text = String::from(
+        "# format=at-recording/1\n# operator=ann\nt_s,position,temp_c,ux_v,uy_v,uz_v,humidity\n",
+    );
+    for l in good_rows(0).lines() {
+        text.push_str(&format!("{l},40\n"));
+    }
+    text.push_str("30,TP1,20.0,0.0045,-0.0044,-0.5521,40\n"); // line 22: 1-sample dwell
+    text.push_str("31,-,20.0,0,0,0,40\n");
+    for k in 0..4 {
+        text.push_str(&format!(
+            "{},TP2,{},0.005,0.5441,-0.0031,40\n",
+            40 + k,
+            21.0 + 0.3 * k as f64
+        ));
+    }
+    let p = write("warn.csv", &text);
+    let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("warn.csv:2: unknown metadata key `operator`"),
+        "{err}"
+    );
+    assert!(
+        err.contains("warn.csv:3: unknown column `humidity`"),
+        "{err}"
+    );
+    assert!(
+        err.contains("warn.csv:22-22: dwell in TP1 has 1 samples"),
+        "{err}"
+    );
+    assert!(
+        err.contains("warn.csv:24-27: temperature drifts 0.90 C"),
+        "{err}"
+    );
+}
+
+#[test]
+fn not_enough_positions_says_which() {
+    let text: String = format!("{HEAD}{}", good_rows(0))
+        .lines()
+        .take(13)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let p = write("four.csv", &text);
+    let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("TP1, TP2, TP3, TP4") && err.contains("20.0"),
+        "{err}"
+    );
+}
+
+#[test]
+fn empty_header_only_semicolons_comma_decimals() {
+    let p = write("empty2.csv", "");
+    let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(err.contains("empty2.csv: no header row"), "{err}");
+    expect_error("header.csv", HEAD, 1, None, "no data rows");
+    expect_error(
+        "semi.csv",
+        "t_s;position;temp_c;ux_v;uy_v;uz_v\n0;TP1;20;0;0;0\n",
+        1,
+        None,
+        "semicolon",
+    );
+    expect_error(
+        "decimal.csv",
+        &format!("{HEAD}0,TP1,20,0,5,0.1,0.2\n"),
+        2,
+        None,
+        "decimal separator",
+    );
+}
+
+#[test]
+fn crlf_and_bom_are_read() {
+    let text = format!(
+        "\u{feff}# unit=CR\r\n{}",
+        format!("{HEAD}{}", good_rows(0)).replace('\n', "\r\n")
+    );
+    let p = write("crlf.csv", &text);
+    let (code, out, err) = run(&["identify", p.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("unit CR"), "{out}");
+}
+
+#[test]
+fn bad_format_metadata_is_an_error() {
+    expect_error(
+        "fmt.csv",
+        &format!("# format=at-recording/2\n{HEAD}"),
+        1,
+        Some("format"),
+        "not a supported format",
+    );
+}

@@ -1,0 +1,104 @@
+//! Golden test: the paper's Tables 1-2 -> Table 3 through `host-fit temp-fit`.
+use tests::{cli, repo};
+
+fn table3() -> Vec<(String, f64, f64)> {
+    let text = std::fs::read_to_string(repo().join("testdata/paper/paper-table3.csv")).unwrap();
+    text.lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("coefficient"))
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (
+                f[0].to_string(),
+                f[2].parse().unwrap(),
+                f[3].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn temp_fit_reproduces_table3_within_1e_3_relative() {
+    let tables = repo().join("testdata/paper/paper-tables.csv");
+    let (code, out, err) = cli(&[
+        "temp-fit",
+        tables.to_str().unwrap(),
+        "--model",
+        "pwl",
+        "--relative",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(j["model"], "pwl");
+    assert_eq!(j["t0_c"], 20.0);
+    let iv = j["intervals"].as_array().unwrap();
+    assert_eq!(iv.len(), 2);
+    assert_eq!(
+        (iv[0]["from_c"].as_f64(), iv[0]["to_c"].as_f64()),
+        (Some(-40.0), Some(20.0))
+    );
+    let rows = table3();
+    assert_eq!(rows.len(), 12);
+    let mut worst: f64 = 0.0;
+    for (name, low, high) in rows {
+        for (k, want) in [(0, low), (1, high)] {
+            let got = iv[k]["coefficients"][&name]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{name} missing"));
+            let rel = ((got - want) / want).abs();
+            worst = worst.max(rel);
+            assert!(
+                rel < 1e-3,
+                "{name} interval {k}: {got} vs paper {want} ({rel:.2e})"
+            );
+        }
+    }
+    println!("max relative difference against Table 3: {worst:.3e}");
+}
+
+#[test]
+fn poly_order_2_through_three_temperatures_interpolates_the_table() {
+    let tables = repo().join("testdata/paper/paper-tables.csv");
+    let (code, out, err) = cli(&[
+        "temp-fit",
+        tables.to_str().unwrap(),
+        "--model",
+        "poly",
+        "--order",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    // Cramer's solution of (11): c(T) = c(T0) + a1 dT + a2 dT^2 passes through all rows.
+    let text = std::fs::read_to_string(&tables).unwrap();
+    for line in text
+        .lines()
+        .filter(|l| l.starts_with('-') || l.starts_with('7'))
+    {
+        let f: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        let dt = f[0] - 20.0;
+        let c0 = j["at_t0"]["u0x"].as_f64().unwrap();
+        let a = j["coefficients"]["u0x"].as_array().unwrap();
+        let v = c0 + a[0].as_f64().unwrap() * dt + a[1].as_f64().unwrap() * dt * dt;
+        assert!((v - f[10]).abs() < 1e-12, "{v} vs {}", f[10]);
+    }
+}
+
+#[test]
+fn poly_order_3_with_three_temperatures_says_what_is_missing() {
+    let tables = repo().join("testdata/paper/paper-tables.csv");
+    let (code, _, err) = cli(&[
+        "temp-fit",
+        tables.to_str().unwrap(),
+        "--model",
+        "poly",
+        "--order",
+        "3",
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("4 or more temperatures") && err.contains("has 3"),
+        "{err}"
+    );
+}

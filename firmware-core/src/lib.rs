@@ -39,3 +39,7 @@ pub mod temperature;
 
 pub use error::Error;
 pub use real::Real;
+
+#[doc = include_str!("../../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -153,6 +153,35 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Simulate a unit's production temperature test (the digital twin).
+    Simulate {
+        /// TOML configuration (default: the built-in paper unit and profile).
+        config: Option<PathBuf>,
+        /// The recording to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Random seed (overrides the configuration's).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Also write the truth (all parameters) as JSON here.
+        #[arg(long)]
+        truth: Option<PathBuf>,
+        /// Overwrite existing outputs.
+        #[arg(long)]
+        force: bool,
+    },
+    /// The main job: simulate the paper's experiment, fit, compensate, summarise, report.
+    Demo {
+        /// Output folder.
+        #[arg(long, default_value = "demo-out")]
+        out: PathBuf,
+        /// Random seed of the simulation.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Overwrite the outputs of an earlier run.
+        #[arg(long)]
+        force: bool,
+    },
     /// Decode a blob and print it, or say why it is invalid.
     Inspect {
         /// The blob.
@@ -517,6 +546,59 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
                 }
                 Ok(())
             }
+        }
+        Command::Simulate {
+            config,
+            out: out_path,
+            seed,
+            truth,
+            force,
+        } => {
+            check_writable(&out_path, force)?;
+            if let Some(t) = &truth {
+                check_writable(t, force)?;
+            }
+            let mut cfg = match &config {
+                Some(p) => {
+                    let text = std::fs::read_to_string(p).map_err(|e| HostError::io(p, &e))?;
+                    crate::simulate::parse_config(p, &text)?
+                }
+                None => crate::simulate::SimConfig::default(),
+            };
+            if let Some(s) = seed {
+                cfg.seed = s;
+            }
+            let sim = crate::simulate::simulate(&cfg, |_| {})?;
+            write_atomic(&out_path, sim.csv.as_bytes(), force)?;
+            if let Some(t) = &truth {
+                let j = serde_json::to_string_pretty(&json!({"config": cfg})).unwrap_or_default();
+                write_atomic(t, j.as_bytes(), force)?;
+            }
+            w(
+                out,
+                format!(
+                    "wrote {} ({} rows, seed {})",
+                    out_path.display(),
+                    sim.rows,
+                    cfg.seed
+                ),
+            )
+        }
+        Command::Demo {
+            out: dir,
+            seed,
+            force,
+        } => {
+            let oc = crate::demo::run(&dir, seed, force)?;
+            w(out, crate::demo::table(&oc.rows))?;
+            w(
+                out,
+                format!("summary: {}", dir.join("summary.json").display()),
+            )?;
+            w(
+                out,
+                format!("report:  {}", dir.join("report.html").display()),
+            )
         }
         Command::Inspect { blob, json } => {
             let bytes = std::fs::read(&blob).map_err(|e| HostError::io(&blob, &e))?;

@@ -7,12 +7,15 @@
 
 pub mod calib;
 pub mod cli;
+pub mod demo;
 pub mod error;
 pub mod identify;
 pub mod io;
 pub mod linalg;
 pub mod positions;
 pub mod recording;
+pub mod report;
 pub mod rng;
+pub mod simulate;
 pub mod temperature;
 pub mod verify;

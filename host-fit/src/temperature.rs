@@ -121,6 +121,19 @@ pub struct ModelFit {
     pub k2: [Option<f64>; 3],
     /// Temperature range of the data, C.
     pub t_range: (f64, f64),
+    /// Weighted residual sum of squares (chi-square with 1/variance weights).
+    pub chi2: f64,
+    /// Observations (per axis, summed over axes).
+    pub n_obs: usize,
+    /// Parameters fitted (all axes).
+    pub n_params: usize,
+}
+
+impl ModelFit {
+    /// Bayesian information criterion of the fit.
+    pub fn bic(&self) -> f64 {
+        self.chi2 + self.n_params as f64 * (self.n_obs.max(1) as f64).ln()
+    }
 }
 
 impl ModelFit {
@@ -171,14 +184,15 @@ fn unscale(basis: &Basis, k: usize, v: f64) -> f64 {
     }
 }
 
-/// Distinct temperatures (clusters more than 2 C apart) in `temps`.
+/// Distinct temperatures in `temps`: sorted, a new cluster starts more than 2 C above
+/// the first value of the current one (so a ramp counts as many temperatures).
 pub fn temperature_clusters(temps: &[f64]) -> Vec<f64> {
     let mut t: Vec<f64> = temps.to_vec();
     t.sort_by(f64::total_cmp);
     let mut out: Vec<Vec<f64>> = Vec::new();
     for v in t {
         match out.last_mut() {
-            Some(c) if v - c[c.len() - 1] <= 2.0 => c.push(v),
+            Some(c) if v - c[0] <= 2.0 => c.push(v),
             _ => out.push(vec![v]),
         }
     }
@@ -234,6 +248,7 @@ pub fn fit_joint(
     let mut params: [Vec<f64>; 12] = Default::default();
     let mut stderr: [Vec<f64>; 12] = Default::default();
     let mut k2 = [None; 3];
+    let (mut chi2, mut n_params) = (0.0, 0);
     for axis in 0..3 {
         let var = noise.sigma[axis].powi(2);
         let w: Vec<f64> = obs.iter().map(|o| o.n as f64 / var).collect();
@@ -278,6 +293,8 @@ pub fn fit_joint(
         if with_k2 {
             k2[axis] = Some(s.x[4 * nb]);
         }
+        chi2 += s.wrss;
+        n_params += s.x.len();
     }
     let lo = temps.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = temps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -288,6 +305,37 @@ pub fn fit_joint(
         stderr,
         k2,
         t_range: (lo, hi),
+        chi2,
+        n_obs: 3 * obs.len(),
+        n_params,
+    })
+}
+
+/// The polynomial order (1..=`max_order`) with the lowest BIC in the joint fit, and
+/// its fit; orders the data cannot determine are skipped.
+pub fn choose_poly_order(
+    obs: &[Obs],
+    noise: &Noise,
+    t0: f64,
+    max_order: usize,
+    path: &Path,
+) -> Result<ModelFit> {
+    let mut best: Option<ModelFit> = None;
+    let mut first_err = None;
+    for order in 1..=max_order.min(MAX_POLY_ORDER) {
+        match fit_joint(obs, noise, &Basis::Poly { order }, t0, path) {
+            Ok(f) => {
+                if best.as_ref().is_none_or(|b| f.bic() < b.bic()) {
+                    best = Some(f);
+                }
+            }
+            Err(e) => {
+                first_err.get_or_insert(e);
+            }
+        }
+    }
+    best.ok_or_else(|| {
+        first_err.unwrap_or_else(|| HostError::msg("no polynomial order could be fitted"))
     })
 }
 
@@ -350,6 +398,7 @@ pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> 
     }
     let mut params: [Vec<f64>; 12] = Default::default();
     let mut stderr: [Vec<f64>; 12] = Default::default();
+    let mut chi2 = 0.0;
     for c in 0..12 {
         let b = DVector::from_iterator(rows.len(), rows.iter().map(|r| r.coeffs[c]));
         let w: Vec<f64> = rows
@@ -369,6 +418,7 @@ pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> 
         stderr[c] = (0..nb)
             .map(|k| unscale(basis, k, s.cov[(k, k)].max(0.0).sqrt()))
             .collect();
+        chi2 += s.wrss;
     }
     let lo = temps.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = temps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -379,6 +429,9 @@ pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> 
         stderr,
         k2: [None; 3],
         t_range: (lo, hi),
+        chi2,
+        n_obs: 12 * rows.len(),
+        n_params: 12 * nb,
     })
 }
 

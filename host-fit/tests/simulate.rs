@@ -1,0 +1,321 @@
+//! The digital twin: recordings parse with the project's reader, a clean recording gives
+//! back the truth within the standard errors, and each effect of physics-catalogue.md
+//! changes the data the way the catalogue says. Effects are isolated by simulating the
+//! same seed with and without them: the noise is identical, the difference is the effect.
+use host_fit::identify::{identify_stop, noise, stops};
+use host_fit::positions::Positions;
+use host_fit::recording::{Recording, Row};
+use host_fit::simulate::{
+    parse_config, simulate, Curvature, Effects, Fixture, PerAxis, SimConfig, Stop, TrueUnit, Warmup,
+};
+use std::path::Path;
+
+fn run(cfg: &SimConfig) -> Recording {
+    let sim = simulate(cfg, |_| {}).unwrap();
+    Recording::from_reader(
+        Path::new("sim.csv"),
+        sim.csv.as_bytes(),
+        Positions::default(),
+    )
+    .unwrap()
+}
+
+fn stop(t: f64, soak: f64, pos: &[&str]) -> Stop {
+    Stop {
+        temp_c: t,
+        soak_s: soak,
+        ramp_c_per_min: 1.0,
+        positions: Some(pos.iter().map(|s| s.to_string()).collect()),
+    }
+}
+
+/// A short profile: 20 -> 50 -> 20, TP and PP at each stop, no quantisation.
+fn base() -> SimConfig {
+    let mut c = SimConfig::default();
+    c.unit.resolution_v = 0.0;
+    c.sensor.quantum_c = 0.0;
+    let all = [
+        "TP1", "TP2", "TP3", "TP4", "TP5", "TP6", "PP1", "PP3", "PP5",
+    ];
+    c.schedule.stops = vec![
+        stop(20.0, 600.0, &all),
+        stop(50.0, 1200.0, &all),
+        stop(20.0, 1200.0, &all),
+    ];
+    c
+}
+
+fn with(effects: Effects) -> (Recording, Recording) {
+    let a = base();
+    let mut b = base();
+    b.effects = effects;
+    (run(&a), run(&b))
+}
+
+fn diffs(a: &Recording, b: &Recording) -> Vec<(Row, [f64; 3])> {
+    a.rows
+        .iter()
+        .zip(&b.rows)
+        .map(|(x, y)| (*x, [y.u[0] - x.u[0], y.u[1] - x.u[1], y.u[2] - x.u[2]]))
+        .collect()
+}
+
+fn rows_in(rec: &Recording, name: &str) -> Vec<usize> {
+    let p = rec.positions.index(name).unwrap();
+    (0..rec.rows.len())
+        .filter(|&i| rec.rows[i].position == Some(p))
+        .collect()
+}
+
+#[test]
+fn toml_config_with_every_effect_parses_and_the_recording_reads() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/sim/all-effects.toml"
+    ))
+    .unwrap();
+    let cfg = parse_config(Path::new("all-effects.toml"), &text).unwrap();
+    assert!(
+        cfg.effects.thermal_lag.is_some()
+            && cfg.effects.warmup_drift.is_some()
+            && cfg.effects.fixture_error.is_some()
+    );
+    let rec = run(&cfg);
+    assert!(rec.rows.len() > 1000);
+    assert!(rec.dwells.len() > 10);
+    let e = parse_config(Path::new("bad.toml"), "seed = 1\n[unit]\nnoise = 3\n").unwrap_err();
+    assert!(
+        e.to_string().contains("bad.toml:3") && e.to_string().contains("noise"),
+        "{e}"
+    );
+}
+
+#[test]
+fn same_seed_same_recording() {
+    let a = simulate(&base(), |_| {}).unwrap().csv;
+    let b = simulate(&base(), |_| {}).unwrap().csv;
+    assert_eq!(a, b);
+    let mut c = base();
+    c.seed = 2;
+    assert_ne!(a, simulate(&c, |_| {}).unwrap().csv);
+}
+
+#[test]
+fn clean_recording_identifies_the_truth_within_standard_errors() {
+    let mut cfg = base();
+    // long soaks: the case has settled, so the stop temperature is one temperature
+    for s in &mut cfg.schedule.stops {
+        s.soak_s = 9000.0;
+    }
+    let unit = TrueUnit::new(&cfg).unwrap();
+    let rec = run(&cfg);
+    let nz = noise(&rec);
+    assert!(
+        (nz.sigma[0] / 2e-5 - 1.0).abs() < 0.1,
+        "noise estimate {:?}",
+        nz.sigma
+    );
+    let tp = |p: usize| rec.positions.name(p).starts_with("TP");
+    let st = stops(&rec, &tp, 3.0);
+    assert_eq!(st.len(), 3);
+    let mut worst: f64 = 0.0;
+    for s in &st {
+        let got = identify_stop(&rec, s, &nz).unwrap();
+        let truth = unit.coeffs(s.temp_c);
+        for c in 0..12 {
+            let z = (got.coeffs[c] - truth[c]) / got.stderr[c];
+            worst = worst.max(z.abs());
+        }
+    }
+    assert!(worst < 4.5, "worst z-score {worst}");
+}
+
+#[test]
+fn nonlinearity_k2_grows_as_a_squared() {
+    let k2 = [3e-4, -2e-4, 1e-4];
+    let (a, b) = with(Effects {
+        nonlinearity_k2: Some(PerAxis { value: k2 }),
+        ..Default::default()
+    });
+    for (row, d) in diffs(&a, &b).iter().filter(|(r, _)| r.position.is_some()) {
+        let v = a.positions.vector(row.position.unwrap());
+        for i in 0..3 {
+            // the recording prints 8 decimals
+            assert!((d[i] - k2[i] * v[i] * v[i]).abs() < 1.1e-8, "{:?}", d);
+        }
+    }
+}
+
+#[test]
+fn scale_asymmetry_grows_as_abs_a() {
+    let delta = [2e-4, 0.0, -3e-4];
+    let (a, b) = with(Effects {
+        scale_asymmetry: Some(PerAxis { value: delta }),
+        ..Default::default()
+    });
+    let unit = TrueUnit::new(&base()).unwrap();
+    for (row, d) in diffs(&a, &b).iter().filter(|(r, _)| r.position.is_some()) {
+        let v = a.positions.vector(row.position.unwrap());
+        let c = unit.coeffs(row.temp_c);
+        for (i, kii) in [(0, c[0]), (2, c[2])] {
+            let want = kii * delta[i] * v[i].abs();
+            // the sensor reads the case with noise: coefficients at the true case temperature
+            assert!(
+                (d[i] - want).abs() < 1e-9 + want.abs() * 1e-3,
+                "{} vs {want}",
+                d[i]
+            );
+        }
+        assert_eq!(d[1], 0.0);
+    }
+}
+
+#[test]
+fn temp_rate_follows_dt_dt_not_the_temperature() {
+    let r = [0.05, -0.03, 0.0];
+    let (a, b) = with(Effects {
+        temp_rate: Some(PerAxis { value: r }),
+        ..Default::default()
+    });
+    let d = diffs(&a, &b);
+    // heating and cooling ramps: the bias has the sign of dT/dt; settled: ~0
+    let chamber: Vec<f64> = a.rows.iter().map(|r| r.chamber_c.unwrap()).collect();
+    let mut heating = 0;
+    let mut cooling = 0;
+    for k in 60..d.len() {
+        if chamber[k] - chamber[k - 60] > 0.5 {
+            assert!(d[k].1[0] > 0.0 && d[k].1[1] < 0.0);
+            heating += 1;
+        } else if chamber[k] - chamber[k - 60] < -0.5 {
+            assert!(d[k].1[0] < 0.0 && d[k].1[1] > 0.0);
+            cooling += 1;
+        }
+    }
+    assert!(heating > 100 && cooling > 100);
+    assert!(
+        d.last().unwrap().1[0].abs() < 0.05 * 1e-3,
+        "settled at the end: {:?}",
+        d.last().unwrap().1
+    );
+}
+
+#[test]
+fn thermal_lag_shows_after_temperature_changes_and_vanishes_when_settled() {
+    let mut plain = base();
+    plain.schedule.stops[2].soak_s = 20_000.0;
+    let mut lagged = plain.clone();
+    lagged.effects.thermal_lag = Some(PerAxis {
+        value: [900.0, 900.0, 900.0],
+    });
+    let (a, b) = (run(&plain), run(&lagged));
+    let d = diffs(&a, &b);
+    let (k_max, max) = d
+        .iter()
+        .enumerate()
+        .map(|(k, x)| (k, x.1[0].abs()))
+        .fold((0, 0.0), |m, x| if x.1 > m.1 { x } else { m });
+    assert!(max > 1e-4, "lag visible during the change: {max}");
+    // the largest effect is while the temperature moves, and it has settled at the end
+    // ... right after a temperature change: the sensor moved in the 15 minutes before
+    let moved = a.rows[k_max].temp_c - a.rows[k_max.saturating_sub(900)].temp_c;
+    assert!(
+        moved.abs() > 1.0,
+        "largest lag error right after a change ({moved} C in 15 min)"
+    );
+    let end = d.last().unwrap().1[0].abs();
+    assert!(end < 0.01 * max, "{end} vs {max}");
+}
+
+#[test]
+fn hysteresis_splits_heating_from_cooling() {
+    let h = [4e-4, 0.0, -2e-4];
+    let (a, b) = with(Effects {
+        hysteresis: Some(PerAxis { value: h }),
+        ..Default::default()
+    });
+    let d = diffs(&a, &b);
+    // first 20 C stop: initial direction heating (+h/2); final 20 C stop reached by cooling (-h/2)
+    let tp2 = rows_in(&a, "TP2");
+    let (first, last) = (tp2[0], *tp2.last().unwrap());
+    assert!((d[first].1[0] - h[0] / 2.0).abs() < 1.1e-8);
+    assert!((d[last].1[0] + h[0] / 2.0).abs() < 1.1e-8);
+    assert!((d[last].1[2] - h[2] / -2.0).abs() < 1.1e-8);
+}
+
+#[test]
+fn fixture_error_moves_one_position_only() {
+    let (a, b) = with(Effects {
+        fixture_error: Some(Fixture {
+            position: "TP3".into(),
+            angles_rad: [2e-3, -1e-3],
+        }),
+        ..Default::default()
+    });
+    let tp3 = a.positions.index("TP3").unwrap();
+    for (row, d) in diffs(&a, &b) {
+        let moved = d.iter().any(|x| x.abs() > 1e-12);
+        match row.position {
+            Some(p) if p == tp3 => assert!(moved),
+            Some(_) => assert!(!moved),
+            None => {}
+        }
+    }
+}
+
+#[test]
+fn warmup_drift_decays_with_time_since_power_on() {
+    let (a, b) = with(Effects {
+        warmup_drift: Some(Warmup {
+            d_v: [1e-3, -5e-4, 0.0],
+            tau_s: 600.0,
+        }),
+        ..Default::default()
+    });
+    for (row, d) in diffs(&a, &b) {
+        let want = 1e-3 * (-row.t_s / 600.0).exp();
+        assert!(
+            (d[0] - want).abs() < 1.1e-8,
+            "t {} {} vs {want}",
+            row.t_s,
+            d[0]
+        );
+    }
+}
+
+#[test]
+fn temp_curvature_changes_the_coefficients_between_stops() {
+    let mut cfg = base();
+    cfg.effects.temp_curvature = Some(Curvature {
+        u0_v: [5e-4, 0.0, 0.0],
+        k_rel: [0.0; 3],
+        period_c: 60.0,
+    });
+    let plain = TrueUnit::new(&base()).unwrap();
+    let curved = TrueUnit::new(&cfg).unwrap();
+    assert_eq!(plain.coeffs(20.0), curved.coeffs(20.0));
+    let dt = curved.coeffs(35.0)[9] - plain.coeffs(35.0)[9];
+    assert!(
+        (dt - 5e-4).abs() < 1e-12,
+        "a quarter period above T0: full amplitude ({dt})"
+    );
+}
+
+#[test]
+fn the_paper_unit_passes_through_the_papers_tables() {
+    let unit = TrueUnit::new(&SimConfig::default()).unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../testdata/paper/paper-tables.csv"
+    ))
+    .unwrap();
+    for line in text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("temp"))
+    {
+        let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        let c = unit.coeffs(v[0]);
+        for k in 0..12 {
+            assert!((c[k] - v[k + 1]).abs() < 1e-12, "{} C coeff {k}", v[0]);
+        }
+    }
+}

@@ -47,7 +47,7 @@ impl Status {
     pub const INPUT_NON_FINITE: Status = Status(8);
     /// K(T) was singular at the new temperature: the last good matrices were kept.
     pub const SINGULAR: Status = Status(16);
-    /// The result overflowed (huge inputs): it is not finite.
+    /// The result overflowed (huge inputs): the acceleration is NaN in all axes.
     pub const OUTPUT_NON_FINITE: Status = Status(32);
 
     /// No flag set.
@@ -93,7 +93,12 @@ pub struct Compensator<'a, R: Real = f32> {
     /// Method 1: N(T), U0(T). Method 2: `delta = m a_hat + e`.
     n: Mat3<R>,
     u0: Vec3<R>,
-    singular: bool,
+    /// Copies of the calibration's range and step: the per-sample path reads only self.
+    t_min: R,
+    t_max: R,
+    step: R,
+    /// Flags of the cached temperature (range, clamping, SINGULAR), set at each update.
+    sticky: Status,
 }
 
 impl<'a, R: Real> Compensator<'a, R> {
@@ -110,7 +115,10 @@ impl<'a, R: Real> Compensator<'a, R> {
             t_cached: cal.t0_c,
             n: n0,
             u0: c0.u0,
-            singular: false,
+            t_min: cal.t_min_c,
+            t_max: cal.t_max_c,
+            step: cal.update_step_c,
+            sticky: Status::default(),
         };
         s.update(cal.t0_c);
         Ok(s)
@@ -144,7 +152,21 @@ impl<'a, R: Real> Compensator<'a, R> {
         }
     }
 
-    /// Recompute the cached matrices for temperature `t` (finite).
+    /// The temperature moved by more than the step, or is not finite: recompute the
+    /// cache (finite) or keep it (NaN, infinite); the status of this sample.
+    #[cold]
+    #[inline(never)]
+    fn refresh(&mut self, t: R) -> Status {
+        if !t.is_finite() {
+            let mut s = self.sticky;
+            s.insert(Status::TEMP_NON_FINITE);
+            return s;
+        }
+        self.update(t);
+        self.sticky
+    }
+
+    /// Recompute the cached matrices and range flags for a finite temperature `t`.
     fn update(&mut self, t: R) {
         let te = self.effective_temperature(t);
         let c = Coeffs::from_array(&self.cal.model.eval(self.cal.t0_c, te));
@@ -154,9 +176,9 @@ impl<'a, R: Real> Compensator<'a, R> {
                 Some(n) => {
                     self.n = n;
                     self.u0 = c.u0;
-                    self.singular = false;
+                    self.sticky = Status::default();
                 }
-                None => self.singular = true,
+                None => self.sticky = Status::SINGULAR,
             },
             Method::CorrectResult(em) => {
                 let dk = mat_sub(&c.k, &self.cal_k0());
@@ -173,8 +195,15 @@ impl<'a, R: Real> Compensator<'a, R> {
                 };
                 self.n = mat_mul(&left, &dk);
                 self.u0 = mat_vec(&left, du0);
-                self.singular = false;
+                self.sticky = Status::default();
             }
+        }
+        if t < self.t_min || t > self.t_max {
+            self.sticky.insert(if self.cal.clamp {
+                Status(Status::TEMP_OUT_OF_RANGE.0 | Status::TEMP_CLAMPED.0)
+            } else {
+                Status::TEMP_OUT_OF_RANGE
+            });
         }
     }
 
@@ -187,30 +216,19 @@ impl<'a, R: Real> Compensator<'a, R> {
     /// Never panics. Non-finite voltages give NaN acceleration with
     /// [`Status::INPUT_NON_FINITE`]; a non-finite temperature keeps the last good one
     /// and sets [`Status::TEMP_NON_FINITE`].
+    ///
+    /// The fast path has two data-independent tests: the cache step (NaN fails every
+    /// comparison, so `!(|T - Tc| <= step)` also catches a non-finite temperature) and
+    /// one finiteness test of the output sum (any non-finite input makes the output
+    /// non-finite); the rare cases are classified off the fast path. The range flags
+    /// are those of the cached temperature, evaluated at each update: within one
+    /// update step of a range limit they may lag by up to that step.
+    // The negated comparisons are the point: they are true for NaN.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     pub fn compensate(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
-        let mut status = Status::default();
-        if !temp_c.is_finite() {
-            status.insert(Status::TEMP_NON_FINITE);
-        } else {
-            if (temp_c - self.t_cached).abs() > self.cal.update_step_c {
-                self.update(temp_c);
-            }
-            if temp_c < self.cal.t_min_c || temp_c > self.cal.t_max_c {
-                status.insert(Status::TEMP_OUT_OF_RANGE);
-                if self.cal.clamp {
-                    status.insert(Status::TEMP_CLAMPED);
-                }
-            }
-        }
-        if self.singular {
-            status.insert(Status::SINGULAR);
-        }
-        if !all_finite(&u) {
-            status.insert(Status::INPUT_NON_FINITE);
-            return Output {
-                accel: [R::NAN; 3],
-                status,
-            };
+        let mut status = self.sticky;
+        if !((temp_c - self.t_cached).abs() <= self.step) {
+            status = self.refresh(temp_c);
         }
         let accel = match self.method {
             Method::CorrectConstants => apply(&self.n, u, self.u0),
@@ -219,10 +237,28 @@ impl<'a, R: Real> Compensator<'a, R> {
                 sub3(a_hat, add3(mat_vec(&self.n, a_hat), self.u0))
             }
         };
-        if !all_finite(&accel) {
-            status.insert(Status::OUTPUT_NON_FINITE);
+        let [a0, a1, a2] = accel;
+        if !(a0 + a1 + a2).is_finite() {
+            status.insert(non_finite_status(&u));
+            return Output {
+                accel: [R::NAN; 3],
+                status,
+            };
         }
         Output { accel, status }
+    }
+}
+
+/// Why the output is not finite: a non-finite input, or an overflow. Either way the
+/// acceleration is one canonical NaN (the sign and payload of a NaN made by the FPU
+/// differ between targets: ARM's default NaN is positive, x86's negative).
+#[cold]
+#[inline(never)]
+fn non_finite_status<R: Real>(u: &Vec3<R>) -> Status {
+    if all_finite(u) {
+        Status::OUTPUT_NON_FINITE
+    } else {
+        Status::INPUT_NON_FINITE
     }
 }
 
@@ -267,5 +303,6 @@ mod tests {
         assert_eq!(comp.cached_temperature(), 90.0);
         let o = comp.compensate([3e38, 3e38, 3e38], 20.0);
         assert!(o.status.contains(Status::OUTPUT_NON_FINITE));
+        assert!(o.accel.iter().all(|v| v.to_bits() == f32::NAN.to_bits()));
     }
 }

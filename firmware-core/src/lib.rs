@@ -17,7 +17,8 @@
 //! assert!(out.status.is_ok());
 //! assert!((out.accel[2] - 1.0).abs() < 0.01);
 //! ```
-#![cfg_attr(not(any(test, feature = "std")), no_std)]
+// no_std always (the error type uses core::error::Error); unit tests use std.
+#![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 #![deny(

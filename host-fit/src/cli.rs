@@ -182,6 +182,28 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Firmware test vectors: write an input table, or print the expected f32 results
+    /// (as bits) of the firmware-core code on it (used by `cargo xtask embedded`).
+    FwVectors {
+        /// The blob.
+        #[arg(long)]
+        blob: PathBuf,
+        /// Write a new input table here (else read --inputs).
+        #[arg(long)]
+        make_inputs: Option<PathBuf>,
+        /// The input table to evaluate.
+        #[arg(long)]
+        inputs: Option<PathBuf>,
+        /// Random samples in a new table (edge cases are appended).
+        #[arg(long, default_value_t = 64)]
+        n: usize,
+        /// Seed of a new table.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Overwrite an existing table.
+        #[arg(long)]
+        force: bool,
+    },
     /// Decode a blob and print it, or say why it is invalid.
     Inspect {
         /// The blob.
@@ -599,6 +621,49 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
                 out,
                 format!("report:  {}", dir.join("report.html").display()),
             )
+        }
+        Command::FwVectors {
+            blob,
+            make_inputs,
+            inputs,
+            n,
+            seed,
+            force,
+        } => {
+            let bytes = std::fs::read(&blob).map_err(|e| HostError::io(&blob, &e))?;
+            let b = Blob::decode(&bytes)
+                .map_err(|e| HostError::in_file(&blob, format!("invalid blob: {e}")))?;
+            if let Some(p) = make_inputs {
+                let table = crate::fwcheck::make_inputs(&b, n, seed);
+                write_atomic(&p, &table, force)?;
+                return w(
+                    out,
+                    format!("wrote {} ({} inputs)", p.display(), table.len() / 16),
+                );
+            }
+            let p =
+                inputs.ok_or_else(|| HostError::msg("give --inputs FILE or --make-inputs FILE"))?;
+            let table = std::fs::read(&p).map_err(|e| HostError::io(&p, &e))?;
+            if table.len() % 16 != 0 {
+                return Err(HostError::in_file(
+                    &p,
+                    "length is not a multiple of 16 bytes (ux uy uz temp, f32)",
+                ));
+            }
+            let (lines, worst) = crate::fwcheck::expected(&b, &table);
+            for l in lines {
+                w(out, l)?;
+            }
+            w(
+                out,
+                format!("f64-departure {worst:e} bound {F32_BOUND_G:e}"),
+            )?;
+            if !crate::fwcheck::within_bound(worst) {
+                return Err(HostError::msg(format!(
+                    "f32 departs from f64 by {worst:e} g, over the bound {F32_BOUND_G:e}"
+                )));
+            }
+            Ok(())
         }
         Command::Inspect { blob, json } => {
             let bytes = std::fs::read(&blob).map_err(|e| HostError::io(&blob, &e))?;

@@ -9,6 +9,7 @@ pub mod calib;
 pub mod cli;
 pub mod demo;
 pub mod error;
+pub mod fwcheck;
 pub mod identify;
 pub mod io;
 pub mod linalg;

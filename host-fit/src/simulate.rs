@@ -543,7 +543,7 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
     };
     let mut rng = Rng::new(cfg.seed);
     let mut csv = String::new();
-    let _ = writeln!(csv, "# format=at-recording/1\n# unit={}\n# t0_c={}\n# g_local=9.80665\n# simulated=host-fit simulate, seed {}", cfg.unit.serial, cfg.t0_c, cfg.seed);
+    let _ = writeln!(csv, "# format=at-recording/1\n# unit={}\n# t0_c={}\n# g_local=9.80665\n# simulated by host-fit simulate, seed {}", cfg.unit.serial, cfg.t0_c, cfg.seed);
     csv.push_str("t_s,position,temp_c,chamber_c,ux_v,uy_v,uz_v\n");
     let fall = |tau: f64| {
         if tau > 0.0 {

@@ -1,24 +1,31 @@
 //! Project tasks: `cargo xtask test | demo`. Each task runs every step, collects the
 //! failures and exits non-zero at the end if any step failed.
+mod embedded;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
-fn root() -> PathBuf {
+/// The repository root.
+pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .map(Path::to_path_buf)
         .unwrap_or_default()
 }
 
-fn cargo() -> Command {
+/// `cargo` in the repository root.
+pub fn cargo() -> Command {
     let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
     c.current_dir(root());
     c
 }
 
-struct Steps {
-    passed: Vec<String>,
-    failed: Vec<String>,
+/// The steps of a task: what passed and what failed.
+pub struct Steps {
+    /// Names of the steps that passed.
+    pub passed: Vec<String>,
+    /// Names of the steps that failed.
+    pub failed: Vec<String>,
 }
 
 impl Steps {
@@ -112,6 +119,8 @@ fn test() -> ExitCode {
         "tests (workspace)",
         args(&mut c, &["test", "--workspace", "--release"]),
     );
+    embedded::cross(&mut s);
+    embedded::embedded(&mut s);
     s.finish()
 }
 
@@ -138,8 +147,18 @@ fn main() -> ExitCode {
     match argv.first().map(String::as_str) {
         Some("test") => test(),
         Some("demo") => demo(&argv[1..]),
+        Some("cross") => {
+            let mut s = Steps::new();
+            embedded::cross(&mut s);
+            s.finish()
+        }
+        Some("embedded") => {
+            let mut s = Steps::new();
+            embedded::embedded(&mut s);
+            s.finish()
+        }
         _ => {
-            eprintln!("usage: cargo xtask <test | demo [args]>");
+            eprintln!("usage: cargo xtask <test | demo [args] | cross | embedded>");
             ExitCode::FAILURE
         }
     }

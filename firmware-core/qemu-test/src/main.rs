@@ -1,0 +1,172 @@
+//! firmware-core on the target: decode the embedded blob, compensate the embedded input
+//! table with every method, print each result's f32 bits (compared bit for bit with
+//! the host by `cargo xtask embedded`), then count instructions and measure the stack.
+#![no_std]
+#![no_main]
+
+use core::hint::black_box;
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use firmware_core::blob::Blob;
+use firmware_core::compensate::{Compensator, ErrorModel, Method};
+use firmware_core::temperature::{Calibration, TempModel};
+use panic_semihosting as _;
+
+static BLOB: &[u8] = include_bytes!(env!("FW_TEST_BLOB"));
+static INPUTS: &[u8] = include_bytes!(env!("FW_TEST_INPUTS"));
+
+const METHODS: [(&str, Method); 3] = [
+    ("m1", Method::CorrectConstants),
+    ("m2full", Method::CorrectResult(ErrorModel::Full)),
+    ("m2simp", Method::CorrectResult(ErrorModel::Simplified)),
+];
+
+fn input(i: usize) -> ([f32; 3], f32) {
+    let f = |k: usize| {
+        let o = i * 16 + k * 4;
+        f32::from_le_bytes([INPUTS[o], INPUTS[o + 1], INPUTS[o + 2], INPUTS[o + 3]])
+    };
+    ([f(0), f(1), f(2)], f(3))
+}
+
+/// A call of `compensate`'s shape that does nothing: the harness's share of a window.
+#[inline(never)]
+fn noop(c: &mut Compensator<'_, f32>, u: [f32; 3], t: f32) -> firmware_core::compensate::Output<f32> {
+    black_box(c);
+    firmware_core::compensate::Output { accel: [u[0], u[1], t], status: Default::default() }
+}
+
+/// Start of a counted window (distinct bodies, so the linker cannot merge them).
+#[inline(never)]
+#[no_mangle]
+pub extern "C" fn fw_mark_start() {
+    cortex_m::asm::nop();
+}
+
+/// End of a counted window.
+#[inline(never)]
+#[no_mangle]
+pub extern "C" fn fw_mark_stop() {
+    cortex_m::asm::nop();
+    cortex_m::asm::nop();
+}
+
+// Stack painting: the harness may use unsafe; firmware-core itself forbids it.
+const PAINT: u32 = 0xA5A5_5A5A;
+const PAINT_WORDS: usize = 2048;
+
+#[inline(never)]
+fn paint() {
+    let sp = cortex_m::register::msp::read() as usize;
+    let base = (sp - 64 - PAINT_WORDS * 4) & !3;
+    for w in 0..PAINT_WORDS {
+        unsafe { core::ptr::write_volatile((base + w * 4) as *mut u32, PAINT) };
+    }
+}
+
+#[inline(never)]
+fn used(sp_at_call: usize) -> usize {
+    let base = (sp_at_call - 64 - PAINT_WORDS * 4) & !3;
+    for w in 0..PAINT_WORDS {
+        if unsafe { core::ptr::read_volatile((base + w * 4) as *const u32) } != PAINT {
+            return sp_at_call - (base + w * 4);
+        }
+    }
+    0
+}
+
+#[inline(never)]
+fn decode_once() -> Option<Blob> {
+    Blob::decode(black_box(BLOB)).ok()
+}
+
+/// Calibrations for the update-cost measurement: a cubic and a 5-breakpoint table.
+fn synthetic(poly: bool, base: &Calibration<f32>) -> Calibration<f32> {
+    let mut c = base.clone();
+    let t0 = base.at_t0();
+    c.update_step_c = 0.0;
+    c.model = if poly {
+        TempModel::Poly { terms: [t0, [1e-5; 12], [1e-7; 12], [1e-9; 12]].into_iter().collect() }
+    } else {
+        let bp = [-40.0f32, -10.0, 20.0, 45.0, 70.0];
+        TempModel::Pwl { breakpoints: bp.into_iter().collect(), values: bp.iter().map(|t| t0.map(|v| v * (1.0 + 1e-5 * t))).collect() }
+    };
+    c
+}
+
+#[entry]
+fn main() -> ! {
+    let n_inputs = INPUTS.len() / 16;
+
+    let sp = cortex_m::register::msp::read() as usize;
+    paint();
+    let blob = match decode_once() {
+        Some(b) => b,
+        None => {
+            hprintln!("error: the embedded blob does not decode");
+            debug::exit(debug::EXIT_FAILURE);
+            loop {}
+        }
+    };
+    let stack_decode = used(sp);
+
+    for (tag, m) in METHODS {
+        let mut c = Compensator::new(&blob.calibration, m).unwrap();
+        for i in 0..n_inputs {
+            let (u, t) = input(i);
+            let o = c.compensate(u, t);
+            hprintln!("vec {} {} {:08x} {:08x} {:08x} {}", tag, i, o.accel[0].to_bits(), o.accel[1].to_bits(), o.accel[2].to_bits(), o.status.bits());
+        }
+    }
+
+    // Stack of compensate, including a temperature update.
+    let mut c = Compensator::new(&blob.calibration, Method::CorrectResult(ErrorModel::Full)).unwrap();
+    let sp = cortex_m::register::msp::read() as usize;
+    paint();
+    let (u, _) = input(0);
+    black_box(c.compensate(black_box(u), black_box(-20.0)));
+    black_box(c.compensate(black_box(u), black_box(60.0)));
+    let stack_compensate = used(sp);
+
+    // Instruction counts: the icount plugin counts from the first instruction of
+    // `fw_mark_start` to that of `fw_mark_stop`; windows come in the order printed.
+    let (u, t) = input(1);
+    hprintln!("measure empty");
+    fw_mark_start();
+    fw_mark_stop();
+    // the same call with the same arguments and result, doing nothing
+    let mut dummy = Compensator::new(&blob.calibration, Method::CorrectConstants).unwrap();
+    hprintln!("measure call_overhead");
+    fw_mark_start();
+    black_box(noop(&mut dummy, black_box([u[0] + 1e-6, u[1], u[2]]), black_box(t)));
+    fw_mark_stop();
+    for (tag, m) in METHODS {
+        let mut c = Compensator::new(&blob.calibration, m).unwrap();
+        c.compensate(u, t);
+        let du = [u[0] + 1e-6, u[1], u[2]];
+        hprintln!("measure sample_{}", tag);
+        fw_mark_start();
+        black_box(c.compensate(black_box(du), black_box(t)));
+        fw_mark_stop();
+    }
+    for (tag, poly) in [("update_poly3", true), ("update_pwl5", false)] {
+        let cal = synthetic(poly, &blob.calibration);
+        let mut c = Compensator::new(&cal, Method::CorrectConstants).unwrap();
+        c.compensate(u, -12.5);
+        hprintln!("measure {}", tag);
+        fw_mark_start();
+        black_box(c.compensate(black_box(u), black_box(33.0)));
+        fw_mark_stop();
+    }
+    hprintln!("measure decode");
+    fw_mark_start();
+    black_box(decode_once());
+    fw_mark_stop();
+    hprintln!("stack decode {}", stack_decode);
+    hprintln!("stack compensate {}", stack_compensate);
+    hprintln!("size compensator {}", core::mem::size_of::<Compensator<'static, f32>>());
+    hprintln!("size blob {}", core::mem::size_of::<Blob>());
+    hprintln!("done");
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {}
+}

@@ -1,0 +1,104 @@
+//! Test vectors for the firmware on the target: an input table, and the f32 results the
+//! host gets from the same firmware-core code (compared bit for bit with the MCU's),
+//! checked against the f64 evaluation within the documented bound.
+use crate::calib::F32_BOUND_G;
+use crate::rng::Rng;
+use firmware_core::blob::Blob;
+use firmware_core::compensate::{Compensator, ErrorModel, Method};
+use firmware_core::model::Coeffs;
+
+/// The methods in the order the firmware harness runs them.
+pub const METHODS: [(&str, Method); 3] = [
+    ("m1", Method::CorrectConstants),
+    ("m2full", Method::CorrectResult(ErrorModel::Full)),
+    ("m2simp", Method::CorrectResult(ErrorModel::Simplified)),
+];
+
+/// `n` samples of a unit at rest in random orientations and temperatures (inside the
+/// valid range and 10 C beyond it), then the edge cases: NaN, infinite, huge and
+/// subnormal voltages, NaN and far-out temperatures. 16 bytes each: ux uy uz temp, f32 LE.
+pub fn make_inputs(blob: &Blob, n: usize, seed: u64) -> Vec<u8> {
+    let cal = blob.calibration.convert::<f64>();
+    let mut rng = Rng::new(seed);
+    let mut out = Vec::new();
+    let mut push = |u: [f32; 3], t: f32| {
+        for v in [u[0], u[1], u[2], t] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    };
+    for _ in 0..n {
+        let t = rng.range(cal.t_min_c - 10.0, cal.t_max_c + 10.0) as f32;
+        let z = rng.range(-1.0, 1.0);
+        let phi = rng.range(0.0, std::f64::consts::TAU);
+        let r = (1.0 - z * z).sqrt();
+        let a = [r * phi.cos(), r * phi.sin(), z];
+        let u = Coeffs::from_array(&cal.model.eval(cal.t0_c, f64::from(t))).forward(a);
+        push(u.map(|v| v as f32), t);
+    }
+    let good = [0.0045f32, -0.0044, -0.5521];
+    for (u, t) in [
+        ([f32::NAN, good[1], good[2]], 20.0),
+        ([good[0], f32::INFINITY, good[2]], 20.0),
+        (good, f32::NAN),
+        (good, f32::INFINITY),
+        ([3e38, -3e38, 3e38], 25.0),
+        ([1e-40, -1e-41, 1e-45], 25.0),
+        (good, -1000.0),
+        (good, 1.0e6),
+        (good, 21.0),
+    ] {
+        push(u, t);
+    }
+    out
+}
+
+fn inputs(bytes: &[u8]) -> Vec<([f32; 3], f32)> {
+    bytes
+        .chunks_exact(16)
+        .map(|c| {
+            let f =
+                |k: usize| f32::from_le_bytes([c[4 * k], c[4 * k + 1], c[4 * k + 2], c[4 * k + 3]]);
+            ([f(0), f(1), f(2)], f(3))
+        })
+        .collect()
+}
+
+/// The expected firmware output lines, and the largest |f32 - f64| (g) over the finite
+/// in-range-or-near samples (method by method, the f64 run of the same code).
+pub fn expected(blob: &Blob, bytes: &[u8]) -> (Vec<String>, f64) {
+    let cal64 = blob.calibration.convert::<f64>();
+    let mut lines = Vec::new();
+    let mut worst: f64 = 0.0;
+    for (tag, m) in METHODS {
+        let (Ok(mut c32), Ok(mut c64)) = (
+            Compensator::new(&blob.calibration, m),
+            Compensator::new(&cal64, m),
+        ) else {
+            continue;
+        };
+        for (i, (u, t)) in inputs(bytes).into_iter().enumerate() {
+            let o = c32.compensate(u, t);
+            let r = c64.compensate(u.map(f64::from), f64::from(t));
+            if o.status.bits() & !1 == 0
+                && (cal64.t_min_c - 10.0..=cal64.t_max_c + 10.0).contains(&f64::from(t))
+            {
+                for (x, y) in o.accel.iter().zip(r.accel) {
+                    worst = worst.max((f64::from(*x) - y).abs());
+                }
+            }
+            lines.push(format!(
+                "vec {tag} {i} {:08x} {:08x} {:08x} {}",
+                o.accel[0].to_bits(),
+                o.accel[1].to_bits(),
+                o.accel[2].to_bits(),
+                o.status.bits()
+            ));
+        }
+    }
+    (lines, worst)
+}
+
+/// Whether `worst` is within the documented bound.
+pub fn within_bound(worst: f64) -> bool {
+    worst <= F32_BOUND_G
+}

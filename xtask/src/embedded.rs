@@ -1,0 +1,544 @@
+//! `cargo xtask cross` and `cargo xtask embedded`: firmware-core on a Cortex-M4F.
+//!
+//! The cross compiler is Debian's rustc-web (with the matching library sources for
+//! `-Zbuild-std=core`), downloaded with `apt-get download` and unpacked under
+//! `target/cross-toolchain/` (cached: a second run does not download). The rustup
+//! toolchain stays untouched for the host build. See ../shared/embedded/cross-build-notes.md.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const PACKAGES: [&str; 13] = [
+    "rustc-web",
+    "cargo-web",
+    "libstd-rust-web-1.96",
+    "libstd-rust-web-dev",
+    "rust-web-src",
+    "rust-web-llvm",
+    "libllvm22",
+    "lld-22",
+    "libgit2-1.5",
+    "libhttp-parser2.9",
+    "libmbedcrypto7",
+    "libmbedtls14",
+    "libmbedx509-1",
+];
+/// The MCU target.
+pub const TARGET: &str = "thumbv7em-none-eabihf";
+
+fn sh(cmd: &mut Command) -> Result<(), String> {
+    let st = cmd.status().map_err(|e| format!("{cmd:?}: {e}"))?;
+    if st.success() {
+        Ok(())
+    } else {
+        Err(format!("{cmd:?} failed ({st})"))
+    }
+}
+
+/// The unpacked toolchain (downloaded on first use).
+pub fn toolchain() -> Result<PathBuf, String> {
+    let dir = crate::root().join("target/cross-toolchain");
+    let sysroot = dir.join("root");
+    let stamp = dir.join("ok");
+    if stamp.exists() && sysroot.join("usr/bin/rustc").exists() {
+        return Ok(sysroot);
+    }
+    let debs = dir.join("debs");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&debs).map_err(|e| e.to_string())?;
+    eprintln!(
+        "xtask: downloading Debian's rustc-web toolchain (~150 MB) into {}",
+        dir.display()
+    );
+    sh(Command::new("apt-get").arg("download").args(PACKAGES).current_dir(&debs)).map_err(|e| {
+        format!("{e}\n(apt-get download needs current package lists: run `apt-get update` as root once)")
+    })?;
+    std::fs::create_dir_all(&sysroot).map_err(|e| e.to_string())?;
+    for entry in std::fs::read_dir(&debs).map_err(|e| e.to_string())? {
+        let deb = entry.map_err(|e| e.to_string())?.path();
+        let name = deb
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        if name.starts_with("rust-web-src") {
+            // only the library sources build-std needs: 519 MB instead of 885 MB
+            let script = format!(
+                "dpkg-deb --fsys-tarfile '{}' | tar -x -C '{}' --wildcards './usr/lib/rustlib/src/rust' './usr/src/rustc-*/library/*'",
+                deb.display(),
+                sysroot.display()
+            );
+            sh(Command::new("sh").arg("-c").arg(script))?;
+        } else {
+            sh(Command::new("dpkg").arg("-x").arg(&deb).arg(&sysroot))?;
+        }
+    }
+    let _ = std::fs::remove_dir_all(&debs);
+    std::fs::write(&stamp, b"").map_err(|e| e.to_string())?;
+    Ok(sysroot)
+}
+
+/// A command run with the cross toolchain first in PATH.
+pub fn cross_cmd(sysroot: &Path, program: &str) -> Command {
+    let mut c = Command::new(sysroot.join("usr/bin").join(program));
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    let mut paths = vec![sysroot.join("usr/bin")];
+    paths.extend(std::env::split_paths(&path));
+    c.env("PATH", std::env::join_paths(paths).unwrap_or_default())
+        .env("LD_LIBRARY_PATH", sysroot.join("usr/lib/x86_64-linux-gnu"))
+        .env("RUSTC_BOOTSTRAP", "1")
+        .env_remove("RUSTUP_TOOLCHAIN")
+        .env_remove("CARGO")
+        .env_remove("RUSTC")
+        .env_remove("RUSTDOC");
+    c
+}
+
+/// `cargo xtask cross`: firmware-core for the thumb target, with no default features,
+/// each feature alone, and all of them (the only feature is `defmt`: checked here, on
+/// the target, as defmt's library guide says).
+pub fn cross(steps: &mut crate::Steps) {
+    let sysroot = match toolchain() {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("xtask: cross toolchain: {e}");
+            steps.failed.push("cross toolchain".into());
+            return;
+        }
+    };
+    for feats in [None, Some("defmt"), Some("all")] {
+        let mut c = cross_cmd(&sysroot, "cargo");
+        c.current_dir(crate::root()).args([
+            "build",
+            "-p",
+            "firmware-core",
+            "--release",
+            "--target",
+            TARGET,
+            "-Zbuild-std=core",
+            "--target-dir",
+        ]);
+        c.arg(crate::root().join("target/thumb"));
+        match feats {
+            None => c.arg("--no-default-features"),
+            Some("all") => c.args(["--no-default-features", "--features", "defmt"]),
+            Some(f) => c.args(["--no-default-features", "--features", f]),
+        };
+        let name = format!(
+            "cross build firmware-core ({})",
+            feats.unwrap_or("no default features")
+        );
+        steps.run(&name, c);
+    }
+}
+
+fn host_fit(args: &[&str]) -> Result<String, String> {
+    let out = crate::cargo()
+        .args(["run", "--quiet", "--release", "-p", "host-fit", "--"])
+        .args(args)
+        .output()
+        .map_err(|e| e.to_string())?;
+    if !out.status.success() {
+        return Err(format!(
+            "host-fit {args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+struct Measured {
+    sizes: Vec<(String, u64)>,
+    components: Vec<(String, u64)>,
+    icount: Vec<(String, u64)>,
+    lines: Vec<String>,
+    soft_double: Vec<String>,
+}
+
+fn run_embedded() -> Result<Measured, String> {
+    let sysroot = toolchain()?;
+    let dir = crate::root().join("target/qemu");
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let (rec, blob, inputs) = (
+        dir.join("rec.csv"),
+        dir.join("unit.blob"),
+        dir.join("inputs.bin"),
+    );
+    let s = |p: &Path| p.to_string_lossy().into_owned();
+    host_fit(&["simulate", "--out", &s(&rec), "--force"])?;
+    host_fit(&[
+        "fit",
+        &s(&rec),
+        "--model",
+        "pwl",
+        "--out",
+        &s(&blob),
+        "--force",
+    ])?;
+    host_fit(&[
+        "fw-vectors",
+        "--blob",
+        &s(&blob),
+        "--make-inputs",
+        &s(&inputs),
+        "--force",
+    ])?;
+    let expected = host_fit(&["fw-vectors", "--blob", &s(&blob), "--inputs", &s(&inputs)])?;
+
+    let crate_dir = crate::root().join("firmware-core/qemu-test");
+    let target_dir = crate::root().join("target/qemu-test");
+    let mut c = cross_cmd(&sysroot, "cargo");
+    c.current_dir(&crate_dir)
+        .args(["build", "--release", "--target-dir"])
+        .arg(&target_dir)
+        .env("FW_TEST_BLOB", &blob)
+        .env("FW_TEST_INPUTS", &inputs);
+    sh(&mut c)?;
+    let elf = target_dir.join(TARGET).join("release/fw-qemu-test");
+
+    // the icount plugin
+    let plugin = dir.join("icount.so");
+    sh(Command::new("gcc")
+        .args(["-O2", "-shared", "-fPIC", "-o"])
+        .arg(&plugin)
+        .arg(crate_dir.join("plugin/icount.c")))?;
+    let nm = Command::new("llvm-nm")
+        .arg("-C")
+        .arg("--print-size")
+        .arg(&elf)
+        .output()
+        .map_err(|e| format!("llvm-nm: {e} (install llvm)"))?;
+    let nm = String::from_utf8_lossy(&nm.stdout).into_owned();
+    let addr = |sym: &str| {
+        nm.lines()
+            .find(|l| l.ends_with(&format!(" {sym}")))
+            .and_then(|l| l.split_whitespace().next())
+            .map(str::to_string)
+    };
+    let (start, stop) = (
+        addr("fw_mark_start").ok_or("no fw_mark_start")?,
+        addr("fw_mark_stop").ok_or("no fw_mark_stop")?,
+    );
+    let log = dir.join("plugin.log");
+    let _ = std::fs::remove_file(&log);
+    let out = Command::new("timeout")
+        .args(["60", "qemu-system-arm", "-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic", "-semihosting-config", "enable=on,target=native"])
+        .arg("-plugin")
+        .arg(format!("{},start=0x{start},stop=0x{stop}", plugin.display()))
+        .args(["-d", "plugin", "-D"])
+        .arg(&log)
+        .arg("-kernel")
+        .arg(&elf)
+        .output()
+        .map_err(|e| format!("qemu-system-arm: {e} (install it: apt-get install -t bookworm-backports qemu-system-arm)"))?;
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    if !out.status.success() {
+        return Err(format!(
+            "the firmware test failed under QEMU ({}):\n{stdout}{}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    // bit for bit
+    let got: Vec<&str> = stdout.lines().filter(|l| l.starts_with("vec ")).collect();
+    let want: Vec<&str> = expected.lines().filter(|l| l.starts_with("vec ")).collect();
+    if got.len() != want.len() || want.is_empty() {
+        return Err(format!(
+            "{} results from the target, {} expected",
+            got.len(),
+            want.len()
+        ));
+    }
+    let diffs: Vec<String> = got
+        .iter()
+        .zip(&want)
+        .filter(|(g, w)| g != w)
+        .map(|(g, w)| format!("target {g}\n  host {w}"))
+        .collect();
+    if !diffs.is_empty() {
+        return Err(format!(
+            "{} of {} results differ from the host:\n{}",
+            diffs.len(),
+            want.len(),
+            diffs.iter().take(8).cloned().collect::<Vec<_>>().join("\n")
+        ));
+    }
+    let mut lines = vec![format!(
+        "{} compensated samples (3 methods) bit-identical to the host's f32 evaluation",
+        want.len()
+    )];
+    lines.extend(
+        expected
+            .lines()
+            .filter_map(|l| l.strip_prefix("f64-departure "))
+            .map(|l| format!("f32 results vs the f64 evaluation of the same code: max {l} g")),
+    );
+    // counts
+    let labels: Vec<String> = stdout
+        .lines()
+        .filter_map(|l| l.strip_prefix("measure "))
+        .map(str::to_string)
+        .collect();
+    let counts: Vec<u64> = std::fs::read_to_string(&log)
+        .unwrap_or_default()
+        .lines()
+        .filter_map(|l| l.strip_prefix("icount "))
+        .filter_map(|v| v.trim().parse().ok())
+        .collect();
+    if counts.len() != labels.len() {
+        return Err(format!(
+            "{} counted windows for {} labels",
+            counts.len(),
+            labels.len()
+        ));
+    }
+    let icount: Vec<(String, u64)> = labels.into_iter().zip(counts).collect();
+    for l in stdout.lines() {
+        if let Some(v) = l.strip_prefix("stack decode ") {
+            lines.push(format!(
+                "maximum stack of blob decoding (painted stack): {v} bytes"
+            ));
+        } else if let Some(v) = l.strip_prefix("stack compensate ") {
+            lines.push(format!("maximum stack of compensate, a temperature update included (painted stack): {v} bytes"));
+        } else if let Some(v) = l.strip_prefix("size compensator ") {
+            lines.push(format!("RAM of the compensator state (size_of::<Compensator<f32>>): {v} bytes (target <= 256)"));
+        } else if let Some(v) = l.strip_prefix("size blob ") {
+            lines.push(format!(
+                "RAM of a decoded blob (size_of::<Blob>, up to 16 breakpoints): {v} bytes"
+            ));
+        }
+    }
+    // sizes
+    let size = Command::new("llvm-size")
+        .arg("-A")
+        .arg(&elf)
+        .output()
+        .map_err(|e| e.to_string())?;
+    let sizes: Vec<(String, u64)> = String::from_utf8_lossy(&size.stdout)
+        .lines()
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            match f.as_slice() {
+                [name, sz, _]
+                    if [".vector_table", ".text", ".rodata", ".data", ".bss"].contains(name) =>
+                {
+                    Some((name.to_string(), sz.parse().ok()?))
+                }
+                _ => None,
+            }
+        })
+        .collect();
+    let mut comp: Vec<(String, u64)> = Vec::new();
+    let mut soft_double = Vec::new();
+    for l in nm.lines() {
+        let f: Vec<&str> = l.splitn(4, ' ').collect();
+        let [_, sz, kind, name] = f.as_slice() else {
+            continue;
+        };
+        if !["t", "T", "r", "R"].contains(kind) {
+            continue;
+        }
+        let Ok(sz) = u64::from_str_radix(sz, 16) else {
+            continue;
+        };
+        if [
+            "__adddf3",
+            "__subdf3",
+            "__muldf3",
+            "__divdf3",
+            "__aeabi_dadd",
+            "__aeabi_dmul",
+            "__aeabi_ddiv",
+            "__aeabi_dsub",
+            "__extendsfdf2",
+            "__truncdfsf2",
+        ]
+        .iter()
+        .any(|d| name.contains(d))
+        {
+            soft_double.push(name.to_string());
+        }
+        let group = component(name);
+        match comp.iter_mut().find(|c| c.0 == group) {
+            Some(c) => c.1 += sz,
+            None => comp.push((group, sz)),
+        }
+    }
+    comp.sort_by_key(|c| std::cmp::Reverse(c.1));
+    Ok(Measured {
+        sizes,
+        components: comp,
+        icount,
+        lines,
+        soft_double,
+    })
+}
+
+/// Components counted as "compensation + blob decode" (the library); the rest is the
+/// test harness, its runtime and its data.
+const LIBRARY: [&str; 10] = [
+    "other (core, runtime)",
+    "firmware-core compensate",
+    "firmware-core temperature tables",
+    "firmware-core model (inverse)",
+    "firmware-core blob decode",
+    "firmware-core crc",
+    "firmware-core other",
+    "blob decode (postcard, serde, heapless)",
+    "libm",
+    "compiler_builtins",
+];
+
+fn component(sym: &str) -> String {
+    let s = sym.trim_start_matches('<');
+    if s.contains("postcard")
+        || s.contains("serde")
+        || s.contains("heapless")
+        || s.starts_with("fw_qemu_test::decode_once")
+    {
+        return "blob decode (postcard, serde, heapless)".into();
+    }
+    if s.starts_with(".Lanon") {
+        return "harness data (embedded blob, input table, strings)".into();
+    }
+    if [
+        "__INTERRUPTS",
+        "__EXCEPTIONS",
+        "Reset",
+        "__rustc",
+        "core::panicking",
+        "core::result::unwrap_failed",
+        "core::option",
+    ]
+    .iter()
+    .any(|p| s.starts_with(p))
+    {
+        return "harness runtime (cortex-m, semihosting)".into();
+    }
+    for (prefix, name) in [
+        ("firmware_core::compensate", "firmware-core compensate"),
+        (
+            "firmware_core::temperature",
+            "firmware-core temperature tables",
+        ),
+        ("firmware_core::model", "firmware-core model (inverse)"),
+        ("firmware_core::blob", "firmware-core blob decode"),
+        ("firmware_core::crc", "firmware-core crc"),
+        ("firmware_core", "firmware-core other"),
+        ("libm", "libm"),
+        ("compiler_builtins", "compiler_builtins"),
+        ("fw_qemu_test", "test harness"),
+        ("cortex_m", "harness runtime (cortex-m, semihosting)"),
+        ("core::fmt", "harness printing (core::fmt)"),
+    ] {
+        if s.starts_with(prefix) {
+            return name.to_string();
+        }
+    }
+    if s.starts_with("__") || s.starts_with("memcpy") || s.starts_with("memset") {
+        "compiler_builtins".into()
+    } else {
+        "other (core, runtime)".into()
+    }
+}
+
+/// `cargo xtask embedded`: run the firmware test under QEMU, compare bit for bit,
+/// measure, and write target/embedded/summary.md.
+pub fn embedded(steps: &mut crate::Steps) {
+    eprintln!("\n==> embedded: firmware-core under QEMU mps2-an386 (Cortex-M4F)");
+    match run_embedded() {
+        Ok(m) => {
+            let md = summary(&m);
+            let out = crate::root().join("target/embedded");
+            let _ = std::fs::create_dir_all(&out);
+            let _ = std::fs::write(out.join("summary.md"), &md);
+            println!("{md}");
+            if m.soft_double.is_empty() {
+                steps.passed.push("embedded (bit-exact under QEMU)".into());
+            } else {
+                eprintln!(
+                    "xtask: soft-double routines in the firmware: {:?}",
+                    m.soft_double
+                );
+                steps
+                    .failed
+                    .push("embedded: soft-double routines linked".into());
+            }
+        }
+        Err(e) => {
+            eprintln!("xtask: embedded: {e}");
+            steps.failed.push("embedded".into());
+        }
+    }
+}
+
+fn summary(m: &Measured) -> String {
+    let get = |k: &str| m.icount.iter().find(|c| c.0 == k).map(|c| c.1).unwrap_or(0);
+    // a window around `compensate` holds the markers and the call itself (argument and
+    // result marshalling): both are measured with a no-op of the same signature
+    let base = get("call_overhead");
+    let net = |k: &str| get(k).saturating_sub(if k == "decode" { get("empty") } else { base });
+    let m1 = net("sample_m1");
+    let mut s = String::from(
+        "## firmware-core on Cortex-M4F (QEMU mps2-an386), `cargo xtask embedded`\n\n",
+    );
+    for l in &m.lines {
+        s.push_str(&format!("- {l}\n"));
+    }
+    s.push_str("\nInstructions executed (exact, TCG plugin; the call overhead, measured with a no-op of the same signature, subtracted):\n\n| operation | instructions | floor | multiple |\n|---|---|---|---|\n");
+    s.push_str(&format!(
+        "| method 1 per sample (cached N(T)) | {m1} | 18 (9 mul, 6 add, 3 sub) | {:.1}x |\n",
+        m1 as f64 / 18.0
+    ));
+    for (k, name) in [
+        ("sample_m2full", "method 2 per sample, full model"),
+        ("sample_m2simp", "method 2 per sample, simplified"),
+    ] {
+        s.push_str(&format!(
+            "| {name} | {} | 39 (a_hat 18, M a_hat + e 18, subtraction 3) | {:.1}x |\n",
+            net(k),
+            net(k) as f64 / 39.0
+        ));
+    }
+    for (k, name) in [
+        (
+            "update_poly3",
+            "temperature update, polynomial order 3 (+ one sample)",
+        ),
+        (
+            "update_pwl5",
+            "temperature update, PWL 5 breakpoints (+ one sample)",
+        ),
+    ] {
+        s.push_str(&format!("| {name} | {} | | |\n", net(k)));
+    }
+    s.push_str(&format!(
+        "| blob decode (the PWL blob through 5 stops, CRC included) | {} | | |\n",
+        net("decode")
+    ));
+    s.push_str("\nFlash and RAM of the linked test binary (llvm-size -A):\n\n| section | bytes |\n|---|---|\n");
+    for (n, v) in &m.sizes {
+        s.push_str(&format!("| {n} | {v} |\n"));
+    }
+    s.push_str("\nBy component (llvm-nm symbol sizes, text + rodata; LTO inlines across crates, so inlined code counts where it landed):\n\n| component | bytes |\n|---|---|\n");
+    for (n, v) in &m.components {
+        s.push_str(&format!("| {n} | {v} |\n"));
+    }
+    let lib: u64 = m
+        .components
+        .iter()
+        .filter(|c| LIBRARY.contains(&c.0.as_str()))
+        .map(|c| c.1)
+        .sum();
+    s.push_str(&format!(
+        "\nCompensation + blob decode (the library components above; compiler_builtins and unclassified core code counted in, as the worst case): **{lib} bytes** ({:.1} KiB; target <= 8 KiB).\n",
+        lib as f64 / 1024.0
+    ));
+    s.push_str(&format!(
+        "\nSoft-double routines (__adddf3, __muldf3, __aeabi_d*, ...) in the binary: {}\n",
+        if m.soft_double.is_empty() {
+            "none".to_string()
+        } else {
+            m.soft_double.join(", ")
+        }
+    ));
+    s
+}

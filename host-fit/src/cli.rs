@@ -153,6 +153,30 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Locate where the model and a recording disagree, name the physics left out,
+    /// model it and show the fit improve (JSON contract at-diagnosis/1).
+    Diagnose {
+        /// The recording.
+        recording: PathBuf,
+        /// Positions file (name,fx,fy,fz).
+        #[arg(long)]
+        positions: Option<PathBuf>,
+        /// Write an HTML report with residual plots before and after.
+        #[arg(long)]
+        report: Option<PathBuf>,
+        /// Overwrite an existing report.
+        #[arg(long)]
+        force: bool,
+        /// Machine-readable output.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Blind tests of the diagnosis on simulated recordings with concealed effects.
+    Blind {
+        /// The long suite (more seeds, magnitudes down to the edge of detectability).
+        #[arg(long)]
+        long: bool,
+    },
     /// Simulate a unit's production temperature test (the digital twin).
     Simulate {
         /// TOML configuration (default: the built-in paper unit and profile).
@@ -567,6 +591,34 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
                     )?;
                 }
                 Ok(())
+            }
+        }
+        Command::Blind { long } => {
+            let cases = crate::blind::suite(long);
+            let outcomes: Vec<_> = cases.iter().map(crate::blind::run).collect();
+            w(out, crate::blind::report(&outcomes))
+        }
+        Command::Diagnose {
+            recording,
+            positions,
+            report,
+            force,
+            json,
+        } => {
+            if let Some(r) = &report {
+                check_writable(r, force)?;
+            }
+            let rec = load(&recording, positions.as_deref(), err)?;
+            let d = crate::diagnose::diagnose(&rec)?;
+            let j = d.json(&rec);
+            if let Some(r) = &report {
+                let html = crate::report::diagnosis_report(&rec, &d)?;
+                write_atomic(r, html.as_bytes(), force)?;
+            }
+            if json {
+                w(out, serde_json::to_string_pretty(&j).unwrap_or_default())
+            } else {
+                w(out, crate::diagnose::text(&j))
             }
         }
         Command::Simulate {

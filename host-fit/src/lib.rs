@@ -5,9 +5,11 @@
 //! f64 and, for checks, in the firmware's own f32 path.
 #![forbid(unsafe_code)]
 
+pub mod blind;
 pub mod calib;
 pub mod cli;
 pub mod demo;
+pub mod diagnose;
 pub mod error;
 pub mod fwcheck;
 pub mod identify;

@@ -147,6 +147,22 @@ fn main() -> ExitCode {
     match argv.first().map(String::as_str) {
         Some("test") => test(),
         Some("demo") => demo(&argv[1..]),
+        Some("blind") => {
+            let mut c = cargo();
+            c.args([
+                "run",
+                "--quiet",
+                "--release",
+                "-p",
+                "host-fit",
+                "--",
+                "blind",
+                "--long",
+            ]);
+            let mut s = Steps::new();
+            s.run("blind tests of the diagnosis (long suite)", c);
+            s.finish()
+        }
         Some("cross") => {
             let mut s = Steps::new();
             embedded::cross(&mut s);
@@ -158,7 +174,7 @@ fn main() -> ExitCode {
             s.finish()
         }
         _ => {
-            eprintln!("usage: cargo xtask <test | demo [args] | cross | embedded>");
+            eprintln!("usage: cargo xtask <test | demo [args] | blind | cross | embedded>");
             ExitCode::FAILURE
         }
     }

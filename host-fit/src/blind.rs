@@ -1,0 +1,413 @@
+//! Blind tests of the diagnosis: the simulator conceals effects of known size in a
+//! recording; the diagnosis, which never sees the truth, must name them (and nothing on
+//! clean data), report ambiguity where the data cannot separate, get the parameters
+//! within 3 sigma and bring the residual to within 1.5x the noise.
+use crate::diagnose::{diagnose, normalized_rms, Data};
+use crate::positions::Positions;
+use crate::recording::Recording;
+use crate::rng::Rng;
+use crate::simulate::{simulate, Curvature, Fixture, PerAxis, SimConfig, Stop, Warmup};
+use std::path::Path;
+
+/// One blind case.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// The concealed effects (catalogue ids); empty = clean.
+    pub effects: Vec<&'static str>,
+    /// Magnitude in units of the effect's nominal size (1 = clearly visible).
+    pub scale: f64,
+    /// Seed of the simulation and of the random axes/signs.
+    pub seed: u64,
+    /// Only TP positions (then k2 and asymmetry cannot be told apart).
+    pub tp_only: bool,
+}
+
+/// The outcome of a case.
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    /// The case.
+    pub case: Case,
+    /// Effects found.
+    pub found: Vec<String>,
+    /// Ambiguous groups.
+    pub ambiguous: Vec<Vec<String>>,
+    /// Found exactly the concealed set (ambiguity counts when expected).
+    pub exact: bool,
+    /// Parameters within 3 sigma (None when not checked).
+    pub params_ok: Option<bool>,
+    /// Final residual over noise.
+    pub final_over_noise: f64,
+    /// Notes for the report.
+    pub note: String,
+}
+
+/// The short test profile: 20 -> -20 -> 10 -> 40 -> 10 C (the last stop reached by
+/// cooling), TP1..TP6 and PP1..PP6 at each, 1 C/min ramps, 20 min soaks.
+pub fn profile(tp_only: bool) -> SimConfig {
+    let mut c = SimConfig::default();
+    c.unit.serial = "BLIND".into();
+    let pos: Vec<String> = if tp_only {
+        (1..=6).map(|i| format!("TP{i}")).collect()
+    } else {
+        c.schedule.positions.clone()
+    };
+    c.schedule.positions = pos.clone();
+    c.schedule.stops = [20.0, -20.0, 10.0, 40.0, 10.0]
+        .iter()
+        .map(|t| Stop {
+            temp_c: *t,
+            soak_s: 1200.0,
+            ramp_c_per_min: 1.0,
+            positions: Some(pos.clone()),
+        })
+        .collect();
+    c
+}
+
+fn axes3(rng: &mut Rng, scale: f64, size: f64) -> [f64; 3] {
+    // one or two axes, random signs, 0.7..1.3 of the size
+    let main = (rng.next_u64() % 3) as usize;
+    let mut v = [0.0; 3];
+    for (i, x) in v.iter_mut().enumerate() {
+        if i == main || rng.uniform() < 0.3 {
+            let s = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+            *x = s * size * scale * rng.range(0.7, 1.3);
+        }
+    }
+    v
+}
+
+/// Conceal the effects of `case` in the profile; returns the config.
+pub fn configure(case: &Case) -> SimConfig {
+    let mut c = profile(case.tp_only);
+    c.seed = case.seed;
+    let mut rng = Rng::new(case.seed ^ 0xB11D);
+    for e in &case.effects {
+        let s = case.scale;
+        match *e {
+            "thermal_lag" => {
+                c.effects.thermal_lag = Some(PerAxis {
+                    value: [rng.range(300.0, 900.0); 3],
+                })
+            }
+            "temp_rate" => {
+                c.effects.temp_rate = Some(PerAxis {
+                    value: axes3(&mut rng, s, 0.02),
+                })
+            }
+            "hysteresis" => {
+                c.effects.hysteresis = Some(PerAxis {
+                    value: axes3(&mut rng, s, 1e-4),
+                })
+            }
+            "nonlinearity_k2" => {
+                c.effects.nonlinearity_k2 = Some(PerAxis {
+                    value: axes3(&mut rng, s, 1e-4),
+                })
+            }
+            "scale_asymmetry" => {
+                c.effects.scale_asymmetry = Some(PerAxis {
+                    value: axes3(&mut rng, s, 2e-4),
+                })
+            }
+            "fixture_error" => {
+                let p = ["TP2", "TP3", "TP5", "PP1", "PP4"][(rng.next_u64() % 5) as usize];
+                c.effects.fixture_error = Some(Fixture {
+                    position: p.into(),
+                    angles_rad: [
+                        rng.range(-2e-4, 2e-4) * s + 2e-4 * s,
+                        rng.range(-2e-4, 2e-4) * s,
+                    ],
+                });
+            }
+            "warmup_drift" => {
+                c.effects.warmup_drift = Some(Warmup {
+                    d_v: axes3(&mut rng, s, 2e-4),
+                    tau_s: rng.range(600.0, 2400.0),
+                })
+            }
+            "temp_curvature" => {
+                c.effects.temp_curvature = Some(Curvature {
+                    u0_v: axes3(&mut rng, s, 1e-4),
+                    k_rel: [0.0; 3],
+                    period_c: 25.0,
+                })
+            }
+            _ => {}
+        }
+    }
+    c
+}
+
+/// Run one case.
+pub fn run(case: &Case) -> Outcome {
+    let cfg = configure(case);
+    let fail = |note: String| Outcome {
+        case: case.clone(),
+        found: Vec::new(),
+        ambiguous: Vec::new(),
+        exact: false,
+        params_ok: None,
+        final_over_noise: f64::NAN,
+        note,
+    };
+    let sim = match simulate(&cfg, |_| {}) {
+        Ok(s) => s,
+        Err(e) => return fail(format!("simulate: {e}")),
+    };
+    let rec = match Recording::from_reader(
+        Path::new("blind.csv"),
+        sim.csv.as_bytes(),
+        Positions::default(),
+    ) {
+        Ok(r) => r,
+        Err(e) => return fail(format!("read: {e}")),
+    };
+    let d = match diagnose(&rec) {
+        Ok(d) => d,
+        Err(e) => return fail(format!("diagnose: {e}")),
+    };
+    let found: Vec<String> = d.findings.iter().map(|f| f.effect.clone()).collect();
+    let ambiguous: Vec<Vec<String>> = d.ambiguous.iter().map(|a| a.candidates.clone()).collect();
+    let mut named: Vec<String> = found.clone();
+    for a in &ambiguous {
+        named.extend(a.iter().cloned());
+    }
+    named.sort();
+    named.dedup();
+    let mut want: Vec<String> = case.effects.iter().map(|s| s.to_string()).collect();
+    let expect_ambiguity = case.tp_only
+        && case
+            .effects
+            .iter()
+            .any(|e| *e == "nonlinearity_k2" || *e == "scale_asymmetry");
+    if expect_ambiguity {
+        want.push("nonlinearity_k2".into());
+        want.push("scale_asymmetry".into());
+    }
+    want.sort();
+    want.dedup();
+    let exact = named == want && (!expect_ambiguity || !ambiguous.is_empty());
+    // parameters within 3 sigma, for the per-axis linear effects and time constants
+    let mut params_ok = None;
+    for f in &d.findings {
+        let truth: Option<Vec<(String, f64)>> = match f.effect.as_str() {
+            "temp_rate" => cfg.effects.temp_rate.map(|p| {
+                (0..3)
+                    .map(|i| (format!("r_{}", ["x", "y", "z"][i]), p.value[i]))
+                    .collect()
+            }),
+            "hysteresis" => cfg.effects.hysteresis.map(|p| {
+                (0..3)
+                    .map(|i| (format!("h_{}", ["x", "y", "z"][i]), p.value[i]))
+                    .collect()
+            }),
+            "nonlinearity_k2" => cfg.effects.nonlinearity_k2.map(|p| {
+                (0..3)
+                    .map(|i| (format!("k2_{}", ["x", "y", "z"][i]), p.value[i]))
+                    .collect()
+            }),
+            "scale_asymmetry" => cfg.effects.scale_asymmetry.map(|p| {
+                (0..3)
+                    .map(|i| (format!("delta_{}", ["x", "y", "z"][i]), p.value[i]))
+                    .collect()
+            }),
+            "thermal_lag" => cfg
+                .effects
+                .thermal_lag
+                .map(|p| vec![("tau_s".to_string(), p.value[0])]),
+            "warmup_drift" => cfg.effects.warmup_drift.map(|w| {
+                let mut v: Vec<(String, f64)> = (0..3)
+                    .map(|i| (format!("d_{}", ["x", "y", "z"][i]), w.d_v[i]))
+                    .collect();
+                v.push(("tau_s".into(), w.tau_s));
+                v
+            }),
+            _ => None,
+        };
+        if let Some(t) = truth {
+            let ok = t.iter().all(|(k, v)| {
+                let est = f.parameters.get(k).and_then(|x| x.as_f64());
+                let sig = f.uncertainties.get(k).and_then(|x| x.as_f64());
+                matches!((est, sig), (Some(e), Some(s)) if (e - v).abs() <= 3.0 * s.max(1e-300))
+            });
+            params_ok = Some(params_ok.unwrap_or(true) && ok);
+        }
+    }
+    let data = Data {
+        rec: &rec,
+        obs: d.obs.clone(),
+        noise: d.noise,
+        t0: rec.t0_c,
+    };
+    let final_over_noise = normalized_rms(&data, &d.final_fit);
+    Outcome {
+        case: case.clone(),
+        found,
+        ambiguous,
+        exact,
+        params_ok,
+        final_over_noise,
+        note: String::new(),
+    }
+}
+
+/// Every catalogue effect the simulator conceals.
+pub const EFFECTS: [&str; 8] = [
+    "temp_curvature",
+    "thermal_lag",
+    "temp_rate",
+    "hysteresis",
+    "nonlinearity_k2",
+    "scale_asymmetry",
+    "fixture_error",
+    "warmup_drift",
+];
+
+/// The suite: clean recordings, each effect at several magnitudes and seeds, pairs, and
+/// the TP-only ambiguity. `long` adds seeds and smaller magnitudes.
+pub fn suite(long: bool) -> Vec<Case> {
+    let seeds: Vec<u64> = if long { (1..=4).collect() } else { vec![1] };
+    let scales: Vec<f64> = if long { vec![1.0, 0.3, 0.1] } else { vec![1.0] };
+    let mut v = Vec::new();
+    for &seed in &seeds {
+        v.push(Case {
+            effects: vec![],
+            scale: 1.0,
+            seed: seed + 100,
+            tp_only: false,
+        });
+        for e in EFFECTS {
+            for &s in &scales {
+                v.push(Case {
+                    effects: vec![e],
+                    scale: s,
+                    seed,
+                    tp_only: false,
+                });
+            }
+        }
+        v.push(Case {
+            effects: vec!["temp_rate", "nonlinearity_k2"],
+            scale: 1.0,
+            seed,
+            tp_only: false,
+        });
+        v.push(Case {
+            effects: vec!["hysteresis", "fixture_error"],
+            scale: 1.0,
+            seed,
+            tp_only: false,
+        });
+        v.push(Case {
+            effects: vec!["nonlinearity_k2"],
+            scale: 1.0,
+            seed,
+            tp_only: true,
+        });
+    }
+    v
+}
+
+/// The confusion matrix and scores as text.
+pub fn report(outcomes: &[Outcome]) -> String {
+    let mut s = String::from("case                                   scale seed  found / ambiguous                         exact  params  final/noise\n");
+    for o in outcomes {
+        let name = if o.case.effects.is_empty() {
+            "clean".to_string()
+        } else {
+            o.case.effects.join("+")
+        } + if o.case.tp_only { " (TP only)" } else { "" };
+        let amb = o
+            .ambiguous
+            .iter()
+            .map(|a| format!("{{{}}}", a.join("|")))
+            .collect::<Vec<_>>()
+            .join(" ");
+        s.push_str(&format!(
+            "{name:<38} {:>5.2} {:>4}  {:<40} {:<6} {:<7} {:>6.2} {}\n",
+            o.case.scale,
+            o.case.seed,
+            format!(
+                "{} {amb}",
+                if o.found.is_empty() {
+                    "none".to_string()
+                } else {
+                    o.found.join(",")
+                }
+            ),
+            if o.exact { "yes" } else { "NO" },
+            match o.params_ok {
+                Some(true) => "ok",
+                Some(false) => "off",
+                None => "-",
+            },
+            o.final_over_noise,
+            o.note
+        ));
+    }
+    // confusion: concealed single effect (rows) vs found (columns)
+    let cols: Vec<&str> = std::iter::once("none").chain(EFFECTS).collect();
+    s.push_str("\nconfusion (concealed single effect -> effects named, counts):\n");
+    s.push_str(&format!("{:<16}", ""));
+    for c in &cols {
+        s.push_str(&format!("{:>6}", &c[..c.len().min(5)]));
+    }
+    s.push('\n');
+    for row in std::iter::once("clean").chain(EFFECTS) {
+        let cases: Vec<&Outcome> = outcomes
+            .iter()
+            .filter(|o| {
+                !o.case.tp_only
+                    && if row == "clean" {
+                        o.case.effects.is_empty()
+                    } else {
+                        o.case.effects == [row]
+                    }
+            })
+            .collect();
+        if cases.is_empty() {
+            continue;
+        }
+        s.push_str(&format!("{row:<16}"));
+        for c in &cols {
+            let n = cases
+                .iter()
+                .filter(|o| {
+                    let mut named: Vec<String> = o.found.clone();
+                    named.extend(o.ambiguous.iter().flatten().cloned());
+                    if *c == "none" {
+                        named.is_empty()
+                    } else {
+                        named.iter().any(|x| x == c)
+                    }
+                })
+                .count();
+            s.push_str(&format!("{n:>6}"));
+        }
+        s.push('\n');
+    }
+    let exact = outcomes.iter().filter(|o| o.exact).count();
+    let clean: Vec<&Outcome> = outcomes
+        .iter()
+        .filter(|o| o.case.effects.is_empty())
+        .collect();
+    let false_on_clean = clean
+        .iter()
+        .filter(|o| !o.found.is_empty() || !o.ambiguous.is_empty())
+        .count();
+    let p: Vec<bool> = outcomes.iter().filter_map(|o| o.params_ok).collect();
+    let resid_ok = outcomes
+        .iter()
+        .filter(|o| o.exact && o.final_over_noise <= 1.5)
+        .count();
+    s.push_str(&format!(
+        "\nexactly the right set: {exact}/{} ({:.0}%); false findings on clean recordings: {false_on_clean}/{}; parameters within 3 sigma: {}/{}; final residual <= 1.5x noise (exact cases): {resid_ok}/{exact}\n",
+        outcomes.len(),
+        100.0 * exact as f64 / outcomes.len().max(1) as f64,
+        clean.len(),
+        p.iter().filter(|b| **b).count(),
+        p.len()
+    ));
+    s
+}

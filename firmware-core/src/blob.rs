@@ -5,7 +5,7 @@
 //! | bytes | content |
 //! |---|---|
 //! | 0..4 | magic `ATCB` |
-//! | 4..6 | format version (u16), currently [`FORMAT_VERSION`] |
+//! | 4..6 | format version (u16), currently [`FORMAT_VERSION`] (2: optional physics terms) |
 //! | 6..n-4 | [`Blob`] encoded with postcard (serial, calibration) |
 //! | n-4..n | CRC-32 (IEEE) of bytes 0..n-4 |
 //!
@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 /// The four magic bytes a blob starts with.
 pub const MAGIC: [u8; 4] = *b"ATCB";
 /// The format version this firmware reads and writes.
-pub const FORMAT_VERSION: u16 = 1;
+pub const FORMAT_VERSION: u16 = 2;
 /// Bytes before the content.
 pub const HEADER_LEN: usize = 6;
 /// Bytes of the trailing checksum.
@@ -141,6 +141,7 @@ pub fn example_blob() -> Blob {
                 breakpoints: [-40.0f32, 20.0, 70.0].into_iter().collect(),
                 values: rows.into_iter().collect(),
             },
+            physics: None,
         },
     }
 }

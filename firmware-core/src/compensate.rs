@@ -99,6 +99,25 @@ pub struct Compensator<'a, R: Real = f32> {
     step: R,
     /// Flags of the cached temperature (range, clamping, SINGULAR), set at each update.
     sticky: Status,
+    /// Physics terms on (the calibration has them).
+    physics_on: bool,
+    /// Their state.
+    ph: PhysicsState<R>,
+}
+
+/// The state of the in-flight physics terms.
+#[derive(Clone, Copy, Debug, Default)]
+struct PhysicsState<R> {
+    started: bool,
+    /// Low-passed temperature (thermal lag).
+    t_lag: R,
+    /// Low-passed temperature whose difference is the rate.
+    t_rate: R,
+    /// Direction of the last change (hysteresis) and its reference temperature.
+    dir: R,
+    dir_ref: R,
+    /// Warm-up weight: 1 at power-on.
+    warm: R,
 }
 
 impl<'a, R: Real> Compensator<'a, R> {
@@ -119,6 +138,16 @@ impl<'a, R: Real> Compensator<'a, R> {
             t_max: cal.t_max_c,
             step: cal.update_step_c,
             sticky: Status::default(),
+            physics_on: cal.physics.is_some(),
+            ph: PhysicsState {
+                dir: cal
+                    .physics
+                    .as_ref()
+                    .map(|p| p.hysteresis_initial)
+                    .unwrap_or(R::ZERO),
+                warm: R::ONE,
+                ..PhysicsState::default()
+            },
         };
         s.update(cal.t0_c);
         Ok(s)
@@ -223,9 +252,90 @@ impl<'a, R: Real> Compensator<'a, R> {
     /// non-finite); the rare cases are classified off the fast path. The range flags
     /// are those of the cached temperature, evaluated at each update: within one
     /// update step of a range limit they may lag by up to that step.
+    ///
+    /// With physics terms in the calibration, one flag branch leads to
+    /// [`Compensator::compensate_physics`]; the cost stays fixed per sample.
+    pub fn compensate(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
+        if self.physics_on {
+            return self.compensate_physics(u, temp_c);
+        }
+        self.core(u, temp_c)
+    }
+
+    /// The physics terms around the core path: the temperature (when within 40 C of the
+    /// valid range) through the thermal-lag filter, the offsets of temperature rate, hysteresis and warm-up removed from the
+    /// voltages, then the K2 and scale-asymmetry terms corrected to first order
+    /// (`a = a_hat - N (k2 a_hat^2 + c |a_hat|)`, error second order in those terms).
+    #[inline(never)]
+    fn compensate_physics(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
+        let Some(p) = self.cal.physics.as_ref() else {
+            return self.core(u, temp_c);
+        };
+        let s = &mut self.ph;
+        let mut rate = R::ZERO;
+        let mut t_model = temp_c;
+        // A glitch far outside the valid range (a broken sensor reading) must not poison
+        // the filters for minutes: such a sample holds them, as a NaN does.
+        let margin = R::from_f32(40.0);
+        if temp_c >= self.t_min - margin && temp_c <= self.t_max + margin {
+            if !s.started {
+                s.started = true;
+                s.t_lag = temp_c;
+                s.t_rate = temp_c;
+                s.dir_ref = temp_c;
+            }
+            s.t_lag = s.t_lag + p.lag_alpha * (temp_c - s.t_lag);
+            let prev = s.t_rate;
+            s.t_rate = s.t_rate + p.rate_alpha * (temp_c - s.t_rate);
+            rate = (s.t_rate - prev) / p.sample_period_s;
+            if temp_c - s.dir_ref > p.hysteresis_threshold_c {
+                s.dir = R::ONE;
+                s.dir_ref = temp_c;
+            } else if s.dir_ref - temp_c > p.hysteresis_threshold_c {
+                s.dir = -R::ONE;
+                s.dir_ref = temp_c;
+            } else if (temp_c - s.dir_ref) * s.dir > R::ZERO {
+                s.dir_ref = temp_c;
+            }
+            t_model = s.t_lag;
+        }
+        let half = R::ONE / (R::ONE + R::ONE);
+        let [r0, r1, r2] = p.rate;
+        let [h0, h1, h2] = p.hysteresis;
+        let [d0, d1, d2] = p.warmup;
+        let (dir, w) = (s.dir * half, s.warm);
+        s.warm = s.warm * p.warmup_decay;
+        let offset = [
+            r0 * rate + h0 * dir + d0 * w,
+            r1 * rate + h1 * dir + d1 * w,
+            r2 * rate + h2 * dir + d2 * w,
+        ];
+        let mut out = self.core(sub3(u, offset), t_model);
+        if out.status.contains(Status::INPUT_NON_FINITE)
+            || out.status.contains(Status::OUTPUT_NON_FINITE)
+        {
+            return out;
+        }
+        let [a0, a1, a2] = out.accel;
+        let [k0, k1, k2] = p.k2;
+        let [c0, c1, c2] = p.asymmetry;
+        let e = [
+            k0 * a0 * a0 + c0 * a0.abs(),
+            k1 * a1 * a1 + c1 * a1.abs(),
+            k2 * a2 * a2 + c2 * a2.abs(),
+        ];
+        let n = match self.method {
+            Method::CorrectConstants => &self.n,
+            Method::CorrectResult(_) => &self.n0,
+        };
+        out.accel = sub3(out.accel, mat_vec(n, e));
+        out
+    }
+
     // The negated comparisons are the point: they are true for NaN.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    pub fn compensate(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
+    #[inline(always)]
+    fn core(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
         let mut status = self.sticky;
         if !((temp_c - self.t_cached).abs() <= self.step) {
             status = self.refresh(temp_c);

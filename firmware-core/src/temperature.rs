@@ -55,6 +55,97 @@ pub struct Calibration<R> {
     pub update_step_c: R,
     /// The coefficient tables.
     pub model: TempModel<R>,
+    /// Physics beyond the 12 coefficients, found by `host-fit diagnose` (None = off).
+    pub physics: Option<Physics<R>>,
+}
+
+/// Terms beyond the paper's model (physics-catalogue.md), applied in flight. Per-sample
+/// constants are computed on the host for the sample period, so the firmware needs no
+/// `exp` (libm's `expf` works in f64 and would pull soft-double code in).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Physics<R> {
+    /// The sample period the constants below are for, s.
+    pub sample_period_s: R,
+    /// `thermal_lag`: one-pole filter on the temperature input,
+    /// `T_eff += lag_alpha (T - T_eff)` (`1 - exp(-dt/tau)`; 1 = no lag).
+    pub lag_alpha: R,
+    /// `temp_rate`: offset per C/s of the temperature rate, per axis (output units).
+    pub rate: [R; 3],
+    /// Low-pass of the temperature whose difference is the rate (`1 - exp(-dt/tau_r)`).
+    pub rate_alpha: R,
+    /// `hysteresis`: offsets split `+-h/2` by the direction of the last change, per axis.
+    pub hysteresis: [R; 3],
+    /// A change of more than this (C) sets the direction.
+    pub hysteresis_threshold_c: R,
+    /// Direction at power-on (+1 heating, -1 cooling, 0 unknown).
+    pub hysteresis_initial: R,
+    /// `nonlinearity_k2`: `U_i += k2_i a_i^2`, per axis (output units per g^2).
+    pub k2: [R; 3],
+    /// `scale_asymmetry`: `U_i += c_i |a_i|` (`c_i = K_ii delta_i`), per axis.
+    pub asymmetry: [R; 3],
+    /// `warmup_drift`: `U0_i += d_i w`, `w` = 1 at power-on, times `warmup_decay` per sample.
+    pub warmup: [R; 3],
+    /// `exp(-dt / tau_w)`.
+    pub warmup_decay: R,
+}
+
+impl<R: Real> Physics<R> {
+    /// Check finiteness and ranges.
+    pub fn validate(&self) -> Result<(), Error> {
+        let scalars = [
+            self.sample_period_s,
+            self.lag_alpha,
+            self.rate_alpha,
+            self.hysteresis_threshold_c,
+            self.hysteresis_initial,
+            self.warmup_decay,
+        ];
+        let arrays = [
+            self.rate,
+            self.hysteresis,
+            self.k2,
+            self.asymmetry,
+            self.warmup,
+        ];
+        if !scalars
+            .iter()
+            .chain(arrays.iter().flatten())
+            .all(|v| v.is_finite())
+        {
+            return Err(Error::NonFinite);
+        }
+        let unit = |v: R| v > R::ZERO && v <= R::ONE;
+        if self.sample_period_s <= R::ZERO
+            || !unit(self.lag_alpha)
+            || !unit(self.rate_alpha)
+            || self.warmup_decay < R::ZERO
+            || self.warmup_decay > R::ONE
+            || self.hysteresis_threshold_c < R::ZERO
+        {
+            return Err(Error::BadRange);
+        }
+        Ok(())
+    }
+
+    /// Convert to another float type.
+    pub fn convert<S: Real>(&self) -> Physics<S> {
+        let c = |v: R| S::from_f64(v.to_f64());
+        let a = |v: [R; 3]| v.map(c);
+        Physics {
+            sample_period_s: c(self.sample_period_s),
+            lag_alpha: c(self.lag_alpha),
+            rate: a(self.rate),
+            rate_alpha: c(self.rate_alpha),
+            hysteresis: a(self.hysteresis),
+            hysteresis_threshold_c: c(self.hysteresis_threshold_c),
+            hysteresis_initial: c(self.hysteresis_initial),
+            k2: a(self.k2),
+            asymmetry: a(self.asymmetry),
+            warmup: a(self.warmup),
+            warmup_decay: c(self.warmup_decay),
+        }
+    }
 }
 
 fn row_finite<R: Real>(r: &CoeffRow<R>) -> bool {
@@ -173,6 +264,9 @@ impl<R: Real> Calibration<R> {
         if self.t_min_c >= self.t_max_c || self.update_step_c < R::ZERO {
             return Err(Error::BadRange);
         }
+        if let Some(p) = &self.physics {
+            p.validate()?;
+        }
         self.model.validate()
     }
 
@@ -191,6 +285,7 @@ impl<R: Real> Calibration<R> {
             clamp: self.clamp,
             update_step_c: c(self.update_step_c),
             model: self.model.convert(),
+            physics: self.physics.as_ref().map(Physics::convert),
         }
     }
 }

@@ -136,7 +136,8 @@ fn header_errors_are_specific() {
 
 /// Wrap arbitrary content in a valid header and CRC, so the content checks are reached.
 fn wrap(content: &[u8]) -> Vec<u8> {
-    let mut b = b"ATCB\x01\x00".to_vec();
+    let mut b = b"ATCB".to_vec();
+    b.extend_from_slice(&firmware_core::blob::FORMAT_VERSION.to_le_bytes());
     b.extend_from_slice(content);
     let crc = crc32(&b);
     b.extend_from_slice(&crc.to_le_bytes());

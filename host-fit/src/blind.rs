@@ -268,7 +268,11 @@ pub const EFFECTS: [&str; 8] = [
 /// the TP-only ambiguity. `long` adds seeds and smaller magnitudes.
 pub fn suite(long: bool) -> Vec<Case> {
     let seeds: Vec<u64> = if long { (1..=4).collect() } else { vec![1] };
-    let scales: Vec<f64> = if long { vec![1.0, 0.3, 0.1] } else { vec![1.0] };
+    let scales: Vec<f64> = if long {
+        vec![1.0, 0.3, 0.1, 0.03, 0.01]
+    } else {
+        vec![1.0]
+    };
     let mut v = Vec::new();
     for &seed in &seeds {
         v.push(Case {
@@ -387,7 +391,42 @@ pub fn report(outcomes: &[Outcome]) -> String {
         }
         s.push('\n');
     }
+    // where detection stops: the concealed effect named, by magnitude
+    let mut scales: Vec<f64> = outcomes
+        .iter()
+        .filter(|o| !o.case.effects.is_empty())
+        .map(|o| o.case.scale)
+        .collect();
+    scales.sort_by(|a, b| b.total_cmp(a));
+    scales.dedup();
+    s.push_str(
+        "\ndetection by magnitude (1 = the nominal size; effect named / exactly right / cases):\n",
+    );
+    for sc in &scales {
+        let at: Vec<&Outcome> = outcomes
+            .iter()
+            .filter(|o| !o.case.effects.is_empty() && o.case.scale == *sc)
+            .collect();
+        let named = at
+            .iter()
+            .filter(|o| {
+                o.case.effects.iter().all(|e| {
+                    o.found.iter().any(|f| f == e) || o.ambiguous.iter().flatten().any(|f| f == e)
+                })
+            })
+            .count();
+        let ex = at.iter().filter(|o| o.exact).count();
+        s.push_str(&format!("  {sc:>5.2}: {named}/{ex}/{}\n", at.len()));
+    }
     let exact = outcomes.iter().filter(|o| o.exact).count();
+    let detectable: Vec<&Outcome> = outcomes.iter().filter(|o| o.case.scale >= 0.1).collect();
+    s.push_str(&format!(
+        "exactly the right set at magnitudes >= 0.1: {}/{} ({:.0}%)\n",
+        detectable.iter().filter(|o| o.exact).count(),
+        detectable.len(),
+        100.0 * detectable.iter().filter(|o| o.exact).count() as f64
+            / detectable.len().max(1) as f64
+    ));
     let clean: Vec<&Outcome> = outcomes
         .iter()
         .filter(|o| o.case.effects.is_empty())

@@ -164,7 +164,10 @@ enum Command {
         /// Write an HTML report with residual plots before and after.
         #[arg(long)]
         report: Option<PathBuf>,
-        /// Overwrite an existing report.
+        /// Write the extended model (tables and in-flight physics terms) as a blob.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Overwrite existing outputs.
         #[arg(long)]
         force: bool,
         /// Machine-readable output.
@@ -224,6 +227,10 @@ enum Command {
         /// Seed of a new table.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Prefix of the method tags in the output (the harness prints `p` for the
+        /// blob with physics terms).
+        #[arg(long, default_value = "")]
+        tag_prefix: String,
         /// Overwrite an existing table.
         #[arg(long)]
         force: bool,
@@ -602,15 +609,27 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             recording,
             positions,
             report,
+            out: blob_out,
             force,
             json,
         } => {
-            if let Some(r) = &report {
-                check_writable(r, force)?;
+            for p in report.iter().chain(blob_out.iter()) {
+                check_writable(p, force)?;
             }
             let rec = load(&recording, positions.as_deref(), err)?;
             let d = crate::diagnose::diagnose(&rec)?;
-            let j = d.json(&rec);
+            let mut j = d.json(&rec);
+            if let Some(b) = &blob_out {
+                let cal = d.calibration(rec.t0_c);
+                let serial = if rec.unit.is_empty() {
+                    "UNKNOWN"
+                } else {
+                    rec.unit.as_str()
+                };
+                let (blob, bytes, dep) = build_blob(serial, &cal)?;
+                write_atomic(b, &bytes, force)?;
+                j["blob"] = json!({"path": b.display().to_string(), "bytes": bytes.len(), "physics": blob.calibration.physics.is_some(), "f32_departure_g": dep});
+            }
             if let Some(r) = &report {
                 let html = crate::report::diagnosis_report(&rec, &d)?;
                 write_atomic(r, html.as_bytes(), force)?;
@@ -680,6 +699,7 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             inputs,
             n,
             seed,
+            tag_prefix,
             force,
         } => {
             let bytes = std::fs::read(&blob).map_err(|e| HostError::io(&blob, &e))?;
@@ -702,7 +722,7 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
                     "length is not a multiple of 16 bytes (ux uy uz temp, f32)",
                 ));
             }
-            let (lines, worst) = crate::fwcheck::expected(&b, &table);
+            let (lines, worst) = crate::fwcheck::expected(&b, &table, &tag_prefix);
             for l in lines {
                 w(out, l)?;
             }

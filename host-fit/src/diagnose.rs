@@ -520,6 +520,17 @@ impl Data<'_> {
             Some(tau) => lagged_temps(self.rec, &self.obs, tau),
             None => self.obs.iter().map(|o| o.temp_c).collect(),
         };
+        self.coefficients_at(spec, x, labels, &temps)
+    }
+
+    /// K(T) and U0(T) of a fitted spec at the (effective) temperatures `temps`.
+    pub fn coefficients_at(
+        &self,
+        spec: &Spec,
+        x: &DVector<f64>,
+        labels: &[String],
+        temps: &[f64],
+    ) -> (Vec<[[f64; 3]; 3]>, Vec<[f64; 3]>) {
         let basis = spec.basis.clone();
         let obasis = spec
             .extras
@@ -536,7 +547,7 @@ impl Data<'_> {
             .unwrap_or_else(|| spec.basis.clone());
         let mut ks = Vec::new();
         let mut us = Vec::new();
-        for t in temps {
+        for &t in temps {
             let phi = basis.eval(self.t0, t);
             let ophi = obasis.eval(self.t0, t);
             let mut k = [[0.0; 3]; 3];
@@ -789,6 +800,93 @@ pub struct Diagnosis {
     pub obs: Vec<DObs>,
     /// Expected residual RMS from noise alone (output units, per window).
     pub noise_rms: f64,
+    /// The final model's coefficients on a grid over the data's temperatures (for the blob).
+    pub table: Vec<(f64, [f64; 12])>,
+    /// Median sample period of the recording, s.
+    pub sample_period_s: f64,
+    /// Direction of the hysteresis state at the start of the recording.
+    pub initial_direction: f64,
+}
+
+impl Diagnosis {
+    /// The extended model as a firmware calibration: the final model's coefficients as a
+    /// piecewise-linear table (up to 16 points, which also carries a temp_curvature
+    /// finding), and the in-flight physics terms of the findings (fixture_error only
+    /// corrects the calibration, which the final fit already does).
+    pub fn calibration(&self, t0: f64) -> firmware_core::temperature::Calibration<f64> {
+        use firmware_core::temperature::{Calibration, Physics, TempModel};
+        let f = &self.final_fit;
+        let get = |prefix: &str| -> [f64; 3] {
+            std::array::from_fn(|i| {
+                f.labels
+                    .iter()
+                    .position(|l| *l == format!("{prefix}_{}", AX[i]))
+                    .map(|j| f.x[j])
+                    .unwrap_or(0.0)
+            })
+        };
+        let dt = self.sample_period_s;
+        let mut ph = Physics {
+            sample_period_s: dt,
+            lag_alpha: 1.0,
+            rate: [0.0; 3],
+            rate_alpha: 1.0 - (-dt / 30.0f64).exp(),
+            hysteresis: [0.0; 3],
+            hysteresis_threshold_c: 0.5,
+            hysteresis_initial: self.initial_direction,
+            k2: [0.0; 3],
+            asymmetry: [0.0; 3],
+            warmup: [0.0; 3],
+            warmup_decay: 1.0,
+        };
+        let mut any = false;
+        for e in &f.spec.extras {
+            match e {
+                Extra::Lag(tau) => {
+                    ph.lag_alpha = 1.0 - (-dt / tau).exp();
+                    any = true;
+                }
+                Extra::Rate => {
+                    ph.rate = get("r");
+                    any = true;
+                }
+                Extra::Hysteresis => {
+                    ph.hysteresis = get("h");
+                    any = true;
+                }
+                Extra::K2 => {
+                    ph.k2 = get("k2");
+                    any = true;
+                }
+                Extra::Asymmetry => {
+                    ph.asymmetry = get("c");
+                    any = true;
+                }
+                Extra::Warmup(tau) => {
+                    ph.warmup = get("d");
+                    ph.warmup_decay = (-dt / tau).exp();
+                    any = true;
+                }
+                Extra::Curvature(_) | Extra::Fixture(_) => {}
+            }
+        }
+        let (lo, hi) = (
+            self.table.first().map(|r| r.0).unwrap_or(t0 - 1.0),
+            self.table.last().map(|r| r.0).unwrap_or(t0 + 1.0),
+        );
+        Calibration {
+            t0_c: t0,
+            t_min_c: lo,
+            t_max_c: hi.max(lo + 1.0),
+            clamp: false,
+            update_step_c: 0.1,
+            model: TempModel::Pwl {
+                breakpoints: self.table.iter().map(|r| r.0).collect(),
+                values: self.table.iter().map(|r| r.1).collect(),
+            },
+            physics: any.then_some(ph),
+        }
+    }
 }
 
 fn residual_rms(f: &Fit) -> f64 {
@@ -1091,6 +1189,32 @@ pub fn diagnose(rec: &Recording) -> Result<Diagnosis> {
         (s / n_rows as f64).sqrt()
     };
     let obs = data.obs.clone();
+    let nb = 16usize
+        .min(((tmax - tmin) / 2.0).floor() as usize + 1)
+        .max(2);
+    let grid: Vec<f64> = (0..nb)
+        .map(|k| tmin + (tmax - tmin) * k as f64 / (nb - 1) as f64)
+        .collect();
+    let (ks, us) = data.coefficients_at(&current.spec, &current.x, &current.labels, &grid);
+    let table = grid
+        .iter()
+        .zip(ks.iter().zip(&us))
+        .map(|(t, (k, u))| {
+            (
+                *t,
+                firmware_core::model::Coeffs { k: *k, u0: *u }.to_array(),
+            )
+        })
+        .collect();
+    let mut gaps: Vec<f64> = rec
+        .rows
+        .windows(2)
+        .map(|w| w[1].t_s - w[0].t_s)
+        .filter(|d| *d > 0.0)
+        .collect();
+    gaps.sort_by(f64::total_cmp);
+    let sample_period_s = gaps.get(gaps.len() / 2).copied().unwrap_or(1.0);
+    let initial_direction = series(rec).dir.first().copied().unwrap_or(0.0);
     Ok(Diagnosis {
         noise: nz,
         baseline,
@@ -1101,6 +1225,9 @@ pub fn diagnose(rec: &Recording) -> Result<Diagnosis> {
         not_identifiable,
         obs,
         noise_rms,
+        table,
+        sample_period_s,
+        initial_direction,
     })
 }
 

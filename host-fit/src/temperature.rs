@@ -173,6 +173,7 @@ impl ModelFit {
             clamp,
             update_step_c,
             model,
+            physics: None,
         }
     }
 }

@@ -155,3 +155,70 @@ fn real_tag_recording_finding_improves_the_held_out_fit() {
             < j["baseline"]["residual_rms"].as_f64().unwrap()
     );
 }
+
+/// The extended model goes into the blob and firmware-core compensates with it: on a
+/// recording with in-flight effects, every dwell's |dg| is smaller with the physics
+/// terms than with the same tables alone.
+#[test]
+fn extended_model_in_the_blob_compensates_better_in_firmware() {
+    use firmware_core::blob::Blob;
+    use firmware_core::compensate::Method;
+    use host_fit::positions::Positions;
+    use host_fit::recording::Recording;
+    let dir = std::env::temp_dir().join(format!("hf-phys-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let case = host_fit::blind::Case {
+        effects: vec!["nonlinearity_k2", "temp_rate", "warmup_drift"],
+        scale: 3.0,
+        seed: 5,
+        tp_only: false,
+    };
+    let sim = host_fit::simulate::simulate(&host_fit::blind::configure(&case), |_| {}).unwrap();
+    let p = dir.join("rec.csv");
+    std::fs::write(&p, &sim.csv).unwrap();
+    let blob_path = dir.join("unit.blob");
+    let (code, out, err) = cli(&[
+        "diagnose",
+        p.to_str().unwrap(),
+        "--out",
+        blob_path.to_str().unwrap(),
+        "--json",
+        "--force",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let found: Vec<&str> = j["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["effect"].as_str().unwrap())
+        .collect();
+    for e in &case.effects {
+        assert!(found.contains(e), "{e} not found: {found:?}");
+    }
+    assert_eq!(j["blob"]["physics"], true);
+    let with = Blob::decode(&std::fs::read(&blob_path).unwrap()).unwrap();
+    let p = with.calibration.physics.clone().unwrap();
+    assert!(
+        p.k2.iter().any(|v| *v != 0.0)
+            && p.rate.iter().any(|v| *v != 0.0)
+            && p.warmup.iter().any(|v| *v != 0.0)
+    );
+    let mut without = with.clone();
+    without.calibration.physics = None;
+    let rec = Recording::from_reader(
+        &dir.join("rec.csv"),
+        sim.csv.as_bytes(),
+        Positions::default(),
+    )
+    .unwrap();
+    let all = |_: usize| true;
+    let mean_dg = |b: &Blob| {
+        let v = host_fit::verify::verify(&rec, b, Method::CorrectConstants, &all).unwrap();
+        v.dwells.iter().map(|d| d.dg_mg.abs()).sum::<f64>() / v.dwells.len() as f64
+    };
+    let (a, b) = (mean_dg(&with), mean_dg(&without));
+    println!("mean |dg| over all dwells: with physics {a:.4} mg, tables alone {b:.4} mg");
+    assert!(a < 0.5 * b, "with physics {a} mg, without {b} mg");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

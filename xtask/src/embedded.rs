@@ -181,7 +181,21 @@ fn run_embedded() -> Result<Measured, String> {
         &s(&inputs),
         "--force",
     ])?;
-    let expected = host_fit(&["fw-vectors", "--blob", &s(&blob), "--inputs", &s(&inputs)])?;
+    let mut expected = host_fit(&["fw-vectors", "--blob", &s(&blob), "--inputs", &s(&inputs)])?;
+    // the extended model: a unit with in-flight effects, diagnosed, its blob with physics
+    let (prec, pblob) = (dir.join("in-flight.csv"), dir.join("in-flight.blob"));
+    let cfg = crate::root().join("examples/sim/in-flight-effects.toml");
+    host_fit(&["simulate", &s(&cfg), "--out", &s(&prec), "--force"])?;
+    host_fit(&["diagnose", &s(&prec), "--out", &s(&pblob), "--force"])?;
+    expected.push_str(&host_fit(&[
+        "fw-vectors",
+        "--blob",
+        &s(&pblob),
+        "--inputs",
+        &s(&inputs),
+        "--tag-prefix",
+        "p",
+    ])?);
 
     let crate_dir = crate::root().join("firmware-core/qemu-test");
     let target_dir = crate::root().join("target/qemu-test");
@@ -190,6 +204,7 @@ fn run_embedded() -> Result<Measured, String> {
         .args(["build", "--release", "--target-dir"])
         .arg(&target_dir)
         .env("FW_TEST_BLOB", &blob)
+        .env("FW_TEST_BLOB_PHYS", &pblob)
         .env("FW_TEST_INPUTS", &inputs);
     sh(&mut c)?;
     let elf = target_dir.join(TARGET).join("release/fw-qemu-test");
@@ -496,6 +511,26 @@ fn summary(m: &Measured) -> String {
             "| {name} | {} | 39 (a_hat 18, M a_hat + e 18, subtraction 3) | {:.1}x |\n",
             net(k),
             net(k) as f64 / 39.0
+        ));
+    }
+    // with physics: + filters and offsets (rate, hysteresis, warm-up: 12 mul/add + 3
+    // sub), the K2/asymmetry correction (6 mul, 3 add, 3 abs, 9 mul + 6 add + 3 sub)
+    for (k, name, floor) in [
+        (
+            "sample_pm1",
+            "method 1 per sample with the physics terms",
+            18 + 15 + 30,
+        ),
+        (
+            "sample_pm2full",
+            "method 2 (full) per sample with the physics terms",
+            39 + 15 + 30,
+        ),
+    ] {
+        s.push_str(&format!(
+            "| {name} | {} | {floor} (the method's floor, the offsets 15, the K2/asymmetry correction 30) | {:.1}x |\n",
+            net(k),
+            net(k) as f64 / floor as f64
         ));
     }
     for (k, name) in [

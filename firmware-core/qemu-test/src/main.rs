@@ -13,6 +13,8 @@ use firmware_core::temperature::{Calibration, TempModel};
 use panic_semihosting as _;
 
 static BLOB: &[u8] = include_bytes!(env!("FW_TEST_BLOB"));
+/// A blob from `host-fit diagnose --out`: tables plus in-flight physics terms.
+static BLOB_PHYS: &[u8] = include_bytes!(env!("FW_TEST_BLOB_PHYS"));
 static INPUTS: &[u8] = include_bytes!(env!("FW_TEST_INPUTS"));
 
 const METHODS: [(&str, Method); 3] = [
@@ -110,12 +112,22 @@ fn main() -> ! {
     };
     let stack_decode = used(sp);
 
-    for (tag, m) in METHODS {
-        let mut c = Compensator::new(&blob.calibration, m).unwrap();
-        for i in 0..n_inputs {
-            let (u, t) = input(i);
-            let o = c.compensate(u, t);
-            hprintln!("vec {} {} {:08x} {:08x} {:08x} {}", tag, i, o.accel[0].to_bits(), o.accel[1].to_bits(), o.accel[2].to_bits(), o.status.bits());
+    let phys = match Blob::decode(BLOB_PHYS) {
+        Ok(b) if b.calibration.physics.is_some() => b,
+        _ => {
+            hprintln!("error: the embedded physics blob does not decode or has no physics terms");
+            debug::exit(debug::EXIT_FAILURE);
+            loop {}
+        }
+    };
+    for (prefix, b) in [("", &blob), ("p", &phys)] {
+        for (tag, m) in METHODS {
+            let mut c = Compensator::new(&b.calibration, m).unwrap();
+            for i in 0..n_inputs {
+                let (u, t) = input(i);
+                let o = c.compensate(u, t);
+                hprintln!("vec {}{} {} {:08x} {:08x} {:08x} {}", prefix, tag, i, o.accel[0].to_bits(), o.accel[1].to_bits(), o.accel[2].to_bits(), o.status.bits());
+            }
         }
     }
 
@@ -145,6 +157,15 @@ fn main() -> ! {
         c.compensate(u, t);
         let du = [u[0] + 1e-6, u[1], u[2]];
         hprintln!("measure sample_{}", tag);
+        fw_mark_start();
+        black_box(c.compensate(black_box(du), black_box(t)));
+        fw_mark_stop();
+    }
+    for (tag, m) in METHODS {
+        let mut c = Compensator::new(&phys.calibration, m).unwrap();
+        c.compensate(u, t);
+        let du = [u[0] + 1e-6, u[1], u[2]];
+        hprintln!("measure sample_p{}", tag);
         fw_mark_start();
         black_box(c.compensate(black_box(du), black_box(t)));
         fw_mark_stop();

@@ -42,6 +42,7 @@ pub fn unit() -> impl Strategy<Value = Calibration<f32>> {
                     .into_iter()
                     .collect(),
             },
+            physics: None,
         }
     })
 }

@@ -329,6 +329,12 @@ impl<'a, R: Real> Compensator<'a, R> {
             Method::CorrectResult(_) => &self.n0,
         };
         out.accel = sub3(out.accel, mat_vec(n, e));
+        let [b0, b1, b2] = out.accel;
+        if !(b0 + b1 + b2).is_finite() {
+            // the quadratic term overflowed on a huge (finite) input
+            out.status.insert(Status::OUTPUT_NON_FINITE);
+            out.accel = [R::NAN; 3];
+        }
         out
     }
 

@@ -174,6 +174,26 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Fit (and optionally diagnose) every recording in a folder, in parallel.
+    Batch {
+        /// Folder of recordings (*.csv).
+        dir: PathBuf,
+        /// Output folder: one blob and one JSON per unit, and summary.csv.
+        #[arg(long)]
+        out: PathBuf,
+        /// Parallel jobs (default: one per core).
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Temperature model.
+        #[arg(long, value_enum, default_value = "pwl")]
+        model: ModelKind,
+        /// Also run the diagnosis on every unit.
+        #[arg(long)]
+        diagnose: bool,
+        /// Overwrite outputs of an earlier run.
+        #[arg(long)]
+        force: bool,
+    },
     /// Blind tests of the diagnosis on simulated recordings with concealed effects.
     Blind {
         /// The long suite (more seeds, magnitudes down to the edge of detectability).
@@ -599,6 +619,32 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
                 }
                 Ok(())
             }
+        }
+        Command::Batch {
+            dir,
+            out: out_dir,
+            jobs,
+            model,
+            diagnose,
+            force,
+        } => {
+            let t = std::time::Instant::now();
+            let res = crate::batch::run(&dir, &out_dir, jobs, model, diagnose, force)?;
+            let bad = res.iter().filter(|r| r.status != "ok").count();
+            for r in res.iter().filter(|r| r.status != "ok") {
+                let _ = writeln!(err, "{}: {}", r.file.display(), r.status);
+            }
+            w(
+                out,
+                format!(
+                    "{} units in {:.1} s: {} ok, {} failed; summary {}",
+                    res.len(),
+                    t.elapsed().as_secs_f64(),
+                    res.len() - bad,
+                    bad,
+                    out_dir.join("summary.csv").display()
+                ),
+            )
         }
         Command::Blind { long } => {
             let cases = crate::blind::suite(long);

@@ -5,6 +5,7 @@
 //! f64 and, for checks, in the firmware's own f32 path.
 #![forbid(unsafe_code)]
 
+pub mod batch;
 pub mod blind;
 pub mod calib;
 pub mod cli;

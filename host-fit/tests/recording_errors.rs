@@ -264,3 +264,35 @@ fn bad_format_metadata_is_an_error() {
         "not a supported format",
     );
 }
+
+#[test]
+fn a_failed_run_leaves_no_partial_files() {
+    let d = dir().join("nopartial");
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    let rec = d.join("rec.csv");
+    std::fs::write(&rec, format!("{HEAD}{}", good_rows(0))).unwrap();
+    let out = d.join("unit.blob");
+    // one temperature cannot carry a polynomial: the fit fails after the checks passed
+    let (code, _, err) = run(&[
+        "fit",
+        rec.to_str().unwrap(),
+        "--model",
+        "poly",
+        "--order",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(err.contains("3 or more temperatures"), "{err}");
+    let left: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        left,
+        vec!["rec.csv".to_string()],
+        "partial or temporary files left: {left:?}"
+    );
+}

@@ -49,9 +49,22 @@ pub fn toolchain() -> Result<PathBuf, String> {
         "xtask: downloading Debian's rustc-web toolchain (~150 MB) into {}",
         dir.display()
     );
-    sh(Command::new("apt-get").arg("download").args(PACKAGES).current_dir(&debs)).map_err(|e| {
-        format!("{e}\n(apt-get download needs current package lists: run `apt-get update` as root once)")
-    })?;
+    if sh(Command::new("apt-get")
+        .arg("download")
+        .args(PACKAGES)
+        .current_dir(&debs))
+    .is_err()
+    {
+        // stale package lists (the security archive keeps only the newest build)
+        crate::setup::apt_update()?;
+        sh(Command::new("apt-get")
+            .arg("download")
+            .args(PACKAGES)
+            .current_dir(&debs))
+        .map_err(|e| {
+            format!("{e}\n(apt-get download needs current package lists: `apt-get update` as root)")
+        })?;
+    }
     std::fs::create_dir_all(&sysroot).map_err(|e| e.to_string())?;
     for entry in std::fs::read_dir(&debs).map_err(|e| e.to_string())? {
         let deb = entry.map_err(|e| e.to_string())?.path();
@@ -154,6 +167,8 @@ struct Measured {
 }
 
 fn run_embedded() -> Result<Measured, String> {
+    crate::setup::qemu()?;
+    crate::setup::tools()?;
     let sysroot = toolchain()?;
     let dir = crate::root().join("target/qemu");
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;

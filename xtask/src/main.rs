@@ -1,6 +1,9 @@
 //! Project tasks: `cargo xtask test | demo`. Each task runs every step, collects the
 //! failures and exits non-zero at the end if any step failed.
+mod bench;
 mod embedded;
+mod fuzz;
+mod setup;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -121,6 +124,14 @@ fn test() -> ExitCode {
     );
     embedded::cross(&mut s);
     embedded::embedded(&mut s);
+    // the fuzz smoke run: XTASK_FUZZ_SECONDS per target (default 30)
+    let secs = std::env::var("XTASK_FUZZ_SECONDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(30);
+    if secs > 0 {
+        fuzz::fuzz(&mut s, secs);
+    }
     s.finish()
 }
 
@@ -147,6 +158,22 @@ fn main() -> ExitCode {
     match argv.first().map(String::as_str) {
         Some("test") => test(),
         Some("demo") => demo(&argv[1..]),
+        Some("fuzz") => {
+            let secs = argv
+                .iter()
+                .position(|a| a == "--seconds")
+                .and_then(|i| argv.get(i + 1))
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(60);
+            let mut s = Steps::new();
+            fuzz::fuzz(&mut s, secs);
+            s.finish()
+        }
+        Some("bench") => {
+            let mut s = Steps::new();
+            bench::bench(&mut s);
+            s.finish()
+        }
         Some("blind") => {
             let mut c = cargo();
             c.args([
@@ -174,7 +201,7 @@ fn main() -> ExitCode {
             s.finish()
         }
         _ => {
-            eprintln!("usage: cargo xtask <test | demo [args] | blind | cross | embedded>");
+            eprintln!("usage: cargo xtask <test | demo [args] | blind | bench | fuzz [--seconds N] | cross | embedded>");
             ExitCode::FAILURE
         }
     }

@@ -1,0 +1,99 @@
+//! The compensator at its edges: any f32 bit pattern for the voltages and the
+//! temperature, with and without the physics terms, never panics and never yields a
+//! non-finite acceleration without a flag; blobs round-trip and every bit flip is caught.
+mod common;
+
+use firmware_core::blob::{Blob, MAX_BLOB_LEN};
+use firmware_core::compensate::{Compensator, ErrorModel, Method, Status};
+use firmware_core::temperature::{Calibration, Physics, TempModel};
+use proptest::prelude::*;
+
+fn physics() -> Physics<f32> {
+    Physics {
+        sample_period_s: 1.0,
+        lag_alpha: 0.01,
+        rate: [0.02, 0.0, -0.01],
+        rate_alpha: 0.03,
+        hysteresis: [1e-4, 0.0, 0.0],
+        hysteresis_threshold_c: 0.5,
+        hysteresis_initial: 1.0,
+        k2: [1e-4, 0.0, 0.0],
+        asymmetry: [0.0, 1e-4, 0.0],
+        warmup: [2e-4, 0.0, 0.0],
+        warmup_decay: 0.999,
+    }
+}
+
+/// Any f32: normal values of every size, subnormals, zeros, infinities and NaNs.
+fn any_f32() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        any::<u32>().prop_map(f32::from_bits),
+        -100.0f32..100.0,
+        Just(f32::NAN),
+        Just(f32::INFINITY),
+        Just(f32::NEG_INFINITY),
+        Just(1e-40f32),
+        Just(3e38f32),
+    ]
+}
+
+const METHODS: [Method; 3] = [
+    Method::CorrectConstants,
+    Method::CorrectResult(ErrorModel::Full),
+    Method::CorrectResult(ErrorModel::Simplified),
+];
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn no_input_sequence_gives_an_unflagged_non_finite_output(
+        cal in common::unit(), phys in any::<bool>(), m in 0usize..3,
+        seq in prop::collection::vec((prop::array::uniform3(any_f32()), any_f32()), 1..40)) {
+        let mut cal: Calibration<f32> = cal;
+        if phys {
+            cal.physics = Some(physics());
+        }
+        let mut c = Compensator::new(&cal, METHODS[m]).unwrap();
+        for (u, t) in seq {
+            let o = c.compensate(u, t);
+            let finite = o.accel.iter().all(|v| v.is_finite());
+            if !finite {
+                prop_assert!(o.status.contains(Status::INPUT_NON_FINITE) || o.status.contains(Status::OUTPUT_NON_FINITE));
+                prop_assert!(o.accel.iter().all(|v| v.to_bits() == f32::NAN.to_bits()), "one canonical NaN");
+            }
+            if !u.iter().all(|v| v.is_finite()) {
+                prop_assert!(o.status.contains(Status::INPUT_NON_FINITE));
+            }
+            if !t.is_finite() {
+                prop_assert!(o.status.contains(Status::TEMP_NON_FINITE));
+            }
+            // a good sample after any history is compensated normally
+            let g = c.compensate([0.0045, -0.0044, -0.5521], 20.0);
+            prop_assert!(g.accel.iter().all(|v| v.is_finite()));
+        }
+    }
+
+    #[test]
+    fn decode_of_encode_is_identity_and_flips_are_caught(cal in common::unit(), poly in any::<bool>(),
+            with_phys in any::<bool>(), flip in any::<prop::sample::Index>()) {
+        let mut cal: Calibration<f32> = cal;
+        if poly {
+            let t0 = cal.at_t0();
+            cal.model = TempModel::Poly { terms: [t0, [1e-5; 12], [-2e-7; 12]].into_iter().collect() };
+        }
+        if with_phys {
+            cal.physics = Some(physics());
+        }
+        let mut serial = heapless::String::new();
+        serial.push_str("UNIT-7").unwrap();
+        let blob = Blob { serial, calibration: cal };
+        let mut buf = [0u8; MAX_BLOB_LEN];
+        let n = blob.encode(&mut buf).unwrap();
+        prop_assert_eq!(Blob::decode(&buf[..n]).unwrap(), blob);
+        let bit = flip.index(n * 8);
+        let mut bad = buf[..n].to_vec();
+        bad[bit / 8] ^= 1 << (bit % 8);
+        prop_assert!(Blob::decode(&bad).is_err());
+    }
+}

@@ -1,0 +1,16 @@
+//! Any text as a positions file: an error or positions, never a panic; every position
+//! is a unit vector.
+#![no_main]
+use host_fit::positions::Positions;
+use libfuzzer_sys::fuzz_target;
+use std::path::Path;
+
+fuzz_target!(|data: &[u8]| {
+    let Ok(text) = std::str::from_utf8(data) else { return };
+    if let Ok((p, _)) = Positions::parse(Path::new("fuzz.csv"), text) {
+        for pos in &p.list {
+            let n = pos.a.iter().map(|v| v * v).sum::<f64>().sqrt();
+            assert!((n - 1.0).abs() < 1e-9, "{} has length {n}", pos.name);
+        }
+    }
+});

@@ -1,0 +1,57 @@
+//! Host costs against recording length: reading, identification + temperature fit,
+//! diagnosis. The recordings are the blind-test profile with 3, 5 and 9 stops.
+// criterion's macros define undocumented functions
+#![allow(missing_docs)]
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use host_fit::cli::{fit_recording, ModelKind, Route};
+use host_fit::positions::Positions;
+use host_fit::recording::Recording;
+use host_fit::simulate::{simulate, Stop};
+use std::path::Path;
+
+fn recording(stops: usize) -> String {
+    let mut cfg = host_fit::blind::profile(false);
+    let temps = [20.0, -20.0, 10.0, 40.0, 10.0, 30.0, 0.0, 35.0, 15.0];
+    let pos = cfg.schedule.positions.clone();
+    cfg.schedule.stops = temps[..stops]
+        .iter()
+        .map(|t| Stop {
+            temp_c: *t,
+            soak_s: 1200.0,
+            ramp_c_per_min: 1.0,
+            positions: Some(pos.clone()),
+        })
+        .collect();
+    simulate(&cfg, |_| {}).unwrap().csv
+}
+
+fn host(c: &mut Criterion) {
+    let mut g = c.benchmark_group("host");
+    g.sample_size(10)
+        .measurement_time(std::time::Duration::from_secs(3));
+    for stops in [3usize, 5, 9] {
+        let csv = recording(stops);
+        let rows = csv.lines().count() as u64;
+        g.throughput(Throughput::Elements(rows));
+        g.bench_with_input(BenchmarkId::new("read", rows), &csv, |b, csv| {
+            b.iter(|| {
+                Recording::from_reader(Path::new("r.csv"), csv.as_bytes(), Positions::default())
+                    .unwrap()
+            })
+        });
+        let rec = Recording::from_reader(Path::new("r.csv"), csv.as_bytes(), Positions::default())
+            .unwrap();
+        let tp = |p: usize| !rec.positions.name(p).starts_with("PP");
+        g.bench_with_input(BenchmarkId::new("fit", rows), &rec, |b, rec| {
+            b.iter(|| fit_recording(rec, &tp, ModelKind::Pwl, None, None, Route::Joint).unwrap())
+        });
+        g.bench_with_input(BenchmarkId::new("diagnose", rows), &rec, |b, rec| {
+            b.iter(|| host_fit::diagnose::diagnose(rec).unwrap())
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, host);
+criterion_main!(benches);

@@ -1,0 +1,106 @@
+//! What the full test needs beyond the Rust toolchain, installed when missing: QEMU 10
+//! from bookworm-backports, LLVM's nm/size, gcc, cargo-fuzz. Installing with apt needs
+//! root (CI runs as root); otherwise the message says what to install.
+use std::process::Command;
+
+fn ok(cmd: &mut Command) -> bool {
+    cmd.output().map(|o| o.status.success()).unwrap_or(false)
+}
+
+fn is_root() -> bool {
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+        .unwrap_or(false)
+}
+
+fn apt(args: &[&str]) -> Result<(), String> {
+    let st = Command::new("apt-get")
+        .args(args)
+        .env("DEBIAN_FRONTEND", "noninteractive")
+        .status()
+        .map_err(|e| e.to_string())?;
+    if st.success() {
+        Ok(())
+    } else {
+        Err(format!("apt-get {args:?} failed"))
+    }
+}
+
+/// Refresh the package lists (for `apt-get download` and installs).
+pub fn apt_update() -> Result<(), String> {
+    if !is_root() {
+        return Err("apt-get update needs root".into());
+    }
+    apt(&["update", "-qq"])
+}
+
+/// qemu-system-arm 10 (bookworm-backports: plain bookworm's 7.2 would remove the
+/// image's backports qemu-utils).
+pub fn qemu() -> Result<(), String> {
+    let have = Command::new("qemu-system-arm")
+        .arg("--version")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).contains("version 1"))
+        .unwrap_or(false);
+    if have {
+        return Ok(());
+    }
+    if !is_root() {
+        return Err("qemu-system-arm 10 is missing: apt-get install -t bookworm-backports --no-install-recommends qemu-system-arm (as root)".into());
+    }
+    let listed = ok(Command::new("grep").args([
+        "-rqs",
+        "bookworm-backports",
+        "/etc/apt/sources.list",
+        "/etc/apt/sources.list.d/",
+    ]));
+    if !listed {
+        std::fs::write(
+            "/etc/apt/sources.list.d/bookworm-backports.list",
+            "deb http://deb.debian.org/debian bookworm-backports main\n",
+        )
+        .map_err(|e| e.to_string())?;
+    }
+    apt_update()?;
+    apt(&[
+        "install",
+        "-y",
+        "-qq",
+        "-t",
+        "bookworm-backports",
+        "--no-install-recommends",
+        "qemu-system-arm",
+    ])
+}
+
+/// llvm-nm / llvm-size and gcc.
+pub fn tools() -> Result<(), String> {
+    for (cmd, pkg) in [("llvm-nm", "llvm"), ("llvm-size", "llvm"), ("gcc", "gcc")] {
+        if !ok(Command::new(cmd).arg("--version")) {
+            if !is_root() {
+                return Err(format!("{cmd} is missing: apt-get install {pkg}"));
+            }
+            apt(&["install", "-y", "-qq", "--no-install-recommends", pkg])?;
+        }
+    }
+    Ok(())
+}
+
+/// cargo-fuzz for the nightly toolchain (from crates.io).
+pub fn cargo_fuzz() -> Result<(), String> {
+    if ok(Command::new("cargo").args(["+nightly", "fuzz", "--version"])) {
+        return Ok(());
+    }
+    eprintln!("xtask: installing cargo-fuzz from crates.io");
+    let st = Command::new("cargo")
+        .args(["install", "cargo-fuzz", "--locked"])
+        .status()
+        .map_err(|e| e.to_string())?;
+    if st.success() {
+        Ok(())
+    } else {
+        Err("cargo install cargo-fuzz failed".into())
+    }
+}

@@ -253,16 +253,7 @@ pub fn run(case: &Case) -> Outcome {
 }
 
 /// Every catalogue effect the simulator conceals.
-pub const EFFECTS: [&str; 8] = [
-    "temp_curvature",
-    "thermal_lag",
-    "temp_rate",
-    "hysteresis",
-    "nonlinearity_k2",
-    "scale_asymmetry",
-    "fixture_error",
-    "warmup_drift",
-];
+pub const EFFECTS: [&str; 8] = crate::diagnose::EFFECT_IDS;
 
 /// The suite: clean recordings, each effect at several magnitudes and seeds, pairs, and
 /// the TP-only ambiguity. `long` adds seeds and smaller magnitudes.

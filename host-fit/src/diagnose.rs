@@ -22,6 +22,17 @@ use serde_json::{json, Map, Value};
 pub const BIC_MARGIN: f64 = 10.0;
 /// Two candidates within this much BIC of each other explain the data equally well.
 pub const AMBIGUITY_MARGIN: f64 = 6.0;
+/// The catalogue's effect ids, in the order candidates are tried.
+pub const EFFECT_IDS: [&str; 8] = [
+    "temp_curvature",
+    "thermal_lag",
+    "temp_rate",
+    "hysteresis",
+    "nonlinearity_k2",
+    "scale_asymmetry",
+    "fixture_error",
+    "warmup_drift",
+];
 /// A `-` run longer than this (s) is handling (the unit re-mounted, turned by hand).
 pub const HANDLING_S: f64 = 120.0;
 
@@ -314,38 +325,31 @@ impl Data<'_> {
         w
     }
 
-    /// Build the stacked design (rows: obs x axis) for `spec`; `base` provides K(T) for
-    /// fixture columns.
-    fn design(&self, spec: &Spec, base: Option<&Fit>) -> (DMatrix<f64>, DVector<f64>, Vec<String>) {
-        let n = self.obs.len();
-        let lag = spec.extras.iter().find_map(|e| {
+    /// The temperature each observation's model is evaluated at: the sensor's, or its
+    /// low-pass with the thermal-lag time constant of the spec.
+    fn model_temps(&self, spec: &Spec) -> Vec<f64> {
+        match spec.extras.iter().find_map(|e| {
             if let Extra::Lag(t) = e {
                 Some(*t)
             } else {
                 None
             }
-        });
-        let temps: Vec<f64> = match lag {
+        }) {
             Some(tau) => lagged_temps(self.rec, &self.obs, tau),
             None => self.obs.iter().map(|o| o.temp_c).collect(),
-        };
+        }
+    }
+
+    /// Build the stacked design (rows: obs x axis) for `spec`; `base` provides K(T) for
+    /// fixture columns.
+    fn design(&self, spec: &Spec, base: Option<&Fit>) -> (DMatrix<f64>, DVector<f64>, Vec<String>) {
+        let n = self.obs.len();
+        let temps = self.model_temps(spec);
         let basis = spec.basis.clone();
         let nb = basis.len();
         let phis: Vec<Vec<f64>> = temps.iter().map(|t| basis.eval(self.t0, *t)).collect();
         // temp_curvature bends the offsets: their basis becomes a fine piecewise-linear one
-        let obasis = spec
-            .extras
-            .iter()
-            .find_map(|e| {
-                if let Extra::Curvature(b) = e {
-                    Some(Basis::Pwl {
-                        breakpoints: b.clone(),
-                    })
-                } else {
-                    None
-                }
-            })
-            .unwrap_or_else(|| spec.basis.clone());
+        let obasis = offset_basis(spec);
         let onb = obasis.len();
         let ophis: Vec<Vec<f64>> = temps.iter().map(|t| obasis.eval(self.t0, *t)).collect();
         let mut labels = Vec::new();
@@ -509,17 +513,7 @@ impl Data<'_> {
         x: &DVector<f64>,
         labels: &[String],
     ) -> (Vec<[[f64; 3]; 3]>, Vec<[f64; 3]>) {
-        let lag = spec.extras.iter().find_map(|e| {
-            if let Extra::Lag(t) = e {
-                Some(*t)
-            } else {
-                None
-            }
-        });
-        let temps: Vec<f64> = match lag {
-            Some(tau) => lagged_temps(self.rec, &self.obs, tau),
-            None => self.obs.iter().map(|o| o.temp_c).collect(),
-        };
+        let temps = self.model_temps(spec);
         self.coefficients_at(spec, x, labels, &temps)
     }
 
@@ -532,19 +526,7 @@ impl Data<'_> {
         temps: &[f64],
     ) -> (Vec<[[f64; 3]; 3]>, Vec<[f64; 3]>) {
         let basis = spec.basis.clone();
-        let obasis = spec
-            .extras
-            .iter()
-            .find_map(|e| {
-                if let Extra::Curvature(b) = e {
-                    Some(Basis::Pwl {
-                        breakpoints: b.clone(),
-                    })
-                } else {
-                    None
-                }
-            })
-            .unwrap_or_else(|| spec.basis.clone());
+        let obasis = offset_basis(spec);
         let mut ks = Vec::new();
         let mut us = Vec::new();
         for &t in temps {
@@ -570,6 +552,23 @@ impl Data<'_> {
         }
         (ks, us)
     }
+}
+
+/// The offsets' temperature basis: temp_curvature bends them with a fine piecewise-linear
+/// one; otherwise the baseline's.
+fn offset_basis(spec: &Spec) -> Basis {
+    spec.extras
+        .iter()
+        .find_map(|e| {
+            if let Extra::Curvature(b) = e {
+                Some(Basis::Pwl {
+                    breakpoints: b.clone(),
+                })
+            } else {
+                None
+            }
+        })
+        .unwrap_or_else(|| spec.basis.clone())
 }
 
 fn cross(u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
@@ -1127,8 +1126,8 @@ pub fn diagnose(rec: &Recording) -> Result<Diagnosis> {
         let Some((best, d)) = per_id.first().cloned() else {
             break;
         };
-        let id = best.spec.extras.last().map(|e| e.id()).unwrap_or("");
-        let rivals: Vec<&str> = per_id[1..]
+        let id: &'static str = best.spec.extras.last().map(|e| e.id()).unwrap_or("none");
+        let rivals: Vec<&'static str> = per_id[1..]
             .iter()
             .filter(|(_, d2)| (d2 - d).abs() < AMBIGUITY_MARGIN)
             .filter_map(|(f, _)| f.spec.extras.last().map(|e| e.id()))
@@ -1144,38 +1143,11 @@ pub fn diagnose(rec: &Recording) -> Result<Diagnosis> {
                 candidates: c,
                 needed: need,
             });
-            used.extend(rivals.iter().filter_map(|r| {
-                [
-                    "temp_curvature",
-                    "thermal_lag",
-                    "temp_rate",
-                    "hysteresis",
-                    "nonlinearity_k2",
-                    "scale_asymmetry",
-                    "fixture_error",
-                    "warmup_drift",
-                ]
-                .into_iter()
-                .find(|x| x == r)
-            }));
+            used.extend(rivals.iter().copied());
         }
-        used.push(
-            [
-                "temp_curvature",
-                "thermal_lag",
-                "temp_rate",
-                "hysteresis",
-                "nonlinearity_k2",
-                "scale_asymmetry",
-                "fixture_error",
-                "warmup_drift",
-            ]
-            .into_iter()
-            .find(|x| *x == id)
-            .unwrap_or("none"),
-        );
+        used.push(id);
         current = best;
-        if used.len() >= 8 {
+        if used.len() >= EFFECT_IDS.len() {
             break;
         }
     }

@@ -153,6 +153,22 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The engineer's HTML report of a recording: the paper's and richer models,
+    /// compensated through firmware-core, dg per verification position, the coefficients
+    /// against temperature, residuals against time.
+    Report {
+        /// The recording.
+        recording: PathBuf,
+        /// Positions file (name,fx,fy,fz).
+        #[arg(long)]
+        positions: Option<PathBuf>,
+        /// The HTML file to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Overwrite an existing file.
+        #[arg(long)]
+        force: bool,
+    },
     /// Locate where the model and a recording disagree, name the physics left out,
     /// model it and show the fit improve (JSON contract at-diagnosis/1).
     Diagnose {
@@ -645,6 +661,21 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
                     out_dir.join("summary.csv").display()
                 ),
             )
+        }
+        Command::Report {
+            recording,
+            positions,
+            out: html_out,
+            force,
+        } => {
+            check_writable(&html_out, force)?;
+            let rec = load(&recording, positions.as_deref(), err)?;
+            let oc = crate::demo::analyse(rec, None, None)?;
+            let table = crate::demo::table(&oc.rows);
+            let html = crate::report::demo_report(&oc, &table)?;
+            write_atomic(&html_out, html.as_bytes(), force)?;
+            w(out, table)?;
+            w(out, format!("report: {}", html_out.display()))
         }
         Command::Blind { long } => {
             let cases = crate::blind::suite(long);

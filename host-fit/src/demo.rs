@@ -53,9 +53,9 @@ pub struct DemoOutcome {
     pub models: Vec<DemoModel>,
     /// summary.json rows.
     pub rows: Vec<SummaryRow>,
-    /// The simulated truth.
-    pub truth: TrueUnit,
-    /// Files written.
+    /// The simulated truth, when the recording is simulated.
+    pub truth: Option<TrueUnit>,
+    /// Files written (the demo's).
     pub files: Vec<PathBuf>,
 }
 
@@ -127,7 +127,26 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<DemoOutcome> {
         .map_err(|e| HostError::msg(e.to_string()))?;
     write_atomic(&dir.join("truth.json"), truth_json.as_bytes(), force)?;
     let rec = Recording::from_reader(&rec_path, sim.csv.as_bytes(), Positions::default())?;
+    let oc = analyse(rec, Some((dir, force)), Some(TrueUnit::new(&cfg)?))?;
+    let serial = oc.recording.unit.clone();
+    let summary = serde_json::to_string_pretty(
+        &serde_json::json!({"unit": serial, "seed": seed, "rows": oc.rows}),
+    )
+    .map_err(|e| HostError::msg(e.to_string()))?;
+    write_atomic(&dir.join("summary.json"), summary.as_bytes(), force)?;
+    let report = crate::report::demo_report(&oc, &table(&oc.rows))?;
+    write_atomic(&dir.join("report.html"), report.as_bytes(), force)?;
+    Ok(oc)
+}
 
+/// Fit a recording with the paper's model (when it has stops near -40, +20 and +70 C)
+/// and the richer ones, build the blobs (written to `blobs` when given), compensate its
+/// verification dwells (PP positions) with methods 1 and 2 through firmware-core.
+pub fn analyse(
+    rec: Recording,
+    blobs: Option<(&Path, bool)>,
+    truth: Option<TrueUnit>,
+) -> Result<DemoOutcome> {
     let b = bar(4, "fitting");
     let pp: Vec<bool> = (0..rec.positions.list.len())
         .map(|i| rec.positions.name(i).starts_with("PP"))
@@ -136,7 +155,7 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<DemoOutcome> {
     let fit_sel = |p: usize| !is_pp(p);
     let stops = identify_stops(&rec, &fit_sel)?;
     let t0 = rec.t0_c;
-    let paper = paper_pwl2(&stops, t0)?;
+    let paper = paper_pwl2(&stops, t0).ok();
     b.inc(1);
     let obs = observations(&rec, &fit_sel, 0.25);
     let nz = noise(&rec);
@@ -149,7 +168,6 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<DemoOutcome> {
         .collect();
     let pwl_all = fit_joint(&obs, &nz, &Basis::Pwl { breakpoints: bps }, t0, &rec.path)?;
     b.inc(1);
-
     let serial = if rec.unit.is_empty() {
         "UNKNOWN".to_string()
     } else {
@@ -158,15 +176,23 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<DemoOutcome> {
     let mut models = Vec::new();
     let mut rows = Vec::new();
     let poly_name = poly.basis.describe();
-    for (name, file, fit) in [
-        ("paper-pwl2", "paper-pwl2.blob", paper),
-        (poly_name.as_str(), "poly.blob", poly),
-        ("pwl-all", "pwl-all.blob", pwl_all),
-    ] {
+    let mut fits = Vec::new();
+    if let Some(p) = paper {
+        fits.push(("paper-pwl2", "paper-pwl2.blob", p));
+    }
+    fits.push((poly_name.as_str(), "poly.blob", poly));
+    fits.push(("pwl-all", "pwl-all.blob", pwl_all));
+    for (name, file, fit) in fits {
         let cal = fit.calibration(0.1, false);
         let (blob, bytes, _) = build_blob(&serial, &cal)?;
-        let path = dir.join(file);
-        write_atomic(&path, &bytes, force)?;
+        let path = match blobs {
+            Some((dir, force)) => {
+                let p = dir.join(file);
+                write_atomic(&p, &bytes, force)?;
+                p
+            }
+            None => PathBuf::from(file),
+        };
         let v1 = verify(&rec, &blob, Method::CorrectConstants, &is_pp)
             .ok_or_else(|| HostError::msg("singular K(T0)"))?;
         let v2 = verify(&rec, &blob, Method::CorrectResult(ErrorModel::Full), &is_pp)
@@ -200,23 +226,14 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<DemoOutcome> {
     }
     b.inc(1);
     b.finish_and_clear();
-    let summary = serde_json::to_string_pretty(
-        &serde_json::json!({"unit": serial, "seed": seed, "rows": rows}),
-    )
-    .map_err(|e| HostError::msg(e.to_string()))?;
-    write_atomic(&dir.join("summary.json"), summary.as_bytes(), force)?;
-    let truth = TrueUnit::new(&cfg)?;
-    let oc = DemoOutcome {
+    Ok(DemoOutcome {
         recording: rec,
         stops,
         models,
         rows,
         truth,
-        files: outputs(dir),
-    };
-    let report = crate::report::demo_report(&oc, &table(&oc.rows))?;
-    write_atomic(&dir.join("report.html"), report.as_bytes(), force)?;
-    Ok(oc)
+        files: Vec::new(),
+    })
 }
 
 fn round2(t: f64) -> f64 {

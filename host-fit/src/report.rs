@@ -299,16 +299,18 @@ fn coeff_plots(oc: &DemoOutcome) -> Vec<Plot> {
             markers: true,
             errors: Some(oc.stops.iter().map(|s| s.stderr[c] * scale).collect()),
         }];
-        series.push(Series {
-            name: "truth".into(),
-            color: PALETTE[6],
-            points: grid
-                .iter()
-                .map(|t| (*t, oc.truth.coeffs(*t)[c] * scale))
-                .collect(),
-            markers: false,
-            errors: None,
-        });
+        if let Some(truth) = &oc.truth {
+            series.push(Series {
+                name: "truth".into(),
+                color: PALETTE[6],
+                points: grid
+                    .iter()
+                    .map(|t| (*t, truth.coeffs(*t)[c] * scale))
+                    .collect(),
+                markers: false,
+                errors: None,
+            });
+        }
         for (i, m) in oc.models.iter().enumerate() {
             series.push(Series {
                 name: m.name.clone(),
@@ -405,7 +407,7 @@ fn residual_plots(oc: &DemoOutcome, model: &DemoModel) -> Vec<Plot> {
 /// The demo's report.
 pub fn demo_report(oc: &DemoOutcome, table: &str) -> Result<String> {
     let intro = format!(
-        "<p>Unit {} simulated through the paper's profile, {} samples. Models: {}. Compensation by firmware-core in f32 (methods 1 and 2).</p>\n<pre>{}</pre>",
+        "<p>Unit {}, {} samples. Models: {}. Compensation by firmware-core in f32 (methods 1 and 2).</p>\n<pre>{}</pre>",
         esc(&oc.recording.unit),
         oc.recording.rows.len(),
         oc.models.iter().map(|m| esc(&m.name)).collect::<Vec<_>>().join(", "),
@@ -417,7 +419,7 @@ pub fn demo_report(oc: &DemoOutcome, table: &str) -> Result<String> {
         .min_by(|a, b| worst(a).total_cmp(&worst(b)));
     let mut sections = vec![
         ("dg in the verification positions (formula (13))".to_string(), "Per temperature: uncompensated (T0 constants) and every model with methods 1 and 2; the acceptance band is 0.3 mg at T0 and 1 mg elsewhere.".to_string(), dg_plots(oc)),
-        ("The 12 coefficients against temperature".to_string(), "Per-stop identification by formula (10) with 1-sigma error bars (from the in-dwell noise), the simulated truth, and each fitted temperature model.".to_string(), coeff_plots(oc)),
+        ("The 12 coefficients against temperature".to_string(), "Per-stop identification by formula (10) with 1-sigma error bars (from the in-dwell noise), the simulated truth (when simulated), and each fitted temperature model.".to_string(), coeff_plots(oc)),
     ];
     if let Some(b) = best {
         sections.push(("Residuals against time".to_string(), format!("Dwell means minus the {} model at the dwell's temperature; below, the temperature trace.", b.name), residual_plots(oc, b)));

@@ -519,8 +519,9 @@ pub fn relative_name(c: usize) -> String {
 /// the paper's beta/gamma relative to the value at T0, offsets always absolute (alpha).
 pub fn report_json(fit: &ModelFit, relative: bool) -> Value {
     let at_t0 = fit.eval(fit.t0_c);
+    // offsets are absolute either way: the paper's alpha; K terms beta/gamma when relative
     let name = |c: usize| {
-        if relative {
+        if relative || c >= 9 {
             relative_name(c)
         } else {
             COEFF_NAMES[c].to_string()

@@ -223,3 +223,58 @@ fn check_report(html: &str, rows: &[(String, String, f64, f64)]) {
     }
     assert_eq!(checked_dg, 5);
 }
+
+#[test]
+fn report_command_on_any_recording() {
+    let dir = std::env::temp_dir().join(format!("hf-report-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let case = host_fit::blind::Case {
+        effects: vec![],
+        scale: 1.0,
+        seed: 2,
+        tp_only: false,
+    };
+    let sim = host_fit::simulate::simulate(&host_fit::blind::configure(&case), |_| {}).unwrap();
+    let rec = dir.join("rec.csv");
+    std::fs::write(&rec, sim.csv).unwrap();
+    let html = dir.join("r.html");
+    let (code, out, err) = cli(&[
+        "report",
+        rec.to_str().unwrap(),
+        "--out",
+        html.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("pwl-all") && !out.contains("paper-pwl2"),
+        "no -40/+70 stops: no paper model\n{out}"
+    );
+    let text = std::fs::read_to_string(&html).unwrap();
+    let doc = roxmltree::Document::parse_with_options(
+        &text,
+        roxmltree::ParsingOptions {
+            allow_dtd: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let dg = doc
+        .descendants()
+        .filter(|n| {
+            n.has_tag_name("figure") && n.attribute("id").is_some_and(|i| i.starts_with("dg-"))
+        })
+        .count();
+    assert_eq!(
+        dg, 4,
+        "one dg plot per verification temperature (-20, 10, 20, 40)"
+    );
+    let (code, _, err) = cli(&[
+        "report",
+        rec.to_str().unwrap(),
+        "--out",
+        html.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(err.contains("--force"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

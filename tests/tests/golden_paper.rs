@@ -79,7 +79,7 @@ fn poly_order_2_through_three_temperatures_interpolates_the_table() {
         let f: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
         let dt = f[0] - 20.0;
         let c0 = j["at_t0"]["u0x"].as_f64().unwrap();
-        let a = j["coefficients"]["u0x"].as_array().unwrap();
+        let a = j["coefficients"]["alpha_x"].as_array().unwrap();
         let v = c0 + a[0].as_f64().unwrap() * dt + a[1].as_f64().unwrap() * dt * dt;
         assert!((v - f[10]).abs() < 1e-12, "{v} vs {}", f[10]);
     }

@@ -85,7 +85,7 @@ pub struct Output<R> {
 pub struct Compensator<'a, R: Real = f32> {
     cal: &'a Calibration<R>,
     method: Method,
-    /// N(T0), U0(T0): the passport constants.
+    /// N(T0), U0(T0): the passport constants (K(T0) at the end: read only by updates).
     n0: Mat3<R>,
     u00: Vec3<R>,
     /// Temperature of the cached matrices (the raw input, before any clamping).
@@ -103,6 +103,8 @@ pub struct Compensator<'a, R: Real = f32> {
     physics_on: bool,
     /// Their state.
     ph: PhysicsState<R>,
+    /// K(T0), for method 2's dK at each update.
+    k0: Mat3<R>,
 }
 
 /// The state of the in-flight physics terms.
@@ -130,6 +132,7 @@ impl<'a, R: Real> Compensator<'a, R> {
             cal,
             method,
             n0,
+            k0: c0.k,
             u00: c0.u0,
             t_cached: cal.t0_c,
             n: n0,
@@ -210,7 +213,7 @@ impl<'a, R: Real> Compensator<'a, R> {
                 None => self.sticky = Status::SINGULAR,
             },
             Method::CorrectResult(em) => {
-                let dk = mat_sub(&c.k, &self.cal_k0());
+                let dk = mat_sub(&c.k, &self.k0);
                 let du0 = sub3(c.u0, self.u00);
                 // delta = N0 (dK a + dU0) = (N0 dK) a + N0 dU0; the simplified model
                 // uses diag(N0) in place of N0.
@@ -234,10 +237,6 @@ impl<'a, R: Real> Compensator<'a, R> {
                 Status::TEMP_OUT_OF_RANGE
             });
         }
-    }
-
-    fn cal_k0(&self) -> Mat3<R> {
-        Coeffs::from_array(&self.cal.at_t0()).k
     }
 
     /// Compensate one sample: output voltages `u` at sensor temperature `temp_c`.
@@ -299,7 +298,7 @@ impl<'a, R: Real> Compensator<'a, R> {
             }
             t_model = s.t_lag;
         }
-        let half = R::ONE / (R::ONE + R::ONE);
+        let half = R::from_f32(0.5);
         let [r0, r1, r2] = p.rate;
         let [h0, h1, h2] = p.hysteresis;
         let [d0, d1, d2] = p.warmup;

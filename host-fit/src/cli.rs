@@ -332,7 +332,7 @@ fn selector(rec: &Recording, names: &[String]) -> Result<Vec<bool>> {
             Some(i) => v[i] = true,
             None => {
                 return Err(HostError::msg(format!(
-                    "unknown position `{n}` in the positions list"
+                    "unknown position `{n}` in --positions-for-check (not built in and not in a positions file)"
                 )))
             }
         }

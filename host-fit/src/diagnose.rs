@@ -154,23 +154,7 @@ pub fn observations(rec: &Recording, span_c: f64, max_s: f64) -> Vec<DObs> {
     let mut out = Vec::new();
     for (di, d) in rec.dwells.iter().enumerate() {
         let a = rec.positions.vector(d.position);
-        let mut windows: Vec<(usize, usize)> = Vec::new();
-        let mut start = d.start;
-        while start < d.end {
-            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-            let mut end = start;
-            while end < d.end {
-                let r = &rec.rows[end];
-                let (l, h) = (lo.min(r.temp_c), hi.max(r.temp_c));
-                if end > start && (h - l > span_c || r.t_s - rec.rows[start].t_s > max_s) {
-                    break;
-                }
-                (lo, hi) = (l, h);
-                end += 1;
-            }
-            windows.push((start, end));
-            start = end;
-        }
+        let mut windows = crate::identify::windows(rec, d, span_c, max_s);
         // at least two windows per dwell, so each held-out fold sees every dwell
         if windows.len() == 1 && d.len() >= 4 {
             let mid = d.start + d.len() / 2;
@@ -462,7 +446,12 @@ impl Data<'_> {
         let (a, b, labels) = self.design(spec, base);
         let w = self.weights();
         let dbg = std::env::var_os("HOSTFIT_DEBUG").is_some();
-        let Some((x, cov)) = solve(&a, &b, &w, None) else {
+        // the normal equations of the two held-out folds; the full fit's are their sum
+        let masks: [Vec<bool>; 2] =
+            [0, 1].map(|fold| self.obs.iter().flat_map(|o| [o.fold == fold; 3]).collect());
+        let folds = masks.clone().map(|m| normal(&a, &b, &w, &m));
+        let (ata, atb) = (&folds[0].0 + &folds[1].0, &folds[0].1 + &folds[1].1);
+        let Some((x, cov)) = solve(&ata, &atb) else {
             if dbg {
                 eprintln!("  rank deficient: {:?}", spec.extras.last());
             }
@@ -470,11 +459,10 @@ impl Data<'_> {
         };
         let r = &b - &a * &x;
         let chi2: f64 = r.iter().zip(&w).map(|(r, w)| w * r * r).sum();
-        // held out: alternate dwells
+        // held out: each fold fitted alone, its chi2 on the other fold
         let mut heldout = 0.0;
-        for fold in 0..2 {
-            let mask: Vec<bool> = self.obs.iter().flat_map(|o| [o.fold == fold; 3]).collect();
-            let Some((xf, _)) = solve(&a, &b, &w, Some(&mask)) else {
+        for (fold, (mask, (fa, fb))) in masks.iter().zip(&folds).enumerate() {
+            let Some((xf, _)) = solve(fa, fb) else {
                 if dbg {
                     eprintln!("  fold {fold} rank deficient: {:?}", spec.extras.last());
                 }
@@ -484,7 +472,7 @@ impl Data<'_> {
             heldout += rf
                 .iter()
                 .zip(&w)
-                .zip(&mask)
+                .zip(mask)
                 .filter(|(_, m)| !**m)
                 .map(|((r, w), _)| w * r * r)
                 .sum::<f64>();
@@ -584,20 +572,21 @@ fn normalize(v: [f64; 3]) -> [f64; 3] {
     v.map(|x| x / n)
 }
 
-/// Weighted least squares by the normal equations on column-scaled data (fast enough
-/// for the many fits of a diagnosis; the residuals are computed directly, not from the
-/// normal equations). `mask` selects the rows fitted.
-fn solve(
+/// Solve the weighted normal equations on column-scaled data (fast enough for the many
+/// fits of a diagnosis; the residuals are computed directly, not from the normal
+/// equations); `None` when rank deficient.
+/// The weighted normal equations `(A^T W A, A^T W b)` of the rows in `fold`.
+fn normal(
     a: &DMatrix<f64>,
     b: &DVector<f64>,
     w: &[f64],
-    mask: Option<&[bool]>,
-) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    fold: &[bool],
+) -> (DMatrix<f64>, DVector<f64>) {
     let p = a.ncols();
     let mut ata: DMatrix<f64> = DMatrix::zeros(p, p);
     let mut atb: DVector<f64> = DVector::zeros(p);
     for r in 0..a.nrows() {
-        if mask.is_some_and(|m| !m[r]) {
+        if !fold[r] {
             continue;
         }
         let row = a.row(r);
@@ -609,6 +598,11 @@ fn solve(
             }
         }
     }
+    (ata, atb)
+}
+
+fn solve(ata: &DMatrix<f64>, atb: &DVector<f64>) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    let p = ata.ncols();
     let d: Vec<f64> = (0..p).map(|j| ata[(j, j)].sqrt()).collect();
     if d.iter().any(|v| *v <= 0.0 || !v.is_finite()) {
         return None;
@@ -1240,7 +1234,7 @@ fn finding(data: &Data, f: &Fit, prev: &Fit, d: f64, evidence: String) -> Findin
     let mut position = None;
     match &e {
         Extra::Lag(tau) | Extra::Warmup(tau) => {
-            let s = tau_sigma(data, f, *tau) * scale;
+            let s = tau_sigma(data, f, prev, *tau) * scale;
             parameters.insert("tau_s".into(), json!(tau));
             unc.insert("tau_s".into(), json!(s));
             if matches!(e, Extra::Lag(_)) {
@@ -1272,7 +1266,7 @@ fn finding(data: &Data, f: &Fit, prev: &Fit, d: f64, evidence: String) -> Findin
 }
 
 /// 1-sigma of a profiled time constant: where chi2 rises by 1 (parabola in log tau).
-fn tau_sigma(data: &Data, f: &Fit, tau: f64) -> f64 {
+fn tau_sigma(data: &Data, f: &Fit, base: &Fit, tau: f64) -> f64 {
     let at = |t: f64| -> f64 {
         let mut s = f.spec.clone();
         if let Some(last) = s.extras.last_mut() {
@@ -1281,7 +1275,9 @@ fn tau_sigma(data: &Data, f: &Fit, tau: f64) -> f64 {
                 _ => Extra::Warmup(t),
             };
         }
-        data.fit(&s, None).map(|g| g.chi2).unwrap_or(f64::INFINITY)
+        data.fit(&s, Some(base))
+            .map(|g| g.chi2)
+            .unwrap_or(f64::INFINITY)
     };
     let h = 0.05;
     let (c0, cp, cm) = (f.chi2, at(tau * (1.0 + h)), at(tau * (1.0 - h)));

@@ -77,20 +77,8 @@ pub fn observations(rec: &Recording, select: &dyn Fn(usize) -> bool, span_c: f64
             continue;
         }
         let a = rec.positions.vector(d.position);
-        let rows = rec.dwell_rows(d);
-        let mut start = 0;
-        while start < rows.len() {
-            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-            let mut end = start;
-            while let Some(r) = rows.get(end) {
-                let (l, h) = (lo.min(r.temp_c), hi.max(r.temp_c));
-                if end > start && h - l > span_c {
-                    break;
-                }
-                (lo, hi) = (l, h);
-                end += 1;
-            }
-            let w = rows.get(start..end).unwrap_or(&[]);
+        for (start, end) in windows(rec, d, span_c, f64::INFINITY) {
+            let w = rec.rows.get(start..end).unwrap_or(&[]);
             let n = w.len() as f64;
             let mut u = [0.0; 3];
             let (mut t, mut ts) = (0.0, 0.0);
@@ -110,8 +98,35 @@ pub fn observations(rec: &Recording, select: &dyn Fn(usize) -> bool, span_c: f64
                 dwell: di,
                 t_s: ts,
             });
-            start = end;
         }
+    }
+    out
+}
+
+/// Split a dwell into consecutive windows (absolute row ranges) whose temperature spans
+/// at most `span_c` and whose time at most `max_s`.
+pub fn windows(
+    rec: &Recording,
+    d: &crate::recording::Dwell,
+    span_c: f64,
+    max_s: f64,
+) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut start = d.start;
+    while start < d.end {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        let t_start = rec.rows.get(start).map(|r| r.t_s).unwrap_or(0.0);
+        let mut end = start;
+        while let Some(r) = rec.rows.get(end).filter(|_| end < d.end) {
+            let (l, h) = (lo.min(r.temp_c), hi.max(r.temp_c));
+            if end > start && (h - l > span_c || r.t_s - t_start > max_s) {
+                break;
+            }
+            (lo, hi) = (l, h);
+            end += 1;
+        }
+        out.push((start, end));
+        start = end;
     }
     out
 }

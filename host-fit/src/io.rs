@@ -15,6 +15,34 @@ fn tmp_path(path: &Path) -> PathBuf {
     }
 }
 
+/// The positions of the `want`ed columns in a CSV header line (names case-insensitive),
+/// or an error naming the file, the line and the missing column. A header separated by
+/// semicolons is refused with that reason (no guessing at the separator).
+pub fn header_columns(path: &Path, line: usize, header: &str, want: &[&str]) -> Result<Vec<usize>> {
+    if !header.contains(',') && header.contains(';') {
+        return Err(HostError::at(path, line, "the header is separated by semicolons; these files are comma-separated, convert the file"));
+    }
+    let names: Vec<String> = header
+        .split(',')
+        .map(|s| s.trim().to_ascii_lowercase())
+        .collect();
+    want.iter()
+        .map(|w| {
+            names.iter().position(|n| n == w).ok_or_else(|| {
+                HostError::at_field(
+                    path,
+                    line,
+                    w,
+                    format!(
+                        "required column `{w}` missing from the header (have: {})",
+                        names.join(",")
+                    ),
+                )
+            })
+        })
+        .collect()
+}
+
 /// Refuse early (before any work) when `path` exists and `force` is off.
 pub fn check_writable(path: &Path, force: bool) -> Result<()> {
     if !force && path.exists() {

@@ -104,23 +104,9 @@ impl Positions {
             }
             let fields: Vec<&str> = line.split(',').map(str::trim).collect();
             let Some(cols) = header else {
-                if !line.contains(',') && line.contains(';') {
-                    return Err(HostError::at(path, line_no,
-                        "the header is semicolon-separated; positions files are comma-separated (name,fx,fy,fz)"));
-                }
-                let lower: Vec<String> = fields.iter().map(|f| f.to_ascii_lowercase()).collect();
-                let mut idx = [0usize; 4];
-                for (slot, want) in idx.iter_mut().zip(["name", "fx", "fy", "fz"]) {
-                    *slot = lower.iter().position(|f| f == want).ok_or_else(|| {
-                        HostError::at_field(
-                            path,
-                            line_no,
-                            want,
-                            "required column missing from the header (name,fx,fy,fz)",
-                        )
-                    })?;
-                }
-                header = Some(idx);
+                let idx =
+                    crate::io::header_columns(path, line_no, line, &["name", "fx", "fy", "fz"])?;
+                header = Some([idx[0], idx[1], idx[2], idx[3]]);
                 continue;
             };
             let [ni, xi, yi, zi] = cols;

@@ -296,13 +296,7 @@ impl Columns {
         text: &str,
         warnings: &mut Vec<String>,
     ) -> Result<Columns> {
-        if !text.contains(',') && text.contains(';') {
-            return Err(HostError::at(
-                path,
-                line,
-                "the header is separated by semicolons; recordings are comma-separated (recording-format.md), convert the file",
-            ));
-        }
+        let idx = crate::io::header_columns(path, line, text, &REQUIRED)?;
         let names: Vec<String> = text
             .split(',')
             .map(|s| s.trim().to_ascii_lowercase())
@@ -317,20 +311,6 @@ impl Columns {
                 ));
             }
         }
-        let find = |want: &str| -> Result<usize> {
-            names.iter().position(|n| n == want).ok_or_else(|| {
-                HostError::at_field(
-                    path,
-                    line,
-                    want,
-                    format!(
-                        "required column `{want}` missing from the header (have: {})",
-                        names.join(",")
-                    ),
-                )
-            })
-        };
-        let idx: Vec<usize> = REQUIRED.iter().map(|r| find(r)).collect::<Result<_>>()?;
         let chamber = names.iter().position(|n| n == "chamber_c");
         for n in &names {
             if !REQUIRED.contains(&n.as_str()) && n != "chamber_c" {

@@ -452,20 +452,7 @@ pub fn read_table(path: &Path) -> Result<Vec<TableRow>> {
         let f: Vec<&str> = line.split(',').map(str::trim).collect();
         match &cols {
             None => {
-                let lower: Vec<String> = f.iter().map(|s| s.to_ascii_lowercase()).collect();
-                let idx = want
-                    .iter()
-                    .map(|w| {
-                        lower.iter().position(|c| c == w).ok_or_else(|| {
-                            HostError::at_field(
-                                path,
-                                line_no,
-                                w,
-                                "required column missing from the header",
-                            )
-                        })
-                    })
-                    .collect::<Result<Vec<_>>>()?;
+                let idx = crate::io::header_columns(path, line_no, line, &want)?;
                 cols = Some(idx);
             }
             Some(idx) => {

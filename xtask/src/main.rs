@@ -153,6 +153,13 @@ fn demo(rest: &[String]) -> ExitCode {
     }
 }
 
+/// Run one task's steps and report.
+fn task(f: impl FnOnce(&mut Steps)) -> ExitCode {
+    let mut s = Steps::new();
+    f(&mut s);
+    s.finish()
+}
+
 fn main() -> ExitCode {
     let argv: Vec<String> = std::env::args().skip(1).collect();
     match argv.first().map(String::as_str) {
@@ -165,16 +172,10 @@ fn main() -> ExitCode {
                 .and_then(|i| argv.get(i + 1))
                 .and_then(|v| v.parse().ok())
                 .unwrap_or(60);
-            let mut s = Steps::new();
-            fuzz::fuzz(&mut s, secs);
-            s.finish()
+            task(|s| fuzz::fuzz(s, secs))
         }
-        Some("bench") => {
-            let mut s = Steps::new();
-            bench::bench(&mut s);
-            s.finish()
-        }
-        Some("blind") => {
+        Some("bench") => task(bench::bench),
+        Some("blind") => task(|s| {
             let mut c = cargo();
             c.args([
                 "run",
@@ -186,20 +187,10 @@ fn main() -> ExitCode {
                 "blind",
                 "--long",
             ]);
-            let mut s = Steps::new();
             s.run("blind tests of the diagnosis (long suite)", c);
-            s.finish()
-        }
-        Some("cross") => {
-            let mut s = Steps::new();
-            embedded::cross(&mut s);
-            s.finish()
-        }
-        Some("embedded") => {
-            let mut s = Steps::new();
-            embedded::embedded(&mut s);
-            s.finish()
-        }
+        }),
+        Some("cross") => task(embedded::cross),
+        Some("embedded") => task(embedded::embedded),
         _ => {
             eprintln!("usage: cargo xtask <test | demo [args] | blind | bench | fuzz [--seconds N] | cross | embedded>");
             ExitCode::FAILURE

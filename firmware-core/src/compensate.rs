@@ -100,14 +100,17 @@ pub struct Compensator<'a, R: Real = f32> {
     /// Flags of the cached temperature (range, clamping, SINGULAR), set at each update.
     sticky: Status,
     /// Physics terms on (the calibration has them).
+    #[cfg(feature = "physics")]
     physics_on: bool,
     /// Their state.
+    #[cfg(feature = "physics")]
     ph: PhysicsState<R>,
     /// K(T0), for method 2's dK at each update.
     k0: Mat3<R>,
 }
 
 /// The state of the in-flight physics terms.
+#[cfg(feature = "physics")]
 #[derive(Clone, Copy, Debug, Default)]
 struct PhysicsState<R> {
     started: bool,
@@ -124,8 +127,15 @@ struct PhysicsState<R> {
 
 impl<'a, R: Real> Compensator<'a, R> {
     /// Build a compensator; the cache starts at T0.
+    ///
+    /// Without the `physics` feature a calibration with physics terms is refused
+    /// ([`Error::PhysicsNotBuiltIn`]).
     pub fn new(cal: &'a Calibration<R>, method: Method) -> Result<Self, Error> {
         cal.validate()?;
+        #[cfg(not(feature = "physics"))]
+        if cal.physics.is_some() {
+            return Err(Error::PhysicsNotBuiltIn);
+        }
         let c0 = Coeffs::from_array(&cal.at_t0());
         let n0 = invert(&c0.k).ok_or(Error::Singular)?;
         let mut s = Compensator {
@@ -141,7 +151,9 @@ impl<'a, R: Real> Compensator<'a, R> {
             t_max: cal.t_max_c,
             step: cal.update_step_c,
             sticky: Status::default(),
+            #[cfg(feature = "physics")]
             physics_on: cal.physics.is_some(),
+            #[cfg(feature = "physics")]
             ph: PhysicsState {
                 dir: cal
                     .physics
@@ -252,9 +264,10 @@ impl<'a, R: Real> Compensator<'a, R> {
     /// are those of the cached temperature, evaluated at each update: within one
     /// update step of a range limit they may lag by up to that step.
     ///
-    /// With physics terms in the calibration, one flag branch leads to
-    /// [`Compensator::compensate_physics`]; the cost stays fixed per sample.
+    /// With the `physics` feature and physics terms in the calibration, one flag branch
+    /// leads to the physics path; the cost stays fixed per sample.
     pub fn compensate(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
+        #[cfg(feature = "physics")]
         if self.physics_on {
             return self.compensate_physics(u, temp_c);
         }
@@ -265,6 +278,7 @@ impl<'a, R: Real> Compensator<'a, R> {
     /// valid range) through the thermal-lag filter, the offsets of temperature rate, hysteresis and warm-up removed from the
     /// voltages, then the K2 and scale-asymmetry terms corrected to first order
     /// (`a = a_hat - N (k2 a_hat^2 + c |a_hat|)`, error second order in those terms).
+    #[cfg(feature = "physics")]
     #[inline(never)]
     fn compensate_physics(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
         let Some(p) = self.cal.physics.as_ref() else {

@@ -30,6 +30,9 @@ pub enum Error {
     Singular,
     /// The output buffer is too small for the encoded blob.
     BufferTooSmall,
+    /// The calibration has in-flight physics terms but the firmware was built without
+    /// the `physics` feature (compensating without them would be silently wrong).
+    PhysicsNotBuiltIn,
 }
 
 impl fmt::Display for Error {
@@ -49,6 +52,9 @@ impl fmt::Display for Error {
             Error::BadRange => f.write_str("invalid temperature range or update step"),
             Error::Singular => f.write_str("matrix K is singular at the reference temperature"),
             Error::BufferTooSmall => f.write_str("output buffer too small"),
+            Error::PhysicsNotBuiltIn => {
+                f.write_str("the blob has physics terms; firmware built without `physics`")
+            }
         }
     }
 }

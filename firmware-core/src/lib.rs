@@ -17,6 +17,13 @@
 //! assert!(out.status.is_ok());
 //! assert!((out.accel[2] - 1.0).abs() < 0.01);
 //! ```
+//!
+//! # Features
+//! - `physics` (default): the in-flight terms found by `host-fit diagnose` (thermal lag,
+//!   temperature rate, hysteresis, warm-up, K2, scale asymmetry). Without it the
+//!   compensation path is about 3 KiB smaller, and a blob that carries such terms is
+//!   refused by [`compensate::Compensator::new`] with [`Error::PhysicsNotBuiltIn`].
+//! - `defmt`: `defmt::Format` on the public types.
 // no_std always (the error type uses core::error::Error); unit tests use std.
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]

@@ -122,6 +122,14 @@ pub fn norm3<R: Real>(v: &Vec3<R>) -> R {
     dot(v, v).sqrt()
 }
 
+/// The largest magnitude of the three components (NaN components are skipped).
+#[inline]
+fn max_abs3<R: Real>(v: &Vec3<R>) -> R {
+    let [x, y, z] = *v;
+    let m = |a: R, b: R| if b.abs() > a { b.abs() } else { a };
+    m(m(x.abs(), y), z)
+}
+
 /// True when all three components are finite.
 #[inline]
 pub fn all_finite<R: Real>(v: &Vec3<R>) -> bool {
@@ -131,8 +139,10 @@ pub fn all_finite<R: Real>(v: &Vec3<R>) -> bool {
 
 /// `N = K^-1` by the adjugate, or `None` when K is singular or not finite.
 ///
-/// Singular means `|det K| <= 64 eps |k0| |k1| |k2|` (rows' norms), i.e. the rows are
-/// parallel to within a few hundred ulps: no physical accelerometer is near that.
+/// Singular means `|det K| <= 64 eps |k0| |k1| |k2|` (rows' max-norms), i.e. the rows
+/// are parallel to within a few hundred ulps: no physical accelerometer is near that.
+/// Max-norms, not Euclidean ones: no square root on the update path (and no libm
+/// `sqrtf` in the firmware), and no squares that overflow f32 for outputs in raw counts.
 ///
 /// Error bound (held by the tests): for the diagonally dominant K of a real unit
 /// (`|K_ij| <= 0.05 |K_ii|`) every element of the result is within
@@ -144,7 +154,7 @@ pub fn invert<R: Real>(k: &Mat3<R>) -> Option<Mat3<R>> {
     let c02 = d * h - e * g;
     let det = a * c00 + b * c01 + c * c02;
     let [r0, r1, r2] = *k;
-    let scale = norm3(&r0) * norm3(&r1) * norm3(&r2);
+    let scale = max_abs3(&r0) * max_abs3(&r1) * max_abs3(&r2);
     let sixty_four = R::from_f32(64.0);
     if !det.is_finite() || !scale.is_finite() || det.abs() <= sixty_four * R::EPSILON * scale {
         return None;
@@ -231,6 +241,19 @@ mod tests {
         }
         let s = [[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [0.0, 1.0, 1.0]];
         assert!(invert(&s).is_none());
+        // parallel to within a few ulps: refused; a real unit in raw 24-bit counts
+        // (K ~ 8e6 counts/g, det ~ 5e20) accepted in f32
+        let near: [[f32; 3]; 3] = [[1.0, 2.0, 3.0], [2.0, 4.0, 6.000001], [0.0, 1.0, 1.0]];
+        assert!(invert(&near).is_none());
+        let counts: [[f32; 3]; 3] = [[8.1e6, 1.2e4, -3e3], [2e3, -7.9e6, 5e3], [-1e4, 4e3, 8.0e6]];
+        let n = invert(&counts).unwrap();
+        let p = mat_mul(&n, &counts);
+        for (i, row) in p.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((v - want).abs() < 1e-6, "{i}{j} {v}");
+            }
+        }
         assert!(invert(&[[f64::NAN, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]).is_none());
     }
 

@@ -81,9 +81,26 @@ pub const MAX_DWELL_DRIFT_C: f64 = 0.5;
 const KNOWN_META: [&str; 5] = ["unit", "t0_c", "g_local", "format", "output_unit"];
 const REQUIRED: [&str; 6] = ["t_s", "position", "temp_c", "ux_v", "uy_v", "uz_v"];
 
+/// Largest magnitude accepted in any numeric field. Beyond it the sums of squares of a fit
+/// overflow f64 (a 1e200 reading is finite but unfittable), so it is rejected here with a
+/// line number instead of surfacing later as a NaN coefficient. 1e12 leaves room for raw
+/// 32-bit ADC counts and Unix-epoch times.
+pub const MAX_ABS_VALUE: f64 = 1e12;
+/// Absolute zero, C: a temperature below it is a wrong column or unit, not a reading.
+pub const ABSOLUTE_ZERO_C: f64 = -273.15;
+
 fn parse_num(path: &Path, line: usize, field: &str, s: &str) -> Result<f64> {
     match s.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
+        Ok(v) if v.is_finite() && v.abs() <= MAX_ABS_VALUE => Ok(v),
+        Ok(v) if v.is_finite() => Err(HostError::at_field(
+            path,
+            line,
+            field,
+            format!(
+                "`{s}` is beyond +-{MAX_ABS_VALUE:e}: too large to fit in double precision \
+                 (check the column's unit and scale)"
+            ),
+        )),
         _ => Err(HostError::at_field(
             path,
             line,
@@ -91,6 +108,19 @@ fn parse_num(path: &Path, line: usize, field: &str, s: &str) -> Result<f64> {
             format!("`{s}` is not a finite number"),
         )),
     }
+}
+
+fn parse_temp(path: &Path, line: usize, field: &str, s: &str) -> Result<f64> {
+    let v = parse_num(path, line, field, s)?;
+    if v < ABSOLUTE_ZERO_C {
+        return Err(HostError::at_field(
+            path,
+            line,
+            field,
+            format!("`{s}` C is below absolute zero (is the column in C?)"),
+        ));
+    }
+    Ok(v)
 }
 
 impl Recording {
@@ -198,7 +228,7 @@ impl Recording {
                     format!("`{v}` is not a supported format (expected at-recording/1)"),
                 ))
             }
-            "t0_c" => self.t0_c = parse_num(&self.path, line, "t0_c", &v)?,
+            "t0_c" => self.t0_c = parse_temp(&self.path, line, "t0_c", &v)?,
             "unit" => self.unit = v.clone(),
             "output_unit" => self.output_unit = v.clone(),
             _ => {}
@@ -357,6 +387,7 @@ impl Columns {
         }
         let get = |k: usize| fields.get(k).copied().unwrap_or("");
         let num = |k: usize, name: &str| parse_num(path, line, name, get(k));
+        let temp = |k: usize, name: &str| parse_temp(path, line, name, get(k));
         let pname = get(self.pos);
         let position = if pname == "-" {
             None
@@ -373,9 +404,9 @@ impl Columns {
         Ok(Row {
             t_s: num(self.t, "t_s")?,
             position,
-            temp_c: num(self.temp, "temp_c")?,
+            temp_c: temp(self.temp, "temp_c")?,
             chamber_c: match self.chamber {
-                Some(k) => Some(num(k, "chamber_c")?),
+                Some(k) => Some(temp(k, "chamber_c")?),
                 None => None,
             },
             u: [

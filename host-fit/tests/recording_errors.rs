@@ -97,6 +97,35 @@ fn value_not_a_finite_number() {
     }
 }
 
+/// Finite but unfittable: the squares of a 1e249 reading overflow f64 (found by the
+/// `recording` fuzz target, which saw an infinite noise estimate).
+#[test]
+fn value_too_large_to_fit() {
+    for (i, bad) in ["2.1E249", "-1e13", "1.7e308"].iter().enumerate() {
+        let text = format!("{HEAD}{}21,TP1,20.0,0.1,{bad},0.3\n", good_rows(0));
+        expect_error(
+            &format!("huge{i}.csv"),
+            &text,
+            20,
+            Some("uy_v"),
+            "too large",
+        );
+    }
+    // the bound itself is accepted: raw counts of wide ADCs must read
+    let text = format!("{HEAD}{}21,TP1,20.0,0.1,1e12,0.3\n", good_rows(0));
+    let p = write("huge-ok.csv", &text);
+    let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+}
+
+#[test]
+fn temperature_below_absolute_zero() {
+    let text = format!("{HEAD}{}21,TP1,-300,0.1,0.2,0.3\n", good_rows(0));
+    expect_error("cold.csv", &text, 20, Some("temp_c"), "absolute zero");
+    let text = format!("# t0_c=-274\n{HEAD}{}", good_rows(0));
+    expect_error("cold-t0.csv", &text, 1, Some("t0_c"), "absolute zero");
+}
+
 #[test]
 fn time_going_backwards() {
     let text = format!("{HEAD}{}5,TP6,20.0,0.1,0.2,0.3\n", good_rows(0));

@@ -7,7 +7,7 @@ use std::process::Command;
 pub const TARGETS: [&str; 4] = ["blob_decode", "compensate", "recording", "positions"];
 
 /// Run every target; prints the executions per target.
-pub fn fuzz(steps: &mut crate::Steps, seconds: u64) {
+pub fn fuzz(steps: &mut crate::Steps, seconds: u64, targets: &[&str]) {
     if let Err(e) = crate::setup::cargo_fuzz() {
         eprintln!("xtask: {e}");
         steps.failed.push("fuzz: cargo-fuzz".into());
@@ -15,7 +15,7 @@ pub fn fuzz(steps: &mut crate::Steps, seconds: u64) {
     }
     let root = crate::root();
     let mut lines = Vec::new();
-    for t in TARGETS {
+    for &t in targets {
         eprintln!("\n==> fuzz {t} for {seconds} s");
         let work = root.join("target/fuzz-corpus").join(t);
         let _ = std::fs::create_dir_all(&work);
@@ -54,17 +54,33 @@ pub fn fuzz(steps: &mut crate::Steps, seconds: u64) {
         if out.status.success() && crashes == 0 {
             steps.passed.push(format!("fuzz {t}"));
         } else {
-            eprintln!(
-                "{}",
-                err.lines()
-                    .rev()
-                    .take(30)
-                    .collect::<Vec<_>>()
-                    .into_iter()
-                    .rev()
-                    .collect::<Vec<_>>()
-                    .join("\n")
-            );
+            // CI keeps only the log, so the log must carry what reproduces the crash: the
+            // panic message and the artefact's bytes, not libFuzzer's tail.
+            let mut shown: Vec<&str> = Vec::new();
+            let lines: Vec<&str> = err.lines().collect();
+            for (i, l) in lines.iter().enumerate() {
+                if l.contains("panicked at") || l.contains("ERROR: libFuzzer") {
+                    shown.extend(lines.iter().skip(i).take(3));
+                }
+            }
+            if shown.is_empty() {
+                shown = lines.iter().rev().take(30).rev().copied().collect();
+            }
+            eprintln!("{}", shown.join("\n"));
+            for a in std::fs::read_dir(&artifacts)
+                .into_iter()
+                .flatten()
+                .flatten()
+            {
+                if let Ok(bytes) = std::fs::read(a.path()) {
+                    eprintln!(
+                        "artefact {} ({} bytes): b\"{}\"",
+                        a.path().display(),
+                        bytes.len(),
+                        escape(&bytes[..bytes.len().min(4096)])
+                    );
+                }
+            }
             steps
                 .failed
                 .push(format!("fuzz {t} (artefacts in {})", artifacts.display()));
@@ -73,4 +89,13 @@ pub fn fuzz(steps: &mut crate::Steps, seconds: u64) {
     for l in &lines {
         println!("fuzz {l}");
     }
+}
+
+/// Bytes as a Rust byte-string body, so a crash input can be pasted into a test.
+fn escape(bytes: &[u8]) -> String {
+    bytes
+        .iter()
+        .flat_map(|b| std::ascii::escape_default(*b))
+        .map(char::from)
+        .collect()
 }

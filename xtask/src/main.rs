@@ -119,6 +119,19 @@ fn test() -> ExitCode {
         ),
     );
     s.run(
+        "tests (firmware-core without the physics feature)",
+        args(
+            &mut c,
+            &[
+                "test",
+                "-p",
+                "firmware-core",
+                "--no-default-features",
+                "--release",
+            ],
+        ),
+    );
+    s.run(
         "tests (workspace)",
         args(&mut c, &["test", "--workspace", "--release"]),
     );
@@ -130,7 +143,7 @@ fn test() -> ExitCode {
         .and_then(|v| v.parse().ok())
         .unwrap_or(30);
     if secs > 0 {
-        fuzz::fuzz(&mut s, secs);
+        fuzz::fuzz(&mut s, secs, &fuzz::TARGETS);
     }
     s.finish()
 }
@@ -172,7 +185,29 @@ fn main() -> ExitCode {
                 .and_then(|i| argv.get(i + 1))
                 .and_then(|v| v.parse().ok())
                 .unwrap_or(60);
-            task(|s| fuzz::fuzz(s, secs))
+            // any other word names a target; none means all of them
+            let named: Vec<&str> = argv[1..]
+                .iter()
+                .enumerate()
+                // argv[i] is the word before argv[1..][i]
+                .filter(|(i, a)| {
+                    *a != "--seconds" && argv.get(*i).map(String::as_str) != Some("--seconds")
+                })
+                .map(|(_, a)| a.as_str())
+                .collect();
+            if let Some(bad) = named.iter().find(|n| !fuzz::TARGETS.contains(n)) {
+                eprintln!(
+                    "xtask: no fuzz target `{bad}` (targets: {:?})",
+                    fuzz::TARGETS
+                );
+                return ExitCode::FAILURE;
+            }
+            let targets = if named.is_empty() {
+                fuzz::TARGETS.to_vec()
+            } else {
+                named
+            };
+            task(|s| fuzz::fuzz(s, secs, &targets))
         }
         Some("bench") => task(bench::bench),
         Some("blind") => task(|s| {
@@ -192,7 +227,7 @@ fn main() -> ExitCode {
         Some("cross") => task(embedded::cross),
         Some("embedded") => task(embedded::embedded),
         _ => {
-            eprintln!("usage: cargo xtask <test | demo [args] | blind | bench | fuzz [--seconds N] | cross | embedded>");
+            eprintln!("usage: cargo xtask <test | demo [args] | blind | bench | fuzz [--seconds N] [TARGET..] | cross | embedded>");
             ExitCode::FAILURE
         }
     }

@@ -1,6 +1,8 @@
 //! firmware-core on the target: decode the embedded blob, compensate the embedded input
 //! table with every method, print each result's f32 bits (compared bit for bit with
 //! the host by `cargo xtask embedded`), then count instructions and measure the stack.
+//! Built twice: with the `physics` feature (the physics blob compensated too) and
+//! without (that blob must be refused).
 #![no_std]
 #![no_main]
 
@@ -29,6 +31,19 @@ fn input(i: usize) -> ([f32; 3], f32) {
         f32::from_le_bytes([INPUTS[o], INPUTS[o + 1], INPUTS[o + 2], INPUTS[o + 3]])
     };
     ([f(0), f(1), f(2)], f(3))
+}
+
+/// A compensator, or a failed run. Not `unwrap`: its `Debug` formatting of the error
+/// would be linked in and counted against the library's flash.
+fn new(cal: &Calibration<f32>, m: Method) -> Compensator<'_, f32> {
+    match Compensator::new(cal, m) {
+        Ok(c) => c,
+        Err(_) => {
+            hprintln!("error: Compensator::new refused a test calibration");
+            debug::exit(debug::EXIT_FAILURE);
+            loop {}
+        }
+    }
 }
 
 /// A call of `compensate`'s shape that does nothing: the harness's share of a window.
@@ -120,9 +135,23 @@ fn main() -> ! {
             loop {}
         }
     };
-    for (prefix, b) in [("", &blob), ("p", &phys)] {
+    #[cfg(feature = "physics")]
+    let sets = [("", &blob), ("p", &phys)];
+    #[cfg(not(feature = "physics"))]
+    let sets = {
+        // built without the terms: the physics blob must be refused, not half-applied
+        match Compensator::new(&phys.calibration, Method::CorrectConstants) {
+            Err(firmware_core::Error::PhysicsNotBuiltIn) => hprintln!("physics refused"),
+            _ => {
+                hprintln!("error: a physics blob was accepted without the physics feature");
+                debug::exit(debug::EXIT_FAILURE);
+            }
+        }
+        [("", &blob)]
+    };
+    for (prefix, b) in sets {
         for (tag, m) in METHODS {
-            let mut c = Compensator::new(&b.calibration, m).unwrap();
+            let mut c = new(&b.calibration, m);
             for i in 0..n_inputs {
                 let (u, t) = input(i);
                 let o = c.compensate(u, t);
@@ -132,7 +161,7 @@ fn main() -> ! {
     }
 
     // Stack of compensate, including a temperature update.
-    let mut c = Compensator::new(&blob.calibration, Method::CorrectResult(ErrorModel::Full)).unwrap();
+    let mut c = new(&blob.calibration, Method::CorrectResult(ErrorModel::Full));
     let sp = cortex_m::register::msp::read() as usize;
     paint();
     let (u, _) = input(0);
@@ -147,13 +176,13 @@ fn main() -> ! {
     fw_mark_start();
     fw_mark_stop();
     // the same call with the same arguments and result, doing nothing
-    let mut dummy = Compensator::new(&blob.calibration, Method::CorrectConstants).unwrap();
+    let mut dummy = new(&blob.calibration, Method::CorrectConstants);
     hprintln!("measure call_overhead");
     fw_mark_start();
     black_box(noop(&mut dummy, black_box([u[0] + 1e-6, u[1], u[2]]), black_box(t)));
     fw_mark_stop();
     for (tag, m) in METHODS {
-        let mut c = Compensator::new(&blob.calibration, m).unwrap();
+        let mut c = new(&blob.calibration, m);
         c.compensate(u, t);
         let du = [u[0] + 1e-6, u[1], u[2]];
         hprintln!("measure sample_{}", tag);
@@ -161,8 +190,9 @@ fn main() -> ! {
         black_box(c.compensate(black_box(du), black_box(t)));
         fw_mark_stop();
     }
+    #[cfg(feature = "physics")]
     for (tag, m) in METHODS {
-        let mut c = Compensator::new(&phys.calibration, m).unwrap();
+        let mut c = new(&phys.calibration, m);
         c.compensate(u, t);
         let du = [u[0] + 1e-6, u[1], u[2]];
         hprintln!("measure sample_p{}", tag);
@@ -172,7 +202,7 @@ fn main() -> ! {
     }
     for (tag, poly) in [("update_poly3", true), ("update_pwl5", false)] {
         let cal = synthetic(poly, &blob.calibration);
-        let mut c = Compensator::new(&cal, Method::CorrectConstants).unwrap();
+        let mut c = new(&cal, Method::CorrectConstants);
         c.compensate(u, -12.5);
         hprintln!("measure {}", tag);
         fw_mark_start();

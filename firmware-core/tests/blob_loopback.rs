@@ -207,3 +207,41 @@ proptest! {
         }
     }
 }
+
+/// The largest blob the format allows (32-character serial, 16 breakpoints, physics terms)
+/// encodes within `MAX_BLOB_LEN`: every valid blob
+/// fits the fixed buffer, so a decoded blob always re-encodes.
+#[test]
+fn the_largest_blob_fits_the_fixed_buffer() {
+    use firmware_core::temperature::{Physics, TempModel};
+    let mut b = example_blob();
+    b.serial.clear();
+    b.serial.push_str(&"W".repeat(32)).unwrap();
+    let t0 = b.calibration.at_t0();
+    let bp: Vec<f32> = (0..16).map(|i| -40.0 + 7.0 * i as f32).collect();
+    b.calibration.t_min_c = -40.0;
+    b.calibration.t_max_c = 65.0;
+    b.calibration.model = TempModel::Pwl {
+        breakpoints: bp.iter().copied().collect(),
+        values: bp.iter().map(|t| t0.map(|v| v * (1.0 + 1e-5 * t))).collect(),
+    };
+    b.calibration.physics = Some(Physics {
+        sample_period_s: 1.0,
+        lag_alpha: 0.01,
+        rate: [0.02, 0.01, -0.01],
+        rate_alpha: 0.03,
+        hysteresis: [1e-4, 2e-4, 3e-4],
+        hysteresis_threshold_c: 0.5,
+        hysteresis_initial: 1.0,
+        k2: [1e-4, 2e-4, 3e-4],
+        asymmetry: [1e-4, 2e-4, 3e-4],
+        warmup: [2e-4, 1e-4, 3e-4],
+        warmup_decay: 0.999,
+    });
+    let mut big = vec![0u8; 4 * MAX_BLOB_LEN];
+    let n = b.encode(&mut big).unwrap();
+    assert!(n <= MAX_BLOB_LEN, "{n} bytes > MAX_BLOB_LEN {MAX_BLOB_LEN}");
+    let mut buf = [0u8; MAX_BLOB_LEN];
+    assert_eq!(b.encode(&mut buf), Ok(n));
+    assert_eq!(Blob::decode(&buf[..n]), Ok(b));
+}

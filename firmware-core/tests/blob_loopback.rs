@@ -223,7 +223,10 @@ fn the_largest_blob_fits_the_fixed_buffer() {
     b.calibration.t_max_c = 65.0;
     b.calibration.model = TempModel::Pwl {
         breakpoints: bp.iter().copied().collect(),
-        values: bp.iter().map(|t| t0.map(|v| v * (1.0 + 1e-5 * t))).collect(),
+        values: bp
+            .iter()
+            .map(|t| t0.map(|v| v * (1.0 + 1e-5 * t)))
+            .collect(),
     };
     b.calibration.physics = Some(Physics {
         sample_period_s: 1.0,

@@ -39,7 +39,7 @@
 
 pub mod blob;
 pub mod compensate;
-mod crc;
+pub mod crc;
 pub mod error;
 pub mod model;
 pub mod real;

@@ -3,31 +3,18 @@
 //! wrapped in a header and a valid CRC, so the content checks (table sizes, breakpoints,
 //! finiteness, ranges, physics terms) are fuzzed and not only the CRC.
 #![no_main]
-use firmware_core::blob::{Blob, FORMAT_VERSION, MAGIC, MAX_BLOB_LEN};
+use firmware_core::blob::{Blob, MAGIC, MAX_BLOB_LEN};
 use libfuzzer_sys::fuzz_target;
 
-fn crc32(data: &[u8]) -> u32 {
-    let mut c = !0u32;
-    for &x in data {
-        c ^= u32::from(x);
-        for _ in 0..8 {
-            c = if c & 1 != 0 { (c >> 1) ^ 0xEDB8_8320 } else { c >> 1 };
-        }
-    }
-    !c
-}
+#[path = "common.rs"]
+mod common;
 
 fuzz_target!(|data: &[u8]| {
     let wrapped;
     let bytes = if data.starts_with(&MAGIC) {
         data
     } else {
-        let mut b = MAGIC.to_vec();
-        b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        b.extend_from_slice(data);
-        let c = crc32(&b);
-        b.extend_from_slice(&c.to_le_bytes());
-        wrapped = b;
+        wrapped = common::wrap(data);
         &wrapped[..]
     };
     if let Ok(b) = Blob::decode(bytes) {

@@ -2,20 +2,12 @@
 //! example blob) and a sequence of samples: no panic, and every non-finite output is
 //! flagged.
 #![no_main]
-use firmware_core::blob::{example_blob_bytes, Blob, FORMAT_VERSION};
+use firmware_core::blob::{example_blob_bytes, Blob};
 use firmware_core::compensate::{Compensator, ErrorModel, Method, Status};
 use libfuzzer_sys::fuzz_target;
 
-fn crc32(data: &[u8]) -> u32 {
-    let mut c = !0u32;
-    for &x in data {
-        c ^= u32::from(x);
-        for _ in 0..8 {
-            c = if c & 1 != 0 { (c >> 1) ^ 0xEDB8_8320 } else { c >> 1 };
-        }
-    }
-    !c
-}
+#[path = "common.rs"]
+mod common;
 
 fuzz_target!(|data: &[u8]| {
     let Some((&head, rest)) = data.split_first() else { return };
@@ -23,12 +15,7 @@ fuzz_target!(|data: &[u8]| {
         (Blob::decode(&example_blob_bytes()).ok(), rest)
     } else {
         let len = (usize::from(head) * 4).min(rest.len());
-        let mut b = b"ATCB".to_vec();
-        b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        b.extend_from_slice(&rest[..len]);
-        let c = crc32(&b);
-        b.extend_from_slice(&c.to_le_bytes());
-        (Blob::decode(&b).ok(), &rest[len..])
+        (Blob::decode(&common::wrap(&rest[..len])).ok(), &rest[len..])
     };
     let Some(blob) = blob else { return };
     let method = match head >> 6 {

@@ -21,7 +21,7 @@
 //! # Features
 //! - `physics` (default): the in-flight terms found by `host-fit diagnose` (thermal lag,
 //!   temperature rate, hysteresis, warm-up, K2, scale asymmetry). Without it the
-//!   compensation path is about 3 KiB smaller, and a blob that carries such terms is
+//!   compensation path is about 1.3 KiB smaller, and a blob that carries such terms is
 //!   refused by [`compensate::Compensator::new`] with [`Error::PhysicsNotBuiltIn`].
 //! - `defmt`: `defmt::Format` on the public types.
 // no_std always (the error type uses core::error::Error); unit tests use std.

@@ -93,15 +93,9 @@ impl Positions {
     pub fn parse(path: &Path, text: &str) -> Result<(Positions, Vec<String>)> {
         let mut pos = Positions::default();
         let mut warnings = Vec::new();
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut header: Option<[usize; 4]> = None;
         let mut n_rows = 0usize;
-        for (i, raw) in text.lines().enumerate() {
-            let line_no = i + 1;
-            let line = raw.trim_end_matches('\r').trim();
-            if line.is_empty() || line.starts_with('#') {
-                continue;
-            }
+        for (line_no, line) in crate::io::data_lines(text) {
             let fields: Vec<&str> = line.split(',').map(str::trim).collect();
             let Some(cols) = header else {
                 let idx =
@@ -126,19 +120,7 @@ impl Positions {
             }
             let mut v = [0.0; 3];
             for (slot, (k, fname)) in v.iter_mut().zip([(xi, "fx"), (yi, "fy"), (zi, "fz")]) {
-                let s = get(k, fname)?;
-                *slot = s
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|x| x.is_finite())
-                    .ok_or_else(|| {
-                        HostError::at_field(
-                            path,
-                            line_no,
-                            fname,
-                            format!("`{s}` is not a finite number"),
-                        )
-                    })?;
+                *slot = crate::io::number(path, line_no, fname, get(k, fname)?)?;
             }
             let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
             if norm == 0.0 || !norm.is_finite() {

@@ -81,47 +81,7 @@ pub const MAX_DWELL_DRIFT_C: f64 = 0.5;
 const KNOWN_META: [&str; 5] = ["unit", "t0_c", "g_local", "format", "output_unit"];
 const REQUIRED: [&str; 6] = ["t_s", "position", "temp_c", "ux_v", "uy_v", "uz_v"];
 
-/// Largest magnitude accepted in any numeric field. Beyond it the sums of squares of a fit
-/// overflow f64 (a 1e200 reading is finite but unfittable), so it is rejected here with a
-/// line number instead of surfacing later as a NaN coefficient. 1e12 leaves room for raw
-/// 32-bit ADC counts and Unix-epoch times.
-pub const MAX_ABS_VALUE: f64 = 1e12;
-/// Absolute zero, C: a temperature below it is a wrong column or unit, not a reading.
-pub const ABSOLUTE_ZERO_C: f64 = -273.15;
-
-fn parse_num(path: &Path, line: usize, field: &str, s: &str) -> Result<f64> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v.abs() <= MAX_ABS_VALUE => Ok(v),
-        Ok(v) if v.is_finite() => Err(HostError::at_field(
-            path,
-            line,
-            field,
-            format!(
-                "`{s}` is beyond +-{MAX_ABS_VALUE:e}: too large to fit in double precision \
-                 (check the column's unit and scale)"
-            ),
-        )),
-        _ => Err(HostError::at_field(
-            path,
-            line,
-            field,
-            format!("`{s}` is not a finite number"),
-        )),
-    }
-}
-
-fn parse_temp(path: &Path, line: usize, field: &str, s: &str) -> Result<f64> {
-    let v = parse_num(path, line, field, s)?;
-    if v < ABSOLUTE_ZERO_C {
-        return Err(HostError::at_field(
-            path,
-            line,
-            field,
-            format!("`{s}` C is below absolute zero (is the column in C?)"),
-        ));
-    }
-    Ok(v)
-}
+use crate::io::{number as parse_num, temperature as parse_temp};
 
 impl Recording {
     /// Read a recording file.

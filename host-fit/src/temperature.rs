@@ -439,16 +439,10 @@ pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> 
 /// Read a coefficient table in the format of paper-tables.csv.
 pub fn read_table(path: &Path) -> Result<Vec<TableRow>> {
     let text = std::fs::read_to_string(path).map_err(|e| HostError::io(path, &e))?;
-    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut cols: Option<Vec<usize>> = None;
     let mut rows = Vec::new();
     let want: Vec<&str> = std::iter::once("temp_c").chain(COEFF_NAMES).collect();
-    for (i, raw) in text.lines().enumerate() {
-        let line_no = i + 1;
-        let line = raw.trim_end_matches('\r').trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
+    for (line_no, line) in crate::io::data_lines(&text) {
         let f: Vec<&str> = line.split(',').map(str::trim).collect();
         match &cols {
             None => {
@@ -459,18 +453,11 @@ pub fn read_table(path: &Path) -> Result<Vec<TableRow>> {
                 let mut v = [0.0; 13];
                 for (slot, (k, name)) in v.iter_mut().zip(idx.iter().zip(&want)) {
                     let s = f.get(*k).copied().unwrap_or("");
-                    *slot = s
-                        .parse::<f64>()
-                        .ok()
-                        .filter(|x| x.is_finite())
-                        .ok_or_else(|| {
-                            HostError::at_field(
-                                path,
-                                line_no,
-                                name,
-                                format!("`{s}` is not a finite number"),
-                            )
-                        })?;
+                    *slot = if *name == "temp_c" {
+                        crate::io::temperature(path, line_no, name, s)?
+                    } else {
+                        crate::io::number(path, line_no, name, s)?
+                    };
                 }
                 rows.push(TableRow {
                     temp_c: v[0],

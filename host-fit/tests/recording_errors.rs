@@ -118,6 +118,56 @@ fn value_too_large_to_fit() {
     assert_eq!(code, 0, "{err}");
 }
 
+/// The positions file and the coefficient table share the recording's number check.
+#[test]
+fn other_inputs_refuse_values_too_large_to_fit() {
+    let rec = write("rec-ok2.csv", &format!("{HEAD}{}", good_rows(0)));
+    let pos = write("pos-huge.csv", "name,fx,fy,fz\nA,1,1e300,0\n");
+    let (code, _, err) = run(&[
+        "identify",
+        rec.to_str().unwrap(),
+        "--positions",
+        pos.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("pos-huge.csv:2:") && err.contains("field `fy`") && err.contains("too large"),
+        "{err}"
+    );
+    let tables =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../testdata/paper/paper-tables.csv");
+    let text = std::fs::read_to_string(tables).unwrap();
+    let first_data = text
+        .lines()
+        .position(|l| l.starts_with(|c: char| c == '-' || c.is_ascii_digit()))
+        .unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    // the table with one field of its first data row replaced
+    let with = |col: usize, value: &str, name: &str| {
+        let mut l: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+        let mut f: Vec<&str> = lines[first_data].split(',').collect();
+        f[col] = value;
+        l[first_data] = f.join(",");
+        write(name, &(l.join("\n") + "\n"))
+    };
+    let table = with(1, "3e200", "table-huge.csv");
+    let (code, _, err) = run(&["temp-fit", table.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains(&format!("table-huge.csv:{}:", first_data + 1))
+            && err.contains("field `kxx`")
+            && err.contains("too large"),
+        "{err}"
+    );
+    let table = with(0, "-300", "table-cold.csv");
+    let (code, _, err) = run(&["temp-fit", table.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("field `temp_c`") && err.contains("absolute zero"),
+        "{err}"
+    );
+}
+
 #[test]
 fn temperature_below_absolute_zero() {
     let text = format!("{HEAD}{}21,TP1,-300,0.1,0.2,0.3\n", good_rows(0));

@@ -179,22 +179,23 @@ fn main() -> ExitCode {
         Some("test") => test(),
         Some("demo") => demo(&argv[1..]),
         Some("fuzz") => {
-            let secs = argv
-                .iter()
-                .position(|a| a == "--seconds")
-                .and_then(|i| argv.get(i + 1))
-                .and_then(|v| v.parse().ok())
-                .unwrap_or(60);
-            // any other word names a target; none means all of them
-            let named: Vec<&str> = argv[1..]
-                .iter()
-                .enumerate()
-                // argv[i] is the word before argv[1..][i]
-                .filter(|(i, a)| {
-                    *a != "--seconds" && argv.get(*i).map(String::as_str) != Some("--seconds")
-                })
-                .map(|(_, a)| a.as_str())
-                .collect();
+            // `--seconds N` (default 60); any other word names a target, none means all
+            let mut secs = 60;
+            let mut named: Vec<&str> = Vec::new();
+            let mut words = argv[1..].iter();
+            while let Some(w) = words.next() {
+                if w != "--seconds" {
+                    named.push(w);
+                    continue;
+                }
+                match words.next().map(|v| v.parse()) {
+                    Some(Ok(n)) => secs = n,
+                    _ => {
+                        eprintln!("xtask: --seconds needs a whole number of seconds");
+                        return ExitCode::FAILURE;
+                    }
+                }
+            }
             if let Some(bad) = named.iter().find(|n| !fuzz::TARGETS.contains(n)) {
                 eprintln!(
                     "xtask: no fuzz target `{bad}` (targets: {:?})",

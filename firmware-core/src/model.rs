@@ -17,6 +17,14 @@ pub const COEFF_NAMES: [&str; N_COEFFS] = [
     "kxx", "kyy", "kzz", "kxy", "kxz", "kyx", "kyz", "kzx", "kzy", "u0x", "u0y", "u0z",
 ];
 
+/// Where `K[i][j]` sits in the canonical order ([`COEFF_NAMES`]): the one definition of
+/// the layout that blob tables, CSV columns and host fits all index by.
+pub const K_INDEX: [[usize; 3]; 3] = [[0, 3, 4], [5, 1, 6], [7, 8, 2]];
+/// Where `U0[i]` sits in the canonical order.
+pub const U0_INDEX: [usize; 3] = [9, 10, 11];
+/// Axis names, in the order of the model's vectors.
+pub const AXES: [&str; 3] = ["x", "y", "z"];
+
 /// The 12 coefficients: `U = K a + U0`.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -30,6 +38,8 @@ pub struct Coeffs<R> {
 impl<R: Real> Coeffs<R> {
     /// From the canonical 12-array ([`COEFF_NAMES`] order).
     pub fn from_array(c: &[R; N_COEFFS]) -> Self {
+        // Spelled out (not indexed through K_INDEX) so the firmware has no bounds checks;
+        // the test `layout_constants_match_the_array_order` pins the two together.
         let [kxx, kyy, kzz, kxy, kxz, kyx, kyz, kzx, kzy, u0x, u0y, u0z] = *c;
         Coeffs {
             k: [[kxx, kxy, kxz], [kyx, kyy, kyz], [kzx, kzy, kzz]],
@@ -222,6 +232,21 @@ mod tests {
         assert_eq!(m.k[2][1], 8.0); // kzy
         assert_eq!(m.u0[1], 10.0);
         assert_eq!(m.to_array(), c);
+    }
+
+    #[test]
+    fn layout_constants_match_the_array_order() {
+        let c: [f64; 12] = core::array::from_fn(|i| i as f64);
+        let m = Coeffs::from_array(&c);
+        for i in 0..3 {
+            for j in 0..3 {
+                assert_eq!(m.k[i][j], c[K_INDEX[i][j]]);
+                let name = COEFF_NAMES[K_INDEX[i][j]];
+                assert_eq!(&name[1..], format!("{}{}", AXES[i], AXES[j]));
+            }
+            assert_eq!(m.u0[i], c[U0_INDEX[i]]);
+            assert_eq!(COEFF_NAMES[U0_INDEX[i]], format!("u0{}", AXES[i]));
+        }
     }
 
     #[test]

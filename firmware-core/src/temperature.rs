@@ -148,6 +148,25 @@ impl<R: Real> Physics<R> {
     }
 }
 
+/// The piecewise-linear segment rule, written once for the firmware's tables and the
+/// host's fits: the segment is the last one whose lower breakpoint is <= `t` (the first
+/// one when `t` is below the table, or NaN), so the end segments extrapolate. Returns the
+/// index of the segment's lower breakpoint and the fraction `(t - b_lo) / (b_hi - b_lo)`
+/// (exact to 1.5 ulp: two roundings). Every segment is visited, so the time does not
+/// depend on `t`. `None` with fewer than two breakpoints.
+pub fn pwl_segment<R: Real>(breakpoints: &[R], t: R) -> Option<(usize, R)> {
+    let mut seg = None;
+    for (idx, w) in breakpoints.windows(2).enumerate() {
+        if let [b0, b1] = w {
+            if idx == 0 || t >= *b0 {
+                seg = Some((idx, *b0, *b1));
+            }
+        }
+    }
+    let (idx, b0, b1) = seg?;
+    Some((idx, (t - b0) / (b1 - b0)))
+}
+
 fn row_finite<R: Real>(r: &CoeffRow<R>) -> bool {
     r.iter().all(|v| v.is_finite())
 }
@@ -210,20 +229,10 @@ impl<R: Real> TempModel<R> {
                 breakpoints,
                 values,
             } => {
-                // The segment is the last one whose lower breakpoint is <= t, the first
-                // one below the table; every segment is visited so the time is fixed.
                 let zero_row = [R::ZERO; N_COEFFS];
-                let mut seg = (R::ZERO, R::ONE, &zero_row, &zero_row);
-                let pairs = breakpoints.windows(2).zip(values.windows(2));
-                for (idx, (b, v)) in pairs.enumerate() {
-                    if let ([b0, b1], [v0, v1]) = (b, v) {
-                        if idx == 0 || t >= *b0 {
-                            seg = (*b0, *b1, v0, v1);
-                        }
-                    }
-                }
-                let (b0, b1, v0, v1) = seg;
-                let f = (t - b0) / (b1 - b0);
+                let (seg, f) = pwl_segment(breakpoints, t).unwrap_or((0, R::ZERO));
+                let v0 = values.get(seg).unwrap_or(&zero_row);
+                let v1 = values.get(seg.wrapping_add(1)).unwrap_or(&zero_row);
                 let mut out = [R::ZERO; N_COEFFS];
                 for ((o, lo), hi) in out.iter_mut().zip(v0.iter()).zip(v1.iter()) {
                     *o = *lo + (*hi - *lo) * f;
@@ -321,6 +330,17 @@ mod tests {
         assert_eq!(m.eval(20.0, 45.0)[0], 3.5);
         assert_eq!(m.eval(20.0, -100.0)[0], -6.0);
         assert_eq!(m.eval(20.0, 120.0)[0], -4.0);
+    }
+
+    #[test]
+    fn segment_rule_picks_the_last_lower_breakpoint() {
+        let b = [-40.0f64, 20.0, 70.0];
+        assert_eq!(pwl_segment(&b, -100.0), Some((0, -1.0)));
+        assert_eq!(pwl_segment(&b, 20.0), Some((1, 0.0)));
+        assert_eq!(pwl_segment(&b, 19.999).map(|s| s.0), Some(0));
+        assert_eq!(pwl_segment(&b, 120.0), Some((1, 2.0)));
+        assert_eq!(pwl_segment(&b, f64::NAN).map(|s| s.0), Some(0));
+        assert_eq!(pwl_segment(&b[..1], 0.0), None);
     }
 
     #[test]

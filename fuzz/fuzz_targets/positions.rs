@@ -1,7 +1,7 @@
 //! Any text as a positions file: an error or positions, never a panic; every position
 //! is a unit vector.
 #![no_main]
-use host_fit::positions::Positions;
+use host_fit::data::positions::Positions;
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 

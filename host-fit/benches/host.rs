@@ -4,9 +4,9 @@
 #![allow(missing_docs)]
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use host_fit::cli::{fit_recording, ModelKind, Route};
-use host_fit::positions::Positions;
-use host_fit::recording::Recording;
+use host_fit::fit::pipeline::{fit_recording, ModelChoice, ModelKind, Route};
+use host_fit::data::positions::Positions;
+use host_fit::data::recording::Recording;
 use host_fit::simulate::{simulate, Stop};
 use std::path::Path;
 
@@ -42,9 +42,13 @@ fn host(c: &mut Criterion) {
         });
         let rec = Recording::from_reader(Path::new("r.csv"), csv.as_bytes(), Positions::default())
             .unwrap();
-        let tp = |p: usize| !rec.positions.name(p).starts_with("PP");
+        let pwl = ModelChoice {
+            kind: ModelKind::Pwl,
+            order: None,
+            breakpoints: None,
+        };
         g.bench_with_input(BenchmarkId::new("fit", rows), &rec, |b, rec| {
-            b.iter(|| fit_recording(rec, &tp, ModelKind::Pwl, None, None, Route::Joint).unwrap())
+            b.iter(|| fit_recording(rec, &pwl, Route::Joint).unwrap())
         });
         g.bench_with_input(BenchmarkId::new("diagnose", rows), &rec, |b, rec| {
             b.iter(|| host_fit::diagnose::diagnose(rec).unwrap())

@@ -1,16 +1,18 @@
 //! Production batches: fit (and optionally diagnose) every recording in a folder in
 //! parallel, one blob and one JSON per unit, and a summary CSV. One unit's bad file is
 //! reported in the summary and does not stop the batch.
-use crate::calib::build_blob;
-use crate::cli::{fit_recording, ModelKind, Route};
+use crate::blob::build_blob;
+use crate::data::positions::{Positions, Role};
+use crate::data::recording::Recording;
+use crate::diagnose::contract::Contract;
 use crate::error::{HostError, Result};
-use crate::io::{check_writable, write_atomic};
-use crate::positions::Positions;
-use crate::recording::Recording;
+use crate::fit::pipeline::{fit_recording, ModelChoice, ModelKind, Route};
+use crate::output::{check_writable, write_atomic, write_json};
 use crate::verify::verify;
 use firmware_core::compensate::Method;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
+use serde::Serialize;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -31,84 +33,93 @@ pub struct UnitResult {
     pub findings: Vec<String>,
 }
 
-fn one(path: &Path, out: &Path, kind: ModelKind, diagnose: bool, force: bool) -> UnitResult {
+/// The per-unit JSON.
+#[derive(Serialize)]
+struct UnitJson {
+    unit: String,
+    file: String,
+    model: String,
+    t_min_c: f64,
+    t_max_c: f64,
+    f32_departure_g: f64,
+    max_abs_dg_mg_uncompensated: Option<f64>,
+    max_abs_dg_mg_method1: Option<f64>,
+    warnings: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    diagnosis: Option<Contract>,
+}
+
+/// Fit one unit, write its blob and JSON; fills `r`.
+fn fit_unit(path: &Path, out: &Path, kind: ModelKind, diagnose: bool, force: bool, r: &mut UnitResult) -> Result<()> {
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let rec = Recording::read(path, Positions::default())?;
+    if !rec.unit.is_empty() {
+        r.unit = rec.unit.clone();
+    }
+    let choice = ModelChoice {
+        kind,
+        order: None,
+        breakpoints: None,
+    };
+    let oc = fit_recording(&rec, &choice, Route::Joint)?;
+    let cal = oc.fit.calibration(0.1, false);
+    let (blob, bytes, dep) = build_blob(&r.unit, &cal)?;
+    write_atomic(&out.join(format!("{stem}.blob")), &bytes, force)?;
+    let check = |p: usize| rec.positions.has_role(p, Role::Verification);
+    if let Some(v) = verify(&rec, &blob, Method::CorrectConstants, &check) {
+        if !v.max_by_temperature.is_empty() {
+            let worst = |f: &dyn Fn(&crate::verify::TempMax) -> f64| {
+                v.max_by_temperature.iter().map(f).fold(0.0, f64::max)
+            };
+            r.max_dg_before_mg = Some(worst(&|t| t.max_abs_dg_mg_uncompensated));
+            r.max_dg_after_mg = Some(worst(&|t| t.max_abs_dg_mg));
+        }
+    }
+    let diagnosis = if diagnose {
+        let d = crate::diagnose::diagnose(&rec)?;
+        r.findings = d.findings.iter().map(|f| f.effect.clone()).collect();
+        Some(d.contract(&rec))
+    } else {
+        None
+    };
+    let j = UnitJson {
+        unit: r.unit.clone(),
+        file: path.display().to_string(),
+        model: oc.fit.basis.describe(),
+        t_min_c: cal.t_min_c,
+        t_max_c: cal.t_max_c,
+        f32_departure_g: dep,
+        max_abs_dg_mg_uncompensated: r.max_dg_before_mg,
+        max_abs_dg_mg_method1: r.max_dg_after_mg,
+        warnings: rec.warnings.len(),
+        diagnosis,
+    };
+    write_json(&out.join(format!("{stem}.json")), &j, force)
+}
+
+fn one(path: &Path, out: &Path, kind: ModelKind, diagnose: bool, force: bool) -> UnitResult {
     let mut r = UnitResult {
         file: path.to_path_buf(),
-        unit: stem.clone(),
+        unit: path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
         status: "ok".into(),
         max_dg_before_mg: None,
         max_dg_after_mg: None,
         findings: Vec::new(),
     };
-    let res = (|| -> Result<()> {
-        let rec = Recording::read(path, Positions::default())?;
-        if !rec.unit.is_empty() {
-            r.unit = rec.unit.clone();
-        }
-        let pp: Vec<bool> = (0..rec.positions.list.len())
-            .map(|i| rec.positions.name(i).starts_with("PP"))
-            .collect();
-        let is_pp = |p: usize| pp.get(p).copied().unwrap_or(false);
-        let fit_sel = |p: usize| !is_pp(p);
-        let oc = fit_recording(&rec, &fit_sel, kind, None, None, Route::Joint)?;
-        let cal = oc.fit.calibration(0.1, false);
-        let (blob, bytes, dep) = build_blob(&r.unit, &cal)?;
-        write_atomic(&out.join(format!("{stem}.blob")), &bytes, force)?;
-        if let Some(v) = verify(&rec, &blob, Method::CorrectConstants, &is_pp) {
-            if !v.max_by_temperature.is_empty() {
-                r.max_dg_before_mg = Some(
-                    v.max_by_temperature
-                        .iter()
-                        .map(|t| t.max_abs_dg_mg_uncompensated)
-                        .fold(0.0, f64::max),
-                );
-                r.max_dg_after_mg = Some(
-                    v.max_by_temperature
-                        .iter()
-                        .map(|t| t.max_abs_dg_mg)
-                        .fold(0.0, f64::max),
-                );
-            }
-        }
-        let mut j = serde_json::json!({
-            "unit": r.unit, "file": path.display().to_string(), "model": oc.fit.basis.describe(),
-            "t_min_c": cal.t_min_c, "t_max_c": cal.t_max_c, "f32_departure_g": dep,
-            "max_abs_dg_mg_uncompensated": r.max_dg_before_mg, "max_abs_dg_mg_method1": r.max_dg_after_mg,
-            "warnings": rec.warnings.len(),
-        });
-        if diagnose {
-            let d = crate::diagnose::diagnose(&rec)?;
-            r.findings = d.findings.iter().map(|f| f.effect.clone()).collect();
-            j["diagnosis"] = d.json(&rec);
-        }
-        write_atomic(
-            &out.join(format!("{stem}.json")),
-            serde_json::to_string_pretty(&j)
-                .unwrap_or_default()
-                .as_bytes(),
-            force,
-        )
-    })();
-    if let Err(e) = res {
+    if let Err(e) = fit_unit(path, out, kind, diagnose, force, &mut r) {
         r.status = format!("error: {e}");
     }
     r
 }
 
-/// Run a batch over every `*.csv` in `dir`; returns the per-unit results (also written
-/// as `summary.csv` in `out`).
-pub fn run(
-    dir: &Path,
-    out: &Path,
-    jobs: Option<usize>,
-    kind: ModelKind,
-    diagnose: bool,
-    force: bool,
-) -> Result<Vec<UnitResult>> {
+/// The `*.csv` files of `dir`, sorted.
+fn recordings(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|e| HostError::io(dir, &e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -121,6 +132,45 @@ pub fn run(
             "no *.csv recordings in this folder",
         ));
     }
+    Ok(files)
+}
+
+/// The summary as CSV text.
+pub fn summary_csv(results: &[UnitResult]) -> Result<String> {
+    let opt = |v: Option<f64>| v.map(|x| format!("{x:.4}")).unwrap_or_default();
+    crate::output::csv(
+        &[
+            "unit",
+            "file",
+            "status",
+            "max_abs_dg_mg_before",
+            "max_abs_dg_mg_after",
+            "findings",
+        ],
+        results.iter().map(|r| {
+            [
+                r.unit.clone(),
+                r.file.display().to_string(),
+                r.status.clone(),
+                opt(r.max_dg_before_mg),
+                opt(r.max_dg_after_mg),
+                r.findings.join(";"),
+            ]
+        }),
+    )
+}
+
+/// Run a batch over every `*.csv` in `dir`; returns the per-unit results (also written
+/// as `summary.csv` in `out`).
+pub fn run(
+    dir: &Path,
+    out: &Path,
+    jobs: Option<usize>,
+    kind: ModelKind,
+    diagnose: bool,
+    force: bool,
+) -> Result<Vec<UnitResult>> {
+    let files = recordings(dir)?;
     std::fs::create_dir_all(out).map_err(|e| HostError::io(out, &e))?;
     let summary = out.join("summary.csv");
     check_writable(&summary, force)?;
@@ -148,21 +198,6 @@ pub fn run(
             .collect()
     });
     bar.finish_and_clear();
-    let mut csv =
-        String::from("unit,file,status,max_abs_dg_mg_before,max_abs_dg_mg_after,findings\n");
-    let opt = |v: Option<f64>| v.map(|x| format!("{x:.4}")).unwrap_or_default();
-    for r in &results {
-        let status = r.status.replace(['"', '\n'], " ");
-        csv.push_str(&format!(
-            "{},{},\"{}\",{},{},{}\n",
-            r.unit,
-            r.file.display(),
-            status,
-            opt(r.max_dg_before_mg),
-            opt(r.max_dg_after_mg),
-            r.findings.join(";")
-        ));
-    }
-    write_atomic(&summary, csv.as_bytes(), force)?;
+    write_atomic(&summary, summary_csv(&results)?.as_bytes(), force)?;
     Ok(results)
 }

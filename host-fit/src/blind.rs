@@ -2,9 +2,12 @@
 //! recording; the diagnosis, which never sees the truth, must name them (and nothing on
 //! clean data), report ambiguity where the data cannot separate, get the parameters
 //! within 3 sigma and bring the residual to within 1.5x the noise.
-use crate::diagnose::{diagnose, normalized_rms, Data};
-use crate::positions::Positions;
-use crate::recording::Recording;
+use crate::data::positions::Positions;
+use crate::data::recording::Recording;
+use crate::diagnose::design::Data;
+use crate::diagnose::findings::Finding;
+use crate::diagnose::metrics::normalized_rms;
+use crate::diagnose::{diagnose, EFFECT_IDS};
 use crate::rng::Rng;
 use crate::simulate::{simulate, Curvature, Fixture, PerAxis, SimConfig, Stop, Warmup};
 use std::path::Path;
@@ -188,52 +191,7 @@ pub fn run(case: &Case) -> Outcome {
     want.sort();
     want.dedup();
     let exact = named == want && (!expect_ambiguity || !ambiguous.is_empty());
-    // parameters within 3 sigma, for the per-axis linear effects and time constants
-    let mut params_ok = None;
-    for f in &d.findings {
-        let truth: Option<Vec<(String, f64)>> = match f.effect.as_str() {
-            "temp_rate" => cfg.effects.temp_rate.map(|p| {
-                (0..3)
-                    .map(|i| (format!("r_{}", ["x", "y", "z"][i]), p.value[i]))
-                    .collect()
-            }),
-            "hysteresis" => cfg.effects.hysteresis.map(|p| {
-                (0..3)
-                    .map(|i| (format!("h_{}", ["x", "y", "z"][i]), p.value[i]))
-                    .collect()
-            }),
-            "nonlinearity_k2" => cfg.effects.nonlinearity_k2.map(|p| {
-                (0..3)
-                    .map(|i| (format!("k2_{}", ["x", "y", "z"][i]), p.value[i]))
-                    .collect()
-            }),
-            "scale_asymmetry" => cfg.effects.scale_asymmetry.map(|p| {
-                (0..3)
-                    .map(|i| (format!("delta_{}", ["x", "y", "z"][i]), p.value[i]))
-                    .collect()
-            }),
-            "thermal_lag" => cfg
-                .effects
-                .thermal_lag
-                .map(|p| vec![("tau_s".to_string(), p.value[0])]),
-            "warmup_drift" => cfg.effects.warmup_drift.map(|w| {
-                let mut v: Vec<(String, f64)> = (0..3)
-                    .map(|i| (format!("d_{}", ["x", "y", "z"][i]), w.d_v[i]))
-                    .collect();
-                v.push(("tau_s".into(), w.tau_s));
-                v
-            }),
-            _ => None,
-        };
-        if let Some(t) = truth {
-            let ok = t.iter().all(|(k, v)| {
-                let est = f.parameters.get(k).and_then(|x| x.as_f64());
-                let sig = f.uncertainties.get(k).and_then(|x| x.as_f64());
-                matches!((est, sig), (Some(e), Some(s)) if (e - v).abs() <= 3.0 * s.max(1e-300))
-            });
-            params_ok = Some(params_ok.unwrap_or(true) && ok);
-        }
-    }
+    let params_ok = params_within_3_sigma(&cfg, &d.findings);
     let data = Data {
         rec: &rec,
         obs: d.obs.clone(),
@@ -252,8 +210,51 @@ pub fn run(case: &Case) -> Outcome {
     }
 }
 
+/// The true values of a finding's parameters, for the per-axis linear effects and the
+/// time constants (None for effects whose parameters are not compared).
+fn truth_of(cfg: &SimConfig, effect: &str) -> Option<Vec<(String, f64)>> {
+    let per_axis = |sym: &str, v: [f64; 3]| -> Vec<(String, f64)> {
+        (0..3)
+            .map(|i| (format!("{sym}_{}", ["x", "y", "z"][i]), v[i]))
+            .collect()
+    };
+    let e = &cfg.effects;
+    match effect {
+        "temp_rate" => e.temp_rate.map(|p| per_axis("r", p.value)),
+        "hysteresis" => e.hysteresis.map(|p| per_axis("h", p.value)),
+        "nonlinearity_k2" => e.nonlinearity_k2.map(|p| per_axis("k2", p.value)),
+        "scale_asymmetry" => e.scale_asymmetry.map(|p| per_axis("delta", p.value)),
+        "thermal_lag" => e
+            .thermal_lag
+            .map(|p| vec![("tau_s".to_string(), p.value[0])]),
+        "warmup_drift" => e.warmup_drift.map(|w| {
+            let mut v = per_axis("d", w.d_v);
+            v.push(("tau_s".into(), w.tau_s));
+            v
+        }),
+        _ => None,
+    }
+}
+
+/// Whether every compared parameter of every finding is within 3 sigma of its truth
+/// (None when no finding has compared parameters).
+fn params_within_3_sigma(cfg: &SimConfig, findings: &[Finding]) -> Option<bool> {
+    let mut params_ok = None;
+    for f in findings {
+        if let Some(t) = truth_of(cfg, &f.effect) {
+            let ok = t.iter().all(|(k, v)| {
+                let est = f.parameters.get(k).copied();
+                let sig = f.uncertainties.get(k).copied();
+                matches!((est, sig), (Some(e), Some(s)) if (e - v).abs() <= 3.0 * s.max(1e-300))
+            });
+            params_ok = Some(params_ok.unwrap_or(true) && ok);
+        }
+    }
+    params_ok
+}
+
 /// Every catalogue effect the simulator conceals.
-pub const EFFECTS: [&str; 8] = crate::diagnose::EFFECT_IDS;
+pub const EFFECTS: [&str; 8] = EFFECT_IDS;
 
 /// The suite: clean recordings, each effect at several magnitudes and seeds, pairs, and
 /// the TP-only ambiguity. `long` adds seeds and smaller magnitudes.
@@ -304,8 +305,8 @@ pub fn suite(long: bool) -> Vec<Case> {
     v
 }
 
-/// The confusion matrix and scores as text.
-pub fn report(outcomes: &[Outcome]) -> String {
+/// One line per case: what was concealed and what was named.
+fn case_lines(outcomes: &[Outcome]) -> String {
     let mut s = String::from("case                                   scale seed  found / ambiguous                         exact  params  final/noise\n");
     for o in outcomes {
         let name = if o.case.effects.is_empty() {
@@ -341,9 +342,20 @@ pub fn report(outcomes: &[Outcome]) -> String {
             o.note
         ));
     }
-    // confusion: concealed single effect (rows) vs found (columns)
+    s
+}
+
+/// Every effect named by a case, found or ambiguous.
+fn named(o: &Outcome) -> Vec<String> {
+    let mut named: Vec<String> = o.found.clone();
+    named.extend(o.ambiguous.iter().flatten().cloned());
+    named
+}
+
+/// Concealed single effect (rows) against the effects named (columns).
+fn confusion(outcomes: &[Outcome]) -> String {
     let cols: Vec<&str> = std::iter::once("none").chain(EFFECTS).collect();
-    s.push_str("\nconfusion (concealed single effect -> effects named, counts):\n");
+    let mut s = String::from("\nconfusion (concealed single effect -> effects named, counts):\n");
     s.push_str(&format!("{:<16}", ""));
     for c in &cols {
         s.push_str(&format!("{:>6}", &c[..c.len().min(5)]));
@@ -369,8 +381,7 @@ pub fn report(outcomes: &[Outcome]) -> String {
             let n = cases
                 .iter()
                 .filter(|o| {
-                    let mut named: Vec<String> = o.found.clone();
-                    named.extend(o.ambiguous.iter().flatten().cloned());
+                    let named = named(o);
                     if *c == "none" {
                         named.is_empty()
                     } else {
@@ -382,7 +393,11 @@ pub fn report(outcomes: &[Outcome]) -> String {
         }
         s.push('\n');
     }
-    // where detection stops: the concealed effect named, by magnitude
+    s
+}
+
+/// Where detection stops: the concealed effect named, by magnitude.
+fn by_magnitude(outcomes: &[Outcome]) -> String {
     let mut scales: Vec<f64> = outcomes
         .iter()
         .filter(|o| !o.case.effects.is_empty())
@@ -390,7 +405,7 @@ pub fn report(outcomes: &[Outcome]) -> String {
         .collect();
     scales.sort_by(|a, b| b.total_cmp(a));
     scales.dedup();
-    s.push_str(
+    let mut s = String::from(
         "\ndetection by magnitude (1 = the nominal size; effect named / exactly right / cases):\n",
     );
     for sc in &scales {
@@ -398,26 +413,29 @@ pub fn report(outcomes: &[Outcome]) -> String {
             .iter()
             .filter(|o| !o.case.effects.is_empty() && o.case.scale == *sc)
             .collect();
-        let named = at
+        let hit = at
             .iter()
             .filter(|o| {
-                o.case.effects.iter().all(|e| {
-                    o.found.iter().any(|f| f == e) || o.ambiguous.iter().flatten().any(|f| f == e)
-                })
+                let named = named(o);
+                o.case.effects.iter().all(|e| named.iter().any(|f| f == e))
             })
             .count();
         let ex = at.iter().filter(|o| o.exact).count();
-        s.push_str(&format!("  {sc:>5.2}: {named}/{ex}/{}\n", at.len()));
+        s.push_str(&format!("  {sc:>5.2}: {hit}/{ex}/{}\n", at.len()));
     }
+    s
+}
+
+/// The scores over the whole suite.
+fn scores(outcomes: &[Outcome]) -> String {
     let exact = outcomes.iter().filter(|o| o.exact).count();
     let detectable: Vec<&Outcome> = outcomes.iter().filter(|o| o.case.scale >= 0.1).collect();
-    s.push_str(&format!(
-        "exactly the right set at magnitudes >= 0.1: {}/{} ({:.0}%)\n",
-        detectable.iter().filter(|o| o.exact).count(),
+    let det_exact = detectable.iter().filter(|o| o.exact).count();
+    let mut s = format!(
+        "exactly the right set at magnitudes >= 0.1: {det_exact}/{} ({:.0}%)\n",
         detectable.len(),
-        100.0 * detectable.iter().filter(|o| o.exact).count() as f64
-            / detectable.len().max(1) as f64
-    ));
+        100.0 * det_exact as f64 / detectable.len().max(1) as f64
+    );
     let clean: Vec<&Outcome> = outcomes
         .iter()
         .filter(|o| o.case.effects.is_empty())
@@ -440,4 +458,9 @@ pub fn report(outcomes: &[Outcome]) -> String {
         p.len()
     ));
     s
+}
+
+/// The confusion matrix and scores as text.
+pub fn report(outcomes: &[Outcome]) -> String {
+    case_lines(outcomes) + &confusion(outcomes) + &by_magnitude(outcomes) + &scores(outcomes)
 }

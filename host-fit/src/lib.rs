@@ -1,25 +1,45 @@
 //! The bench side of the accelerometer calibration: read recordings, identify the 12
-//! coefficients, fit their temperature models, build coefficient blobs, verify.
+//! coefficients, fit their temperature models, build coefficient blobs, verify, simulate
+//! the production test, diagnose what the model leaves out, report.
 //!
 //! The model itself (formulas (1)-(8), (13)) is `firmware-core`'s, evaluated here in
 //! f64 and, for checks, in the firmware's own f32 path.
+//!
+//! The modules are layered; each uses only modules of its own layer or below (the tidy
+//! test `tests/tidy.rs` holds it, and that no module imports in a circle):
+//!
+//! | layer | modules | what |
+//! |---|---|---|
+//! | 0 | `error`, `rng`, `output` | foundations: errors, random numbers, atomic writes, JSON/CSV |
+//! | 1 | `data` | recordings, positions with their roles, coefficient tables |
+//! | 2 | `fit`, `simulate` | identification, one least-squares solver, temperature models, the pipeline; the digital twin |
+//! | 3 | `blob`, `verify`, `vectors` | blobs built and read, formula (13) through firmware-core, firmware test vectors |
+//! | 4 | `diagnose` | locate, explain, model what the paper's model leaves out |
+//! | 5 | `analysis`, `blind` | the demo's comparison (pure), the blind tests of the diagnosis |
+//! | 6 | `report`, `batch`, `demo` | HTML reports, production batches, the main job's files |
+//! | 7 | `cli` | the command line |
 #![forbid(unsafe_code)]
 
-pub mod batch;
-pub mod blind;
-pub mod calib;
-pub mod cli;
-pub mod demo;
-pub mod diagnose;
 pub mod error;
-pub mod fwcheck;
-pub mod identify;
-pub mod io;
-pub mod linalg;
-pub mod positions;
-pub mod recording;
-pub mod report;
+pub mod output;
 pub mod rng;
+
+pub mod data;
+
+pub mod fit;
 pub mod simulate;
-pub mod temperature;
+
+pub mod blob;
+pub mod vectors;
 pub mod verify;
+
+pub mod diagnose;
+
+pub mod analysis;
+pub mod blind;
+
+pub mod batch;
+pub mod demo;
+pub mod report;
+
+pub mod cli;

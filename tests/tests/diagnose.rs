@@ -163,8 +163,8 @@ fn real_tag_recording_finding_improves_the_held_out_fit() {
 fn extended_model_in_the_blob_compensates_better_in_firmware() {
     use firmware_core::blob::Blob;
     use firmware_core::compensate::Method;
-    use host_fit::positions::Positions;
-    use host_fit::recording::Recording;
+    use host_fit::data::positions::Positions;
+    use host_fit::data::recording::Recording;
     let dir = std::env::temp_dir().join(format!("hf-phys-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let case = host_fit::blind::Case {

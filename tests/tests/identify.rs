@@ -1,9 +1,10 @@
 //! Identification: least squares = formula (10), recovery within the standard errors,
 //! too few positions, and the joint fit against the per-stop route under drift.
-use host_fit::cli::{fit_recording, ModelKind, Route};
-use host_fit::identify::{formula_10, identify_stop, noise, stops};
-use host_fit::positions::Positions;
-use host_fit::recording::Recording;
+use host_fit::fit::pipeline::{fit_recording, ModelChoice, ModelKind, Route};
+use host_fit::fit::identify::{formula_10, identify_stop, stops};
+use host_fit::fit::noise::noise;
+use host_fit::data::positions::Positions;
+use host_fit::data::recording::Recording;
 use std::path::Path;
 use tests::{synthetic_csv, PAPER_T0, TP};
 
@@ -124,7 +125,15 @@ fn joint_fit_beats_per_stop_when_the_temperature_drifts_within_a_stop() {
     let temps = [-40.0, 20.0, 70.0];
     let rec = read(&synthetic_csv(&temps, &truth, &TP, 30, 1e-6, 0.15, 7));
     let err_at = |route: Route| {
-        let oc = fit_recording(&rec, &all, ModelKind::Poly, Some(1), None, route).unwrap();
+        let oc = fit_recording(
+            &rec,
+            &ModelChoice {
+                kind: ModelKind::Poly,
+                order: Some(1),
+                breakpoints: None,
+            },
+            route,
+        ).unwrap();
         let mut worst: f64 = 0.0;
         for t in [-30.0, 0.0, 45.0] {
             let (a, b) = (oc.fit.eval(t), truth(t));

@@ -1,19 +1,7 @@
-//! Output files: written atomically, never over an existing file without `--force`.
+//! The fields of input files: numbers and temperatures checked for range, CSV headers
+//! and data lines, every error naming the file, the line and the field.
 use crate::error::{HostError, Result};
-use std::io::Write;
-use std::path::{Path, PathBuf};
-
-fn tmp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = format!(".{name}.tmp-{}", std::process::id());
-    match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.join(tmp),
-        _ => PathBuf::from(tmp),
-    }
-}
+use std::path::Path;
 
 /// The positions of the `want`ed columns in a CSV header line (names case-insensitive),
 /// or an error naming the file, the line and the missing column. A header separated by
@@ -96,65 +84,4 @@ pub fn data_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
         .enumerate()
         .map(|(i, raw)| (i + 1, raw.trim_end_matches('\r').trim()))
         .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
-}
-
-/// Refuse early (before any work) when `path` exists and `force` is off.
-pub fn check_writable(path: &Path, force: bool) -> Result<()> {
-    if !force && path.exists() {
-        return Err(HostError::in_file(
-            path,
-            "exists; refusing to overwrite it (use --force)",
-        ));
-    }
-    Ok(())
-}
-
-/// Write `bytes` to `path` atomically: a temporary file in the same folder, synced,
-/// then moved into place. Without `force` an existing file is never replaced (even one
-/// created meanwhile: the final step is a hard link, which fails if the name exists).
-pub fn write_atomic(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
-    check_writable(path, force)?;
-    let tmp = tmp_path(path);
-    let result = (|| -> std::io::Result<()> {
-        let mut f = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        drop(f);
-        if force {
-            std::fs::rename(&tmp, path)
-        } else {
-            std::fs::hard_link(&tmp, path)?;
-            std::fs::remove_file(&tmp)
-        }
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(HostError::io(path, &e));
-    }
-    Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn refuses_overwrite_and_leaves_no_temp() {
-        let dir = std::env::temp_dir().join(format!("hf-io-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join("out.bin");
-        let _ = std::fs::remove_file(&p);
-        write_atomic(&p, b"one", false).unwrap();
-        let e = write_atomic(&p, b"two", false).unwrap_err();
-        assert!(e.to_string().contains("--force"), "{e}");
-        assert_eq!(std::fs::read(&p).unwrap(), b"one");
-        write_atomic(&p, b"two", true).unwrap();
-        assert_eq!(std::fs::read(&p).unwrap(), b"two");
-        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
-        assert_eq!(left.len(), 1, "no temporary files left");
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
 }

@@ -1,12 +1,15 @@
 //! Temperature models of the 12 coefficients: fitted jointly from all dwells, or from
 //! per-stop coefficient tables (the paper's route, formulas (11), (12)).
+use crate::data::table::TableRow;
 use crate::error::{HostError, Result};
-use crate::identify::{Noise, Obs, K_INDEX, U0_INDEX};
-use crate::linalg::weighted_lsq;
-use firmware_core::model::COEFF_NAMES;
-use firmware_core::temperature::{Calibration, TempModel, MAX_BREAKPOINTS, MAX_POLY_ORDER};
+use crate::fit::identify::Obs;
+use crate::fit::lsq::{weighted_lsq, Lsq};
+use crate::fit::noise::Noise;
+use firmware_core::model::{K_INDEX, U0_INDEX};
+use firmware_core::temperature::{
+    pwl_segment, Calibration, TempModel, MAX_BREAKPOINTS, MAX_POLY_ORDER,
+};
 use nalgebra::{DMatrix, DVector};
-use serde_json::{json, Map, Value};
 use std::path::Path;
 
 /// Polynomial fits work in `dT / POLY_SCALE_C` for conditioning.
@@ -76,14 +79,12 @@ impl Basis {
                 (0..=*order).map(|k| x.powi(k as i32)).collect()
             }
             Basis::Pwl { breakpoints } => {
-                let n = breakpoints.len();
-                let mut out = vec![0.0; n];
-                // the last segment whose lower end is <= t (the first one below)
-                let s = breakpoints[1..n - 1].iter().filter(|b| t >= **b).count();
-                let (b0, b1) = (breakpoints[s], breakpoints[s + 1]);
-                let f = (t - b0) / (b1 - b0);
-                out[s] = 1.0 - f;
-                out[s + 1] = f;
+                // firmware-core's segment rule, so a fit and its table agree everywhere
+                let mut out = vec![0.0; breakpoints.len()];
+                if let Some((s, f)) = pwl_segment(breakpoints, t) {
+                    out[s] = 1.0 - f;
+                    out[s + 1] = f;
+                }
                 out
             }
         }
@@ -251,32 +252,8 @@ pub fn fit_joint(
     let mut k2 = [None; 3];
     let (mut chi2, mut n_params) = (0.0, 0);
     for axis in 0..3 {
-        let var = noise.sigma[axis].powi(2);
-        let w: Vec<f64> = obs.iter().map(|o| o.n as f64 / var).collect();
-        let b = DVector::from_iterator(obs.len(), obs.iter().map(|o| o.u[axis]));
-        let build = |with_k2: bool| {
-            let p = 4 * nb + usize::from(with_k2);
-            let mut a = DMatrix::zeros(obs.len(), p);
-            for (r, (o, phi)) in obs.iter().zip(&phis).enumerate() {
-                let g = [o.a[0], o.a[1], o.a[2], 1.0];
-                for (j, gj) in g.iter().enumerate() {
-                    for (k, f) in phi.iter().enumerate() {
-                        a[(r, j * nb + k)] = gj * f;
-                    }
-                }
-                if with_k2 {
-                    a[(r, 4 * nb)] = o.a[axis] * o.a[axis];
-                }
-            }
-            weighted_lsq(&a, &b, &w)
-        };
-        let (s, with_k2) = match build(true) {
-            Some(s) => (s, true),
-            None => (
-                build(false).ok_or_else(|| rank_error(obs, path, basis))?,
-                false,
-            ),
-        };
+        let (s, with_k2) = fit_axis(obs, &phis, noise, axis)
+            .ok_or_else(|| rank_error(obs, path, basis))?;
         let slots = [
             K_INDEX[axis][0],
             K_INDEX[axis][1],
@@ -310,6 +287,35 @@ pub fn fit_joint(
         n_obs: 3 * obs.len(),
         n_params,
     })
+}
+
+/// One axis of [`fit_joint`]: columns `a_j phi_k(T)` for j = x, y, z, 1 and, when the
+/// positions determine it, `a_axis^2`; returns the solution and whether it has that term.
+fn fit_axis(obs: &[Obs], phis: &[Vec<f64>], noise: &Noise, axis: usize) -> Option<(Lsq, bool)> {
+    let nb = phis.first().map(Vec::len).unwrap_or(0);
+    let var = noise.sigma[axis].powi(2);
+    let w: Vec<f64> = obs.iter().map(|o| o.n as f64 / var).collect();
+    let b = DVector::from_iterator(obs.len(), obs.iter().map(|o| o.u[axis]));
+    let build = |with_k2: bool| {
+        let p = 4 * nb + usize::from(with_k2);
+        let mut a = DMatrix::zeros(obs.len(), p);
+        for (r, (o, phi)) in obs.iter().zip(phis).enumerate() {
+            let g = [o.a[0], o.a[1], o.a[2], 1.0];
+            for (j, gj) in g.iter().enumerate() {
+                for (k, f) in phi.iter().enumerate() {
+                    a[(r, j * nb + k)] = gj * f;
+                }
+            }
+            if with_k2 {
+                a[(r, 4 * nb)] = o.a[axis] * o.a[axis];
+            }
+        }
+        weighted_lsq(&a, &b, &w)
+    };
+    match build(true) {
+        Some(s) => Some((s, true)),
+        None => build(false).map(|s| (s, false)),
+    }
 }
 
 /// The polynomial order (1..=`max_order`) with the lowest BIC in the joint fit, and
@@ -361,17 +367,6 @@ fn rank_error(obs: &[Obs], path: &Path, basis: &Basis) -> HostError {
             parts.join("; ")
         ),
     )
-}
-
-/// One row of a coefficient table (COEFFS.csv / per-stop identification).
-#[derive(Debug, Clone, PartialEq)]
-pub struct TableRow {
-    /// Temperature, C.
-    pub temp_c: f64,
-    /// The 12 coefficients.
-    pub coeffs: [f64; 12],
-    /// Their standard errors, when known (weights of the fit).
-    pub stderr: Option<[f64; 12]>,
 }
 
 /// Fit a temperature model to a coefficient table, coefficient by coefficient. Order n
@@ -436,99 +431,3 @@ pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> 
     })
 }
 
-/// Read a coefficient table in the format of paper-tables.csv.
-pub fn read_table(path: &Path) -> Result<Vec<TableRow>> {
-    let text = std::fs::read_to_string(path).map_err(|e| HostError::io(path, &e))?;
-    let mut cols: Option<Vec<usize>> = None;
-    let mut rows = Vec::new();
-    let want: Vec<&str> = std::iter::once("temp_c").chain(COEFF_NAMES).collect();
-    for (line_no, line) in crate::io::data_lines(&text) {
-        let f: Vec<&str> = line.split(',').map(str::trim).collect();
-        match &cols {
-            None => {
-                let idx = crate::io::header_columns(path, line_no, line, &want)?;
-                cols = Some(idx);
-            }
-            Some(idx) => {
-                let mut v = [0.0; 13];
-                for (slot, (k, name)) in v.iter_mut().zip(idx.iter().zip(&want)) {
-                    let s = f.get(*k).copied().unwrap_or("");
-                    *slot = if *name == "temp_c" {
-                        crate::io::temperature(path, line_no, name, s)?
-                    } else {
-                        crate::io::number(path, line_no, name, s)?
-                    };
-                }
-                rows.push(TableRow {
-                    temp_c: v[0],
-                    coeffs: std::array::from_fn(|c| v[c + 1]),
-                    stderr: None,
-                });
-            }
-        }
-    }
-    if rows.is_empty() {
-        return Err(HostError::in_file(path, "no coefficient rows"));
-    }
-    rows.sort_by(|a, b| a.temp_c.total_cmp(&b.temp_c));
-    Ok(rows)
-}
-
-/// The paper's name of a relative coefficient: beta_xx, gamma_xy, alpha_x.
-pub fn relative_name(c: usize) -> String {
-    let n = COEFF_NAMES[c];
-    if let Some(ax) = n.strip_prefix("u0") {
-        format!("alpha_{ax}")
-    } else {
-        let ij = &n[1..];
-        if ij.as_bytes()[0] == ij.as_bytes()[1] {
-            format!("beta_{ij}")
-        } else {
-            format!("gamma_{ij}")
-        }
-    }
-}
-
-/// The temp-fit JSON: intervals (pwl) or polynomial terms; with `relative`, K terms as
-/// the paper's beta/gamma relative to the value at T0, offsets always absolute (alpha).
-pub fn report_json(fit: &ModelFit, relative: bool) -> Value {
-    let at_t0 = fit.eval(fit.t0_c);
-    // offsets are absolute either way: the paper's alpha; K terms beta/gamma when relative
-    let name = |c: usize| {
-        if relative || c >= 9 {
-            relative_name(c)
-        } else {
-            COEFF_NAMES[c].to_string()
-        }
-    };
-    let rel = |c: usize, v: f64| if relative && c < 9 { v / at_t0[c] } else { v };
-    let mut t0 = Map::new();
-    for (c, v) in at_t0.iter().enumerate() {
-        t0.insert(COEFF_NAMES[c].to_string(), json!(v));
-    }
-    match &fit.basis {
-        Basis::Pwl { breakpoints } => {
-            let intervals: Vec<Value> = breakpoints
-                .windows(2)
-                .enumerate()
-                .map(|(k, w)| {
-                    let mut m = Map::new();
-                    for c in 0..12 {
-                        let slope = (fit.params[c][k + 1] - fit.params[c][k]) / (w[1] - w[0]);
-                        m.insert(name(c), json!(rel(c, slope)));
-                    }
-                    json!({"from_c": w[0], "to_c": w[1], "coefficients": m})
-                })
-                .collect();
-            json!({"model": "pwl", "t0_c": fit.t0_c, "relative": relative, "at_t0": t0, "intervals": intervals})
-        }
-        Basis::Poly { order } => {
-            let mut m = Map::new();
-            for c in 0..12 {
-                let terms: Vec<f64> = (1..=*order).map(|k| rel(c, fit.params[c][k])).collect();
-                m.insert(name(c), json!(terms));
-            }
-            json!({"model": "poly", "order": order, "t0_c": fit.t0_c, "relative": relative, "at_t0": t0, "coefficients": m})
-        }
-    }
-}

@@ -1,7 +1,7 @@
 //! Test vectors for the firmware on the target: an input table, and the f32 results the
 //! host gets from the same firmware-core code (compared bit for bit with the MCU's),
 //! checked against the f64 evaluation within the documented bound.
-use crate::calib::F32_BOUND_G;
+use crate::blob::F32_BOUND_G;
 use crate::rng::Rng;
 use firmware_core::blob::Blob;
 use firmware_core::compensate::{Compensator, ErrorModel, Method};

@@ -1,53 +1,11 @@
-//! Identification of the 12 coefficients: in-dwell noise, observation windows, stops,
-//! and the per-stop least squares that reduces to the paper's formula (10).
+//! Identification of the 12 coefficients: observation windows, stops, and the per-stop
+//! least squares that reduces to the paper's formula (10).
+use crate::data::recording::{Dwell, Recording};
 use crate::error::{HostError, Result};
-use crate::linalg::weighted_lsq;
-use crate::recording::Recording;
+use crate::fit::lsq::weighted_lsq;
+use crate::fit::noise::Noise;
+use firmware_core::model::{K_INDEX, U0_INDEX};
 use nalgebra::{DMatrix, DVector};
-
-/// Canonical index (model::COEFF_NAMES) of `K[i][j]`.
-pub const K_INDEX: [[usize; 3]; 3] = [[0, 3, 4], [5, 1, 6], [7, 8, 2]];
-/// Canonical index of `U0[i]`.
-pub const U0_INDEX: [usize; 3] = [9, 10, 11];
-/// Axis names.
-pub const AXES: [&str; 3] = ["x", "y", "z"];
-
-/// Measurement noise per axis, from the scatter inside dwells.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Noise {
-    /// Standard deviation of one sample, output units.
-    pub sigma: [f64; 3],
-    /// Degrees of freedom behind the estimate (0: unknown, unit weights used).
-    pub dof: usize,
-}
-
-/// Estimate the per-sample noise from successive differences inside dwells: half the
-/// mean squared difference is the variance, and a slow drift (temperature settling)
-/// barely touches it, unlike the plain in-dwell variance.
-pub fn noise(rec: &Recording) -> Noise {
-    let mut ss = [0.0; 3];
-    let mut dof = 0usize;
-    for d in &rec.dwells {
-        for w in rec.dwell_rows(d).windows(2) {
-            if let [a, b] = w {
-                for (s, (x, y)) in ss.iter_mut().zip(a.u.iter().zip(b.u.iter())) {
-                    *s += (y - x) * (y - x);
-                }
-                dof += 1;
-            }
-        }
-    }
-    if dof == 0 {
-        return Noise {
-            sigma: [1.0; 3],
-            dof: 0,
-        };
-    }
-    Noise {
-        sigma: ss.map(|s| (s / (2.0 * dof as f64)).sqrt().max(1e-15)),
-        dof,
-    }
-}
 
 /// One observation for a static fit: the mean of a window of a dwell.
 #[derive(Debug, Clone, PartialEq)]
@@ -107,7 +65,7 @@ pub fn observations(rec: &Recording, select: &dyn Fn(usize) -> bool, span_c: f64
 /// at most `span_c` and whose time at most `max_s`.
 pub fn windows(
     rec: &Recording,
-    d: &crate::recording::Dwell,
+    d: &Dwell,
     span_c: f64,
     max_s: f64,
 ) -> Vec<(usize, usize)> {
@@ -163,7 +121,7 @@ pub fn stops(rec: &Recording, select: &dyn Fn(usize) -> bool, tol_c: f64) -> Vec
         }
     };
     for (i, d) in rec.dwells.iter().enumerate() {
-        if d.temp_span_c > crate::recording::MAX_DWELL_DRIFT_C {
+        if d.temp_span_c > crate::data::recording::MAX_DWELL_DRIFT_C {
             close(&mut cur, &mut out);
             continue;
         }

@@ -1,0 +1,229 @@
+//! From a fitted model to a flashed blob and back: f32 tables, the f32-vs-f64 check,
+//! encoding, reading a blob file, and what `inspect` shows of it.
+use crate::error::{HostError, Result};
+use firmware_core::blob::{Blob, FORMAT_VERSION, MAX_BLOB_LEN, MAX_SERIAL_LEN};
+use firmware_core::compensate::{Compensator, ErrorModel, Method};
+use firmware_core::model::{Coeffs, COEFF_NAMES};
+use firmware_core::temperature::{Calibration, TempModel};
+use serde::Serialize;
+use std::path::Path;
+
+/// Documented bound: the firmware's f32 path (f32 tables, f32 arithmetic) stays within
+/// this many g of the f64 evaluation of the unrounded model, for |a| <= 1 g, inside the
+/// valid temperature range. Held by [`build_blob`] on every blob built; the departure in
+/// the 10 C beyond the range (extrapolation, where a high-order polynomial loses f32
+/// digits) is measured and reported.
+pub const F32_BOUND_G: f64 = 2e-6;
+
+/// Largest |a_f32 - a_f64| (g) over a grid of temperatures (0.5 C steps) and 26
+/// directions, for method 1 and method 2 (full): inside the valid range, and in the
+/// 10 C beyond it.
+pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Result<(f64, f64)> {
+    let mut c64 = cal64.clone();
+    c64.update_step_c = 0.0;
+    let mut c32 = cal32.clone();
+    c32.update_step_c = 0.0;
+    let mut dirs = Vec::new();
+    for x in -1i32..=1 {
+        for y in -1i32..=1 {
+            for z in -1i32..=1 {
+                let v = [f64::from(x), f64::from(y), f64::from(z)];
+                let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                if n > 0.0 {
+                    dirs.push(v.map(|c| c / n));
+                }
+            }
+        }
+    }
+    let (mut inside, mut beyond): (f64, f64) = (0.0, 0.0);
+    for method in [
+        Method::CorrectConstants,
+        Method::CorrectResult(ErrorModel::Full),
+    ] {
+        let mut m64 = Compensator::new(&c64, method).map_err(|e| HostError::msg(e.to_string()))?;
+        let mut m32 = Compensator::new(&c32, method).map_err(|e| HostError::msg(e.to_string()))?;
+        let mut t = cal64.t_min_c - 10.0;
+        while t <= cal64.t_max_c + 10.0 {
+            let t32 = t as f32;
+            let coeffs = Coeffs::from_array(&cal64.model.eval(cal64.t0_c, f64::from(t32)));
+            for a in &dirs {
+                let u = coeffs.forward(*a).map(|v| f64::from(v as f32));
+                let r64 = m64.compensate(u, f64::from(t32)).accel;
+                let r32 = m32.compensate(u.map(|v| v as f32), t32).accel;
+                let in_range = (cal64.t_min_c..=cal64.t_max_c).contains(&f64::from(t32));
+                for (x, y) in r64.iter().zip(r32.iter()) {
+                    let d = (x - f64::from(*y)).abs();
+                    if in_range {
+                        inside = inside.max(d);
+                    } else {
+                        beyond = beyond.max(d);
+                    }
+                }
+            }
+            t += 0.5;
+        }
+    }
+    Ok((inside, beyond))
+}
+
+/// Build and encode the blob for `serial` from an f64 calibration; checks the f32 path
+/// against [`F32_BOUND_G`]. Returns the blob, its bytes and the measured departure.
+pub fn build_blob(serial: &str, cal64: &Calibration<f64>) -> Result<(Blob, Vec<u8>, f64)> {
+    let (blob, bytes, (inside, _)) = build_blob_checked(serial, cal64)?;
+    Ok((blob, bytes, inside))
+}
+
+/// [`build_blob`], returning the departure inside the range and beyond it.
+pub fn build_blob_checked(
+    serial: &str,
+    cal64: &Calibration<f64>,
+) -> Result<(Blob, Vec<u8>, (f64, f64))> {
+    let mut s = heapless::String::<MAX_SERIAL_LEN>::new();
+    s.push_str(serial).map_err(|_| {
+        HostError::msg(format!(
+            "unit serial `{serial}` is longer than {MAX_SERIAL_LEN} bytes"
+        ))
+    })?;
+    let blob = Blob {
+        serial: s,
+        calibration: cal64.convert(),
+    };
+    let mut buf = [0u8; MAX_BLOB_LEN];
+    let n = blob
+        .encode(&mut buf)
+        .map_err(|e| HostError::msg(format!("cannot build the blob: {e}")))?;
+    let (dep, beyond) = f32_departure(cal64, &blob.calibration)?;
+    if dep.is_nan() || dep > F32_BOUND_G {
+        return Err(HostError::msg(format!(
+            "the f32 firmware path departs from the f64 model by {dep:.3e} g, over the bound {F32_BOUND_G:.1e} g: the unit's K is too ill-conditioned for f32"
+        )));
+    }
+    Ok((blob, buf[..n].to_vec(), (dep, beyond)))
+}
+
+/// Read and decode a blob file; the error names the file and why it is invalid.
+pub fn read_blob(path: &Path) -> Result<(Blob, Vec<u8>)> {
+    let bytes = std::fs::read(path).map_err(|e| HostError::io(path, &e))?;
+    let b = Blob::decode(&bytes)
+        .map_err(|e| HostError::in_file(path, format!("invalid blob: {e}")))?;
+    Ok((b, bytes))
+}
+
+/// What `inspect` shows of a blob.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Inspection {
+    /// Blob format version.
+    pub format_version: u16,
+    /// Size, bytes.
+    pub bytes: usize,
+    /// Unit serial.
+    pub serial: String,
+    /// Reference temperature, C.
+    pub t0_c: f32,
+    /// Valid range, C.
+    pub t_min_c: f32,
+    /// Valid range, C.
+    pub t_max_c: f32,
+    /// Outside the range: clamp (true) or extrapolate.
+    pub clamp: bool,
+    /// Cache update step, C.
+    pub update_step_c: f32,
+    /// `polyN` or `pwl`.
+    pub model: String,
+    /// The coefficient names, in table order.
+    pub columns: [&'static str; 12],
+    /// The table rows.
+    pub rows: Vec<InspectRow>,
+}
+
+/// One table row: `dT^k` (poly) or a breakpoint (pwl).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct InspectRow {
+    /// `dT^k` or `T C`.
+    pub at: String,
+    /// The 12 values.
+    pub values: Vec<f32>,
+}
+
+impl Inspection {
+    /// Describe a decoded blob of `bytes` bytes.
+    pub fn of(b: &Blob, bytes: usize) -> Self {
+        let c = &b.calibration;
+        let (model, rows) = match &c.model {
+            TempModel::Poly { terms } => (
+                format!("poly{}", terms.len() - 1),
+                terms
+                    .iter()
+                    .enumerate()
+                    .map(|(k, r)| InspectRow {
+                        at: format!("dT^{k}"),
+                        values: r.to_vec(),
+                    })
+                    .collect(),
+            ),
+            TempModel::Pwl {
+                breakpoints,
+                values,
+            } => (
+                "pwl".to_string(),
+                breakpoints
+                    .iter()
+                    .zip(values)
+                    .map(|(t, r)| InspectRow {
+                        at: format!("{t} C"),
+                        values: r.to_vec(),
+                    })
+                    .collect(),
+            ),
+        };
+        Inspection {
+            format_version: FORMAT_VERSION,
+            bytes,
+            serial: b.serial.to_string(),
+            t0_c: c.t0_c,
+            t_min_c: c.t_min_c,
+            t_max_c: c.t_max_c,
+            clamp: c.clamp,
+            update_step_c: c.update_step_c,
+            model,
+            columns: COEFF_NAMES,
+            rows,
+        }
+    }
+
+    /// As text (the blob's path as given on the command line).
+    pub fn text(&self, path: &Path) -> String {
+        let mut s = format!(
+            "blob {} ({} bytes, format {}): serial {}\n",
+            path.display(),
+            self.bytes,
+            self.format_version,
+            self.serial
+        );
+        s.push_str(&format!(
+            "T0 {} C, valid {}..{} C, {}, update step {} C, model {}\n",
+            self.t0_c,
+            self.t_min_c,
+            self.t_max_c,
+            if self.clamp { "clamped" } else { "extrapolated" },
+            self.update_step_c,
+            self.model
+        ));
+        s.push_str(&format!(
+            "{:>10} {}\n",
+            "",
+            self.columns.map(|n| format!("{n:>12}")).join("")
+        ));
+        for r in &self.rows {
+            s.push_str(&format!(
+                "{:>10} {}\n",
+                r.at,
+                r.values
+                    .iter()
+                    .map(|v| format!("{v:>12.4e}"))
+                    .collect::<String>()
+            ));
+        }
+        s.trim_end().to_string()
+    }
+}

@@ -1,0 +1,305 @@
+//! The command line's grammar: every command and option, with its help text.
+use crate::fit::pipeline::{ModelKind, Route};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// Calibration and temperature compensation of a triaxial accelerometer: the bench tool.
+#[derive(Parser, Debug)]
+#[command(name = "host-fit", version, about)]
+pub struct Cli {
+    /// The command.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Method-2 error model.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrModel {
+    /// Formulas (6)/(7).
+    Full,
+    /// Formula (8).
+    Simplified,
+}
+
+/// The temperature model options.
+#[derive(Args, Debug, Clone)]
+pub struct ModelArgs {
+    /// Temperature model.
+    #[arg(long, value_enum, default_value = "pwl")]
+    pub model: ModelKind,
+    /// Polynomial order (default: 3, or less if fewer temperatures).
+    #[arg(long)]
+    pub order: Option<usize>,
+    /// Breakpoints for pwl, C, comma-separated (default: the calibration temperatures).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub breakpoints: Option<Vec<f64>>,
+}
+
+/// A recording and its positions.
+#[derive(Args, Debug, Clone)]
+pub struct Input {
+    /// The recording.
+    pub recording: PathBuf,
+    /// Positions file (name,fx,fy,fz[,role]).
+    #[arg(long)]
+    pub positions: Option<PathBuf>,
+}
+
+/// `temp-fit`.
+#[derive(Args, Debug)]
+pub struct TempFitArgs {
+    /// The table: temp_c,kxx,kyy,kzz,kxy,kxz,kyx,kyz,kzx,kzy,u0x,u0y,u0z.
+    pub coeffs: PathBuf,
+    /// The temperature model.
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Reference temperature T0, C.
+    #[arg(long, default_value_t = 20.0, allow_hyphen_values = true)]
+    pub t0: f64,
+    /// Report scale and cross terms as the paper's relative beta/gamma.
+    #[arg(long)]
+    pub relative: bool,
+    /// Machine-readable output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `identify`.
+#[derive(Args, Debug)]
+pub struct IdentifyArgs {
+    /// The recording and its positions.
+    #[command(flatten)]
+    pub input: Input,
+    /// Write the per-stop table in the format of paper-tables.csv.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Overwrite an existing output.
+    #[arg(long)]
+    pub force: bool,
+    /// Machine-readable output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `fit`.
+#[derive(Args, Debug)]
+pub struct FitArgs {
+    /// The recording and its positions.
+    #[command(flatten)]
+    pub input: Input,
+    /// The temperature model.
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Identification route.
+    #[arg(long, value_enum, default_value = "joint")]
+    pub route: Route,
+    /// Positions kept out of the fit for verification (default: those whose role is
+    /// verification, PP1..PP6 unless a positions file says otherwise).
+    #[arg(long, value_delimiter = ',')]
+    pub positions_for_check: Option<Vec<String>>,
+    /// Recompute the firmware's cached matrices after this temperature change, C.
+    #[arg(long, default_value_t = 0.1)]
+    pub update_step: f64,
+    /// Clamp the temperature to the valid range instead of extrapolating.
+    #[arg(long)]
+    pub clamp: bool,
+    /// The blob to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Overwrite an existing output.
+    #[arg(long)]
+    pub force: bool,
+    /// Machine-readable output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `verify`.
+#[derive(Args, Debug)]
+pub struct VerifyArgs {
+    /// The recording and its positions.
+    #[command(flatten)]
+    pub input: Input,
+    /// The coefficient blob.
+    #[arg(long)]
+    pub blob: PathBuf,
+    /// 1: correct the constants; 2: correct the result.
+    #[arg(long, value_parser = ["1", "2"], default_value = "1")]
+    pub method: String,
+    /// Error model of method 2.
+    #[arg(long, value_enum, default_value = "full")]
+    pub error_model: ErrModel,
+    /// Positions to check (default: those whose role is verification).
+    #[arg(long, value_delimiter = ',')]
+    pub positions_for_check: Option<Vec<String>>,
+    /// Machine-readable output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `report`.
+#[derive(Args, Debug)]
+pub struct ReportArgs {
+    /// The recording and its positions.
+    #[command(flatten)]
+    pub input: Input,
+    /// The HTML file to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Overwrite an existing file.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `diagnose`.
+#[derive(Args, Debug)]
+pub struct DiagnoseArgs {
+    /// The recording and its positions.
+    #[command(flatten)]
+    pub input: Input,
+    /// Write an HTML report with residual plots before and after.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Write the extended model (tables and in-flight physics terms) as a blob.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Overwrite existing outputs.
+    #[arg(long)]
+    pub force: bool,
+    /// Machine-readable output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `batch`.
+#[derive(Args, Debug)]
+pub struct BatchArgs {
+    /// Folder of recordings (*.csv).
+    pub dir: PathBuf,
+    /// Output folder: one blob and one JSON per unit, and summary.csv.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Parallel jobs (default: one per core).
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    /// Temperature model.
+    #[arg(long, value_enum, default_value = "pwl")]
+    pub model: ModelKind,
+    /// Also run the diagnosis on every unit.
+    #[arg(long)]
+    pub diagnose: bool,
+    /// Overwrite outputs of an earlier run.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `blind`.
+#[derive(Args, Debug)]
+pub struct BlindArgs {
+    /// The long suite (more seeds, magnitudes down to the edge of detectability).
+    #[arg(long)]
+    pub long: bool,
+}
+
+/// `simulate`.
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    /// TOML configuration (default: the built-in paper unit and profile).
+    pub config: Option<PathBuf>,
+    /// The recording to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Random seed (overrides the configuration's).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Also write the truth (all parameters) as JSON here.
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+    /// Overwrite existing outputs.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `demo`.
+#[derive(Args, Debug)]
+pub struct DemoArgs {
+    /// Output folder.
+    #[arg(long, default_value = "demo-out")]
+    pub out: PathBuf,
+    /// Random seed of the simulation.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Overwrite the outputs of an earlier run.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `fw-vectors`.
+#[derive(Args, Debug)]
+pub struct FwVectorsArgs {
+    /// The blob.
+    #[arg(long)]
+    pub blob: PathBuf,
+    /// Write a new input table here (else read --inputs).
+    #[arg(long)]
+    pub make_inputs: Option<PathBuf>,
+    /// The input table to evaluate.
+    #[arg(long)]
+    pub inputs: Option<PathBuf>,
+    /// Random samples in a new table (edge cases are appended).
+    #[arg(long, default_value_t = 64)]
+    pub n: usize,
+    /// Seed of a new table.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Prefix of the method tags in the output (the harness prints `p` for the
+    /// blob with physics terms).
+    #[arg(long, default_value = "")]
+    pub tag_prefix: String,
+    /// Overwrite an existing table.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `inspect`.
+#[derive(Args, Debug)]
+pub struct InspectArgs {
+    /// The blob.
+    pub blob: PathBuf,
+    /// Machine-readable output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The commands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Fit temperature models to a coefficient table (format of paper-tables.csv).
+    TempFit(TempFitArgs),
+    /// Identify the 12 coefficients at every calibration stop (the paper's formula (10)).
+    Identify(IdentifyArgs),
+    /// Fit a recording and write the coefficient blob.
+    Fit(FitArgs),
+    /// Formula (13) in the verification dwells, uncompensated and compensated.
+    Verify(VerifyArgs),
+    /// The engineer's HTML report of a recording: the paper's and richer models,
+    /// compensated through firmware-core, dg per verification position, the coefficients
+    /// against temperature, residuals against time.
+    Report(ReportArgs),
+    /// Locate where the model and a recording disagree, name the physics left out,
+    /// model it and show the fit improve (JSON contract at-diagnosis/1).
+    Diagnose(DiagnoseArgs),
+    /// Fit (and optionally diagnose) every recording in a folder, in parallel.
+    Batch(BatchArgs),
+    /// Blind tests of the diagnosis on simulated recordings with concealed effects.
+    Blind(BlindArgs),
+    /// Simulate a unit's production temperature test (the digital twin).
+    Simulate(SimulateArgs),
+    /// The main job: simulate the paper's experiment, fit, compensate, summarise, report.
+    Demo(DemoArgs),
+    /// Firmware test vectors: write an input table, or print the expected f32 results
+    /// (as bits) of the firmware-core code on it (used by `cargo xtask embedded`).
+    FwVectors(FwVectorsArgs),
+    /// Decode a blob and print it, or say why it is invalid.
+    Inspect(InspectArgs),
+}

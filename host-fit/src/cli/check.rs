@@ -1,0 +1,121 @@
+//! `verify`, `inspect` and `fw-vectors`: a blob against a recording, a blob alone, and
+//! the firmware's expected outputs.
+use super::args::{ErrModel, FwVectorsArgs, InspectArgs, VerifyArgs};
+use super::{load, w};
+use crate::blob::{read_blob, Inspection, F32_BOUND_G};
+use crate::data::positions::Role;
+use crate::error::{HostError, Result};
+use crate::output::{json, write_atomic};
+use crate::verify::{verify as run_verify, DwellCheck, TempMax};
+use firmware_core::compensate::{ErrorModel, Method};
+use serde::Serialize;
+use std::io::Write;
+
+/// `verify --json`.
+#[derive(Serialize)]
+struct Verified<'a> {
+    unit: &'a str,
+    method: &'a str,
+    dwells: &'a [DwellCheck],
+    max_by_temperature: &'a [TempMax],
+}
+
+pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+    let (b, _) = read_blob(&a.blob)?;
+    let rec = load(&a.input, a.positions_for_check.as_deref(), err)?;
+    let m = match (a.method.as_str(), a.error_model) {
+        ("1", _) => Method::CorrectConstants,
+        (_, ErrModel::Full) => Method::CorrectResult(ErrorModel::Full),
+        (_, ErrModel::Simplified) => Method::CorrectResult(ErrorModel::Simplified),
+    };
+    let check = |p: usize| rec.positions.has_role(p, Role::Verification);
+    let v = run_verify(&rec, &b, m, &check)
+        .ok_or_else(|| HostError::in_file(&a.blob, "K(T0) of the blob is singular"))?;
+    if v.dwells.is_empty() {
+        return Err(HostError::in_file(
+            &a.input.recording,
+            format!(
+                "no dwells in the verification positions ({})",
+                rec.positions.names_with(Role::Verification).join(",")
+            ),
+        ));
+    }
+    if a.json {
+        let j = Verified {
+            unit: b.serial.as_str(),
+            method: &a.method,
+            dwells: &v.dwells,
+            max_by_temperature: &v.max_by_temperature,
+        };
+        return w(out, json(&j)?);
+    }
+    w(
+        out,
+        format!(
+            "{:<8} {:>8} {:>16} {:>12}",
+            "position", "temp_c", "dg_uncomp_mg", "dg_mg"
+        ),
+    )?;
+    for d in &v.dwells {
+        w(
+            out,
+            format!(
+                "{:<8} {:>8.2} {:>16.4} {:>12.4}",
+                d.position, d.temp_c, d.dg_mg_uncompensated, d.dg_mg
+            ),
+        )?;
+    }
+    for t in &v.max_by_temperature {
+        w(
+            out,
+            format!(
+                "max |dg| at {:>7.2} C: uncompensated {:.4} mg, method {} {:.4} mg",
+                t.temp_c, t.max_abs_dg_mg_uncompensated, a.method, t.max_abs_dg_mg
+            ),
+        )?;
+    }
+    Ok(())
+}
+
+pub(super) fn inspect(a: InspectArgs, out: &mut dyn Write) -> Result<()> {
+    let (b, bytes) = read_blob(&a.blob)?;
+    let i = Inspection::of(&b, bytes.len());
+    if a.json {
+        w(out, json(&i)?)
+    } else {
+        w(out, i.text(&a.blob))
+    }
+}
+
+pub(super) fn fw_vectors(a: FwVectorsArgs, out: &mut dyn Write) -> Result<()> {
+    let (b, _) = read_blob(&a.blob)?;
+    if let Some(p) = a.make_inputs {
+        let table = crate::vectors::make_inputs(&b, a.n, a.seed);
+        write_atomic(&p, &table, a.force)?;
+        return w(
+            out,
+            format!("wrote {} ({} inputs)", p.display(), table.len() / 16),
+        );
+    }
+    let p = a
+        .inputs
+        .ok_or_else(|| HostError::msg("give --inputs FILE or --make-inputs FILE"))?;
+    let table = std::fs::read(&p).map_err(|e| HostError::io(&p, &e))?;
+    if table.len() % 16 != 0 {
+        return Err(HostError::in_file(
+            &p,
+            "length is not a multiple of 16 bytes (ux uy uz temp, f32)",
+        ));
+    }
+    let (lines, worst) = crate::vectors::expected(&b, &table, &a.tag_prefix);
+    for l in lines {
+        w(out, l)?;
+    }
+    w(out, format!("f64-departure {worst:e} bound {F32_BOUND_G:e}"))?;
+    if !crate::vectors::within_bound(worst) {
+        return Err(HostError::msg(format!(
+            "f32 departs from f64 by {worst:e} g, over the bound {F32_BOUND_G:e}"
+        )));
+    }
+    Ok(())
+}

@@ -1,0 +1,56 @@
+//! `diagnose`, `report` and `blind`: looking into a recording, and testing the looking.
+use super::args::{BlindArgs, DiagnoseArgs, ReportArgs};
+use super::{load, serial, w};
+use crate::analysis::{analyse, table};
+use crate::blob::build_blob;
+use crate::diagnose::contract::BlobNote;
+use crate::error::Result;
+use crate::output::{check_writable, json, write_atomic};
+use std::io::Write;
+
+pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+    for p in a.report.iter().chain(a.out.iter()) {
+        check_writable(p, a.force)?;
+    }
+    let rec = load(&a.input, None, err)?;
+    let d = crate::diagnose::diagnose(&rec)?;
+    let mut c = d.contract(&rec);
+    if let Some(b) = &a.out {
+        let (blob, bytes, dep) = build_blob(serial(&rec), &d.calibration(rec.t0_c))?;
+        write_atomic(b, &bytes, a.force)?;
+        c.blob = Some(BlobNote {
+            path: b.display().to_string(),
+            bytes: bytes.len(),
+            physics: blob.calibration.physics.is_some(),
+            f32_departure_g: dep,
+        });
+    }
+    if let Some(r) = &a.report {
+        let html = crate::report::diagnosis::diagnosis_report(&rec, &d)?;
+        write_atomic(r, html.as_bytes(), a.force)?;
+    }
+    if a.json {
+        w(out, json(&c)?)
+    } else {
+        w(out, c.text())
+    }
+}
+
+pub(super) fn report(a: ReportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+    check_writable(&a.out, a.force)?;
+    let rec = load(&a.input, None, err)?;
+    let oc = analyse(rec, None)?;
+    let t = table(&oc.rows);
+    let html = crate::report::demo::demo_report(&oc, &t)?;
+    write_atomic(&a.out, html.as_bytes(), a.force)?;
+    w(out, t)?;
+    w(out, format!("report: {}", a.out.display()))
+}
+
+pub(super) fn blind(a: BlindArgs, out: &mut dyn Write) -> Result<()> {
+    let outcomes: Vec<_> = crate::blind::suite(a.long)
+        .iter()
+        .map(crate::blind::run)
+        .collect();
+    w(out, crate::blind::report(&outcomes))
+}

@@ -1,0 +1,242 @@
+//! Positions: the built-in TP1..TP6 and PP1..PP6 (model.md section 1), positions files,
+//! and each position's role (calibration or verification), decided here once.
+use crate::data::fields;
+use crate::error::{HostError, Result};
+use serde::Serialize;
+use std::path::Path;
+
+/// What a position's dwells are used for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Role {
+    /// Fitted: identification and temperature models (TP1..TP6 by default).
+    Calibration,
+    /// Held out of every fit and used to judge it, formula (13) (PP1..PP6 by default).
+    Verification,
+}
+
+impl Role {
+    fn parse(s: &str) -> Option<Role> {
+        match s.to_ascii_lowercase().as_str() {
+            "calibration" | "cal" => Some(Role::Calibration),
+            "verification" | "check" => Some(Role::Verification),
+            _ => None,
+        }
+    }
+}
+
+/// A named orientation: the unit vector of specific force in unit axes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Position {
+    /// Name as used in recordings.
+    pub name: String,
+    /// Unit vector (g).
+    pub a: [f64; 3],
+    /// What its dwells are used for.
+    pub role: Role,
+}
+
+/// The set of known positions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Positions {
+    /// All positions, built-in first, then those of a positions file.
+    pub list: Vec<Position>,
+}
+
+/// The tilt of the verification positions, degrees.
+pub const PP_TILT_DEG: f64 = 25.0;
+
+impl Default for Positions {
+    fn default() -> Self {
+        let (s, c) = PP_TILT_DEG.to_radians().sin_cos();
+        let builtin: [(&str, [f64; 3]); 12] = [
+            ("TP1", [0.0, 0.0, 1.0]),
+            ("TP2", [0.0, -1.0, 0.0]),
+            ("TP3", [0.0, 0.0, -1.0]),
+            ("TP4", [0.0, 1.0, 0.0]),
+            ("TP5", [-1.0, 0.0, 0.0]),
+            ("TP6", [1.0, 0.0, 0.0]),
+            ("PP1", [s, 0.0, c]),
+            ("PP2", [0.0, -c, s]),
+            ("PP3", [-s, 0.0, -c]),
+            ("PP4", [0.0, c, -s]),
+            ("PP5", [-c, s, 0.0]),
+            ("PP6", [c, -s, 0.0]),
+        ];
+        Positions {
+            list: builtin
+                .iter()
+                .enumerate()
+                .map(|(i, (n, a))| Position {
+                    name: n.to_string(),
+                    a: *a,
+                    role: if i < 6 {
+                        Role::Calibration
+                    } else {
+                        Role::Verification
+                    },
+                })
+                .collect(),
+        }
+    }
+}
+
+impl Positions {
+    /// Index of a position by exact name.
+    pub fn index(&self, name: &str) -> Option<usize> {
+        self.list.iter().position(|p| p.name == name)
+    }
+
+    /// The vector of position `i`.
+    pub fn vector(&self, i: usize) -> [f64; 3] {
+        self.list.get(i).map(|p| p.a).unwrap_or([0.0; 3])
+    }
+
+    /// The name of position `i`.
+    pub fn name(&self, i: usize) -> &str {
+        self.list.get(i).map(|p| p.name.as_str()).unwrap_or("?")
+    }
+
+    /// Whether position `i` has `role`.
+    pub fn has_role(&self, i: usize, role: Role) -> bool {
+        self.list.get(i).is_some_and(|p| p.role == role)
+    }
+
+    /// The names of the positions with `role`.
+    pub fn names_with(&self, role: Role) -> Vec<String> {
+        self.list
+            .iter()
+            .filter(|p| p.role == role)
+            .map(|p| p.name.clone())
+            .collect()
+    }
+
+    /// Add or replace a position; a replaced position keeps its role unless `role` says.
+    pub fn set(&mut self, name: &str, a: [f64; 3], role: Option<Role>) {
+        match self.index(name) {
+            Some(i) => {
+                if let Some(p) = self.list.get_mut(i) {
+                    p.a = a;
+                    p.role = role.unwrap_or(p.role);
+                }
+            }
+            None => self.list.push(Position {
+                name: name.to_string(),
+                a,
+                role: role.unwrap_or(Role::Calibration),
+            }),
+        }
+    }
+
+    /// Make exactly the named positions the verification positions (the command line's
+    /// `--positions-for-check`); every other position becomes a calibration position.
+    pub fn set_verification(&mut self, names: &[String], option: &str) -> Result<()> {
+        if let Some(bad) = names.iter().find(|n| self.index(n).is_none()) {
+            return Err(HostError::msg(format!(
+                "unknown position `{bad}` in {option} (not built in and not in a positions file)"
+            )));
+        }
+        for p in &mut self.list {
+            p.role = if names.contains(&p.name) {
+                Role::Verification
+            } else {
+                Role::Calibration
+            };
+        }
+        Ok(())
+    }
+
+    /// The built-ins plus a positions file (`name,fx,fy,fz[,role]`); returns the warnings.
+    pub fn with_file(path: &Path) -> Result<(Positions, Vec<String>)> {
+        let text = std::fs::read(path).map_err(|e| HostError::io(path, &e))?;
+        let text =
+            String::from_utf8(text).map_err(|_| HostError::in_file(path, "is not UTF-8 text"))?;
+        Self::parse(path, &text)
+    }
+
+    /// Parse positions-file text (see [`Positions::with_file`]). The optional `role`
+    /// column (`calibration` or `verification`) sets a position's role; a new position
+    /// without it is a calibration position, a replaced built-in keeps its role.
+    pub fn parse(path: &Path, text: &str) -> Result<(Positions, Vec<String>)> {
+        let mut pos = Positions::default();
+        let mut warnings = Vec::new();
+        let mut header: Option<([usize; 4], Option<usize>)> = None;
+        let mut n_rows = 0usize;
+        for (line_no, line) in fields::data_lines(text) {
+            let Some((cols, role_col)) = header else {
+                let idx = fields::header_columns(path, line_no, line, &["name", "fx", "fy", "fz"])?;
+                let role_col = line
+                    .split(',')
+                    .position(|c| c.trim().eq_ignore_ascii_case("role"));
+                header = Some(([idx[0], idx[1], idx[2], idx[3]], role_col));
+                continue;
+            };
+            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            let (name, v, role) = parse_row(path, line_no, &fields, cols, role_col)?;
+            let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if norm == 0.0 || !norm.is_finite() {
+                return Err(HostError::at(
+                    path,
+                    line_no,
+                    format!("position `{name}` has a zero-length vector"),
+                ));
+            }
+            if (norm - 1.0).abs() > 1e-6 {
+                warnings.push(format!(
+                    "{}:{line_no}: position `{name}` has length {norm:.9}; normalised to unit length",
+                    path.display()
+                ));
+            }
+            pos.set(name, v.map(|x| x / norm), role);
+            n_rows += 1;
+        }
+        if header.is_none() {
+            return Err(HostError::in_file(path, "no header line `name,fx,fy,fz`"));
+        }
+        if n_rows == 0 {
+            warnings.push(format!("{}: no positions defined", path.display()));
+        }
+        Ok((pos, warnings))
+    }
+}
+
+type PositionRow<'a> = (&'a str, [f64; 3], Option<Role>);
+
+fn parse_row<'a>(
+    path: &Path,
+    line_no: usize,
+    fields: &[&'a str],
+    [ni, xi, yi, zi]: [usize; 4],
+    role_col: Option<usize>,
+) -> Result<PositionRow<'a>> {
+    let get = |k: usize, name: &str| -> Result<&'a str> {
+        fields.get(k).copied().ok_or_else(|| {
+            HostError::at_field(path, line_no, name, "missing value (too few fields)")
+        })
+    };
+    let name = get(ni, "name")?;
+    if name.is_empty() || name == "-" {
+        return Err(HostError::at_field(
+            path,
+            line_no,
+            "name",
+            "empty or `-` position name",
+        ));
+    }
+    let mut v = [0.0; 3];
+    for (slot, (k, fname)) in v.iter_mut().zip([(xi, "fx"), (yi, "fy"), (zi, "fz")]) {
+        *slot = fields::number(path, line_no, fname, get(k, fname)?)?;
+    }
+    let role = match role_col.and_then(|k| fields.get(k)).filter(|s| !s.is_empty()) {
+        None => None,
+        Some(s) => Some(Role::parse(s).ok_or_else(|| {
+            HostError::at_field(
+                path,
+                line_no,
+                "role",
+                format!("`{s}` is not a role (calibration or verification)"),
+            )
+        })?),
+    };
+    Ok((name, v, role))
+}

@@ -1,0 +1,84 @@
+//! Typed parameter ids of the diagnosis's designs: which coefficient's temperature term,
+//! which effect on which axis, which fixture angle. Their text form is the JSON contract's.
+use firmware_core::model::AXES;
+use std::fmt;
+
+/// A per-axis term of a catalogue effect.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Term {
+    /// `temp_rate`: offset per C/s.
+    Rate,
+    /// `hysteresis`: offset split by direction.
+    Hysteresis,
+    /// `nonlinearity_k2`: output per g^2.
+    K2,
+    /// `scale_asymmetry`: output per |g| (`c_i = K_ii delta_i`).
+    Asymmetry,
+    /// `warmup_drift`: offset at power-on.
+    Warmup,
+}
+
+impl Term {
+    /// The symbol in parameter names (`r_x`, `h_y`, ...).
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Term::Rate => "r",
+            Term::Hysteresis => "h",
+            Term::K2 => "k2",
+            Term::Asymmetry => "c",
+            Term::Warmup => "d",
+        }
+    }
+}
+
+/// One column of a diagnosis design.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Param {
+    /// `K[i][j]`, temperature-basis function `k`.
+    K {
+        /// Row (output axis).
+        i: usize,
+        /// Column (input axis).
+        j: usize,
+        /// Basis function.
+        k: usize,
+    },
+    /// `U0[i]`, temperature-basis function `k`.
+    U0 {
+        /// Axis.
+        i: usize,
+        /// Basis function.
+        k: usize,
+    },
+    /// A per-axis effect term.
+    Effect {
+        /// Which term.
+        term: Term,
+        /// Axis.
+        axis: usize,
+    },
+    /// `fixture_error`: rotation angle 1 or 2 of one position, rad.
+    FixtureAngle(u8),
+}
+
+impl Param {
+    /// The axis a per-axis effect term is on.
+    pub fn effect_axis(self) -> Option<usize> {
+        match self {
+            Param::Effect { axis, .. } => Some(axis),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for Param {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let ax = |i: usize| AXES.get(i).copied().unwrap_or("?");
+        match *self {
+            Param::K { i, j, k } => write!(f, "k{}{}#{k}", ax(i), ax(j)),
+            Param::U0 { i, k } => write!(f, "u0{}#{k}", ax(i)),
+            Param::Effect { term, axis } => write!(f, "{}_{}", term.symbol(), ax(axis)),
+            Param::FixtureAngle(n) => write!(f, "angle{n}_rad"),
+        }
+    }
+}

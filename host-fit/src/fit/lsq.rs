@@ -1,0 +1,169 @@
+//! Weighted linear least squares: the one solver of the crate. Normal equations are
+//! accumulated row by row (zeros skipped, so the sparse designs of the diagnosis stay
+//! cheap, and folds of held-out data are simply added), then solved on the
+//! column-equilibrated matrix by a symmetric eigen-decomposition with one rank test.
+use nalgebra::{DMatrix, DVector};
+
+/// Rank test: the equilibrated normal matrix counts as singular when its smallest
+/// eigenvalue is at most this fraction of its largest, i.e. when the design's condition
+/// number exceeds about 3e5. A direction of parameter space constrained that much less
+/// than the best one is not determined by the data (and the normal equations could not
+/// resolve it reliably in f64 anyway: their rounding is eps times the condition squared).
+pub const RANK_TOL: f64 = 1e-11;
+
+/// The weighted normal equations `(A^T W A, A^T W b)` of a set of rows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Normal {
+    /// `A^T W A`.
+    pub ata: DMatrix<f64>,
+    /// `A^T W b`.
+    pub atb: DVector<f64>,
+}
+
+/// A solved least-squares problem.
+#[derive(Debug, Clone)]
+pub struct Solution {
+    /// The parameters.
+    pub x: DVector<f64>,
+    /// `(A^T W A)^-1`: the covariance when the weights are 1/variance.
+    pub cov: DMatrix<f64>,
+}
+
+impl Normal {
+    /// Empty equations for `p` parameters.
+    pub fn new(p: usize) -> Self {
+        Normal {
+            ata: DMatrix::zeros(p, p),
+            atb: DVector::zeros(p),
+        }
+    }
+
+    /// The rows `r` of `(a, b)` with `include(r)`, weights `w`.
+    pub fn of_rows(
+        a: &DMatrix<f64>,
+        b: &DVector<f64>,
+        w: &[f64],
+        include: impl Fn(usize) -> bool,
+    ) -> Self {
+        let p = a.ncols();
+        let mut n = Normal::new(p);
+        let mut nz = Vec::with_capacity(p);
+        for r in 0..a.nrows() {
+            if !include(r) {
+                continue;
+            }
+            let row = a.row(r);
+            nz.clear();
+            nz.extend((0..p).filter(|&j| row[j] != 0.0));
+            let wr = w.get(r).copied().unwrap_or(0.0);
+            for &i in &nz {
+                n.atb[i] += wr * row[i] * b[r];
+                for &j in &nz {
+                    n.ata[(i, j)] += wr * row[i] * row[j];
+                }
+            }
+        }
+        n
+    }
+
+    /// The equations of both sets of rows.
+    pub fn plus(&self, other: &Normal) -> Normal {
+        Normal {
+            ata: &self.ata + &other.ata,
+            atb: &self.atb + &other.atb,
+        }
+    }
+
+    /// Solve; `None` when the rows do not determine every parameter ([`RANK_TOL`]).
+    pub fn solve(&self) -> Option<Solution> {
+        let p = self.ata.ncols();
+        let d: Vec<f64> = (0..p).map(|j| self.ata[(j, j)].sqrt()).collect();
+        if p == 0 || d.iter().any(|v| *v <= 0.0 || !v.is_finite()) {
+            return None;
+        }
+        let s = DMatrix::from_fn(p, p, |i, j| self.ata[(i, j)] / (d[i] * d[j]));
+        let eig = s.symmetric_eigen();
+        let (mn, mx) = eig
+            .eigenvalues
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+        if mn.is_nan() || mn <= RANK_TOL * mx {
+            return None;
+        }
+        let inv = &eig.eigenvectors
+            * DMatrix::from_diagonal(&eig.eigenvalues.map(|v| 1.0 / v))
+            * eig.eigenvectors.transpose();
+        let sb = DVector::from_fn(p, |i, _| self.atb[i] / d[i]);
+        let y = &inv * sb;
+        let x = DVector::from_fn(p, |i, _| y[i] / d[i]);
+        let cov = DMatrix::from_fn(p, p, |i, j| inv[(i, j)] / (d[i] * d[j]));
+        Some(Solution { x, cov })
+    }
+}
+
+/// A solved weighted least-squares problem with its residuals.
+#[derive(Debug, Clone)]
+pub struct Lsq {
+    /// The parameters.
+    pub x: DVector<f64>,
+    /// `(A^T W A)^-1`: the covariance when the weights are 1/variance.
+    pub cov: DMatrix<f64>,
+    /// Weighted residual sum of squares.
+    pub wrss: f64,
+    /// Residuals (unweighted), one per observation, computed from the data (not from
+    /// the normal equations, which would lose them to cancellation).
+    pub residuals: DVector<f64>,
+}
+
+/// Solve `min sum w_k (b_k - A_k x)^2`; `None` when `A` does not determine `x`.
+pub fn weighted_lsq(a: &DMatrix<f64>, b: &DVector<f64>, w: &[f64]) -> Option<Lsq> {
+    let (n, p) = a.shape();
+    if n < p || p == 0 || w.len() != n {
+        return None;
+    }
+    let s = Normal::of_rows(a, b, w, |_| true).solve()?;
+    let residuals = b - a * &s.x;
+    let wrss = residuals.iter().zip(w).map(|(r, w)| w * r * r).sum();
+    Some(Lsq {
+        x: s.x,
+        cov: s.cov,
+        wrss,
+        residuals,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fits_a_line_and_detects_rank_deficiency() {
+        let a = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 1.0, 1.0, 1.0, 2.0]);
+        let b = DVector::from_vec(vec![1.0, 3.0, 5.0]);
+        let s = weighted_lsq(&a, &b, &[1.0; 3]).unwrap();
+        assert!((s.x[0] - 1.0).abs() < 1e-14 && (s.x[1] - 2.0).abs() < 1e-14);
+        assert!(s.wrss < 1e-25);
+        let d = DMatrix::from_row_slice(3, 2, &[1.0, 2.0, 2.0, 4.0, 3.0, 6.0]);
+        assert!(weighted_lsq(&d, &b, &[1.0; 3]).is_none());
+        // nearly parallel columns, condition ~1e7: not determined
+        let e = DMatrix::from_row_slice(3, 2, &[1.0, 1.0, 1.0, 1.0 + 1e-7, 1.0, 1.0]);
+        assert!(weighted_lsq(&e, &b, &[1.0; 3]).is_none());
+    }
+
+    #[test]
+    fn folds_add_up_to_the_whole() {
+        let a = DMatrix::from_row_slice(4, 2, &[1.0, 0.0, 1.0, 1.0, 1.0, 2.0, 1.0, 3.0]);
+        let b = DVector::from_vec(vec![1.0, 2.9, 5.2, 7.0]);
+        let w = [1.0, 2.0, 1.0, 0.5];
+        let even = Normal::of_rows(&a, &b, &w, |r| r % 2 == 0);
+        let odd = Normal::of_rows(&a, &b, &w, |r| r % 2 == 1);
+        let all = Normal::of_rows(&a, &b, &w, |_| true);
+        assert!((&even.plus(&odd).ata - &all.ata).norm() < 1e-12);
+        let s = all.solve().unwrap();
+        // covariance of a weighted line fit: the inverse of sum w [1 x; x x^2]
+        let (sw, sx, sxx) = (4.5, 2.0 + 2.0 + 1.5, 2.0 + 4.0 + 4.5);
+        let det = sw * sxx - sx * sx;
+        assert!((s.cov[(0, 0)] - sxx / det).abs() < 1e-12);
+        assert!((s.cov[(1, 1)] - sw / det).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,258 @@
+//! The twin's configuration, as read from TOML (`examples/sim/all-effects.toml`
+//! documents every option); every section optional, unknown keys refused.
+use crate::error::{HostError, Result};
+use serde::{Deserialize, Serialize};
+
+/// The whole simulation, as read from TOML (every section optional).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimConfig {
+    /// Random seed (overridden by `--seed`).
+    pub seed: u64,
+    /// Reference temperature written as metadata, C.
+    pub t0_c: f64,
+    /// Thermal chamber and case.
+    pub chamber: Chamber,
+    /// The unit's temperature sensor.
+    pub sensor: Sensor,
+    /// Stops and tilter.
+    pub schedule: Schedule,
+    /// The unit's coefficients and voltmeter.
+    pub unit: Unit,
+    /// Physics beyond the paper's model.
+    pub effects: Effects,
+}
+
+/// Chamber air and unit case: first-order lags.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Chamber {
+    /// Initial temperature of everything, C.
+    pub start_c: f64,
+    /// Time constant of the air following the set point, s.
+    pub tau_air_s: f64,
+    /// Time constant of the case following the air, s.
+    pub tau_case_s: f64,
+}
+
+/// The temperature sensor on the case.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Sensor {
+    /// White noise, C (1 sigma).
+    pub noise_c: f64,
+    /// Quantisation step, C (0 = none).
+    pub quantum_c: f64,
+}
+
+/// One stop of the profile.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Stop {
+    /// Set point, C.
+    pub temp_c: f64,
+    /// Soak after reaching the set point, s.
+    #[serde(default = "default_soak")]
+    pub soak_s: f64,
+    /// Ramp rate to this stop, C/min.
+    #[serde(default = "default_ramp")]
+    pub ramp_c_per_min: f64,
+    /// Positions visited (default: the schedule's).
+    #[serde(default)]
+    pub positions: Option<Vec<String>>,
+}
+
+fn default_soak() -> f64 {
+    1500.0
+}
+fn default_ramp() -> f64 {
+    1.0
+}
+
+/// The tilter schedule.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Schedule {
+    /// Samples per second.
+    pub rate_hz: f64,
+    /// Dwell per position, s.
+    pub dwell_s: f64,
+    /// Motion between positions, s (rows with position `-`).
+    pub move_s: f64,
+    /// Where the unit rests during ramps and soaks (recorded).
+    pub rest_position: String,
+    /// Positions visited at every stop unless the stop says otherwise.
+    pub positions: Vec<String>,
+    /// The profile.
+    pub stops: Vec<Stop>,
+    /// Extra positions (name, unit vector) beyond TP/PP.
+    pub extra_positions: Vec<(String, [f64; 3])>,
+}
+
+/// How the coefficients depend on temperature.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Unit {
+    /// Serial written as metadata.
+    pub serial: String,
+    /// `paper` (the built-in paper unit) or `table` (`temps_c` + `coeffs`).
+    pub model: String,
+    /// Table temperatures, C.
+    pub temps_c: Vec<f64>,
+    /// Table rows, 12 coefficients each (kxx kyy kzz kxy kxz kyx kyz kzx kzy u0x u0y u0z).
+    pub coeffs: Vec<[f64; 12]>,
+    /// Between table rows: `poly` (the polynomial through all rows) or `pwl`.
+    pub interp: String,
+    /// Voltmeter white noise, V (1 sigma).
+    pub noise_v: f64,
+    /// Voltmeter resolution, V (0 = none).
+    pub resolution_v: f64,
+}
+
+/// Every effect of physics-catalogue.md; all off by default. Per-axis arrays are x, y, z.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct Effects {
+    /// `temp_curvature`: an extra shape `sin(2 pi (T - T0) / period)` on offsets (V)
+    /// and scale factors (relative).
+    pub temp_curvature: Option<Curvature>,
+    /// `thermal_lag`: sensing elements follow the case with these time constants, s.
+    pub thermal_lag: Option<PerAxis>,
+    /// `temp_rate`: U0 += r dT/dt, V per (C/s).
+    pub temp_rate: Option<PerAxis>,
+    /// `hysteresis`: U0 += +-h/2 by the direction of the last temperature change, V.
+    pub hysteresis: Option<PerAxis>,
+    /// `nonlinearity_k2`: U += K2 a^2, V/g^2.
+    pub nonlinearity_k2: Option<PerAxis>,
+    /// `scale_asymmetry`: K_ii (1 +- d) for positive/negative input (relative).
+    pub scale_asymmetry: Option<PerAxis>,
+    /// `fixture_error`: one position rotated by two small angles.
+    pub fixture_error: Option<Fixture>,
+    /// `warmup_drift`: U0 += d exp(-t / tau).
+    pub warmup_drift: Option<Warmup>,
+}
+
+/// Three per-axis values.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct PerAxis {
+    /// x, y, z.
+    pub value: [f64; 3],
+}
+
+/// Extra temperature shape.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Curvature {
+    /// Offset amplitude per axis, V.
+    pub u0_v: [f64; 3],
+    /// Scale-factor amplitude per axis, relative.
+    #[serde(default)]
+    pub k_rel: [f64; 3],
+    /// Period of the shape, C.
+    #[serde(default = "default_period")]
+    pub period_c: f64,
+}
+fn default_period() -> f64 {
+    60.0
+}
+
+/// A tilter face off its nominal orientation.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Fixture {
+    /// The position.
+    pub position: String,
+    /// Two rotation angles about axes perpendicular to the nominal vector, rad.
+    pub angles_rad: [f64; 2],
+}
+
+/// Exponential settling after power-on.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Warmup {
+    /// Amplitude per axis, V.
+    pub d_v: [f64; 3],
+    /// Time constant, s.
+    pub tau_s: f64,
+}
+
+impl Default for Chamber {
+    fn default() -> Self {
+        Chamber {
+            start_c: 20.0,
+            tau_air_s: 120.0,
+            tau_case_s: 600.0,
+        }
+    }
+}
+impl Default for Sensor {
+    fn default() -> Self {
+        Sensor {
+            noise_c: 0.02,
+            quantum_c: 0.0625,
+        }
+    }
+}
+impl Default for Schedule {
+    fn default() -> Self {
+        let tp: Vec<String> = (1..=6).map(|i| format!("TP{i}")).collect();
+        let pp: Vec<String> = (1..=6).map(|i| format!("PP{i}")).collect();
+        Schedule {
+            rate_hz: 1.0,
+            dwell_s: 60.0,
+            move_s: 10.0,
+            rest_position: "TP1".into(),
+            positions: tp.into_iter().chain(pp).collect(),
+            stops: [-40.0, -10.0, 20.0, 45.0, 70.0]
+                .iter()
+                .map(|t| Stop {
+                    temp_c: *t,
+                    soak_s: default_soak(),
+                    ramp_c_per_min: default_ramp(),
+                    positions: None,
+                })
+                .collect(),
+            extra_positions: Vec::new(),
+        }
+    }
+}
+impl Default for Unit {
+    fn default() -> Self {
+        Unit {
+            serial: "PAPER-UNIT".into(),
+            model: "paper".into(),
+            temps_c: Vec::new(),
+            coeffs: Vec::new(),
+            interp: "poly".into(),
+            noise_v: 2e-5,
+            resolution_v: 1e-7,
+        }
+    }
+}
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig {
+            seed: 1,
+            t0_c: 20.0,
+            chamber: Chamber::default(),
+            sensor: Sensor::default(),
+            schedule: Schedule::default(),
+            unit: Unit::default(),
+            effects: Effects::default(),
+        }
+    }
+}
+
+/// Parse a TOML configuration; the message names the file and the line.
+pub fn parse_config(path: &std::path::Path, text: &str) -> Result<SimConfig> {
+    toml::from_str(text).map_err(|e| {
+        let line = e
+            .span()
+            .map(|s| text.get(..s.start).unwrap_or(text).matches('\n').count() + 1);
+        match line {
+            Some(l) => HostError::at(path, l, e.message().to_string()),
+            None => HostError::in_file(path, e.message().to_string()),
+        }
+    })
+}

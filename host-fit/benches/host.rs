@@ -4,9 +4,9 @@
 #![allow(missing_docs)]
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use host_fit::fit::pipeline::{fit_recording, ModelChoice, ModelKind, Route};
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::Recording;
+use host_fit::fit::pipeline::{fit_recording, ModelChoice, ModelKind, Route};
 use host_fit::simulate::{simulate, Stop};
 use std::path::Path;
 

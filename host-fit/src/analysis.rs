@@ -13,10 +13,10 @@ use crate::fit::temperature::{choose_poly_order, fit_joint, fit_table, Basis, Mo
 use crate::simulate::TrueUnit;
 use crate::verify::{verify, Verification};
 use firmware_core::compensate::{ErrorModel, Method};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// One row of summary.json.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct SummaryRow {
     /// `t0-constants`, `paper-pwl2`, `polyN`, `pwl-all`.
     pub model: String,
@@ -143,7 +143,12 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
     })
 }
 
-fn summary_rows(model: &str, method: &str, v: &Verification, uncompensated: bool) -> Vec<SummaryRow> {
+fn summary_rows(
+    model: &str,
+    method: &str,
+    v: &Verification,
+    uncompensated: bool,
+) -> Vec<SummaryRow> {
     v.max_by_temperature
         .iter()
         .map(|t| SummaryRow {

@@ -50,7 +50,14 @@ struct UnitJson {
 }
 
 /// Fit one unit, write its blob and JSON; fills `r`.
-fn fit_unit(path: &Path, out: &Path, kind: ModelKind, diagnose: bool, force: bool, r: &mut UnitResult) -> Result<()> {
+fn fit_unit(
+    path: &Path,
+    out: &Path,
+    kind: ModelKind,
+    diagnose: bool,
+    force: bool,
+    r: &mut UnitResult,
+) -> Result<()> {
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())

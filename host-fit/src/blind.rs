@@ -5,9 +5,10 @@
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::diagnose::design::Data;
+use crate::diagnose::design::EFFECT_IDS;
+use crate::diagnose::diagnose;
 use crate::diagnose::findings::Finding;
 use crate::diagnose::metrics::normalized_rms;
-use crate::diagnose::{diagnose, EFFECT_IDS};
 use crate::rng::Rng;
 use crate::simulate::{simulate, Curvature, Fixture, PerAxis, SimConfig, Stop, Warmup};
 use std::path::Path;

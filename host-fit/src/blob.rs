@@ -104,8 +104,8 @@ pub fn build_blob_checked(
 /// Read and decode a blob file; the error names the file and why it is invalid.
 pub fn read_blob(path: &Path) -> Result<(Blob, Vec<u8>)> {
     let bytes = std::fs::read(path).map_err(|e| HostError::io(path, &e))?;
-    let b = Blob::decode(&bytes)
-        .map_err(|e| HostError::in_file(path, format!("invalid blob: {e}")))?;
+    let b =
+        Blob::decode(&bytes).map_err(|e| HostError::in_file(path, format!("invalid blob: {e}")))?;
     Ok((b, bytes))
 }
 
@@ -205,7 +205,11 @@ impl Inspection {
             self.t0_c,
             self.t_min_c,
             self.t_max_c,
-            if self.clamp { "clamped" } else { "extrapolated" },
+            if self.clamp {
+                "clamped"
+            } else {
+                "extrapolated"
+            },
             self.update_step_c,
             self.model
         ));

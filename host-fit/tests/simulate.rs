@@ -2,10 +2,10 @@
 //! back the truth within the standard errors, and each effect of physics-catalogue.md
 //! changes the data the way the catalogue says. Effects are isolated by simulating the
 //! same seed with and without them: the noise is identical, the difference is the effect.
-use host_fit::fit::identify::{identify_stop, stops};
-use host_fit::fit::noise::noise;
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::{Recording, Row};
+use host_fit::fit::identify::{identify_stop, stops};
+use host_fit::fit::noise::noise;
 use host_fit::simulate::{
     parse_config, simulate, Curvature, Effects, Fixture, PerAxis, SimConfig, Stop, TrueUnit, Warmup,
 };

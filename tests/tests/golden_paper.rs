@@ -1,21 +1,6 @@
 //! Golden test: the paper's Tables 1-2 -> Table 3 through `host-fit temp-fit`.
 use tests::{cli, repo};
 
-fn table3() -> Vec<(String, f64, f64)> {
-    let text = std::fs::read_to_string(repo().join("testdata/paper/paper-table3.csv")).unwrap();
-    text.lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with("coefficient"))
-        .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            (
-                f[0].to_string(),
-                f[2].parse().unwrap(),
-                f[3].parse().unwrap(),
-            )
-        })
-        .collect()
-}
-
 #[test]
 fn temp_fit_reproduces_table3_within_1e_3_relative() {
     let tables = repo().join("testdata/paper/paper-tables.csv");
@@ -37,23 +22,10 @@ fn temp_fit_reproduces_table3_within_1e_3_relative() {
         (iv[0]["from_c"].as_f64(), iv[0]["to_c"].as_f64()),
         (Some(-40.0), Some(20.0))
     );
-    let rows = table3();
-    assert_eq!(rows.len(), 12);
-    let mut worst: f64 = 0.0;
-    for (name, low, high) in rows {
-        for (k, want) in [(0, low), (1, high)] {
-            let got = iv[k]["coefficients"][&name]
-                .as_f64()
-                .unwrap_or_else(|| panic!("{name} missing"));
-            let rel = ((got - want) / want).abs();
-            worst = worst.max(rel);
-            assert!(
-                rel < 1e-3,
-                "{name} interval {k}: {got} vs paper {want} ({rel:.2e})"
-            );
-        }
-    }
-    println!("max relative difference against Table 3: {worst:.3e}");
+    let (worst, line) = tests::figures::golden_table3();
+    println!("{line}");
+    assert!(line.ends_with("over 24 coefficients"), "{line}");
+    assert!(worst < 1e-3, "{line}");
 }
 
 #[test]

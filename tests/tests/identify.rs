@@ -1,10 +1,10 @@
 //! Identification: least squares = formula (10), recovery within the standard errors,
 //! too few positions, and the joint fit against the per-stop route under drift.
-use host_fit::fit::pipeline::{fit_recording, ModelChoice, ModelKind, Route};
-use host_fit::fit::identify::{formula_10, identify_stop, stops};
-use host_fit::fit::noise::noise;
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::Recording;
+use host_fit::fit::identify::{formula_10, identify_stop, stops};
+use host_fit::fit::noise::noise;
+use host_fit::fit::pipeline::{fit_recording, ModelChoice, ModelKind, Route};
 use std::path::Path;
 use tests::{synthetic_csv, PAPER_T0, TP};
 
@@ -133,7 +133,8 @@ fn joint_fit_beats_per_stop_when_the_temperature_drifts_within_a_stop() {
                 breakpoints: None,
             },
             route,
-        ).unwrap();
+        )
+        .unwrap();
         let mut worst: f64 = 0.0;
         for t in [-30.0, 0.0, 45.0] {
             let (a, b) = (oc.fit.eval(t), truth(t));

@@ -3,16 +3,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+/// The mean estimate (ns) of one criterion benchmark, from its `new/estimates.json`.
 fn estimate_ns(dir: &Path) -> Option<f64> {
     let text = std::fs::read_to_string(dir.join("new/estimates.json")).ok()?;
-    let mean = text.find("\"mean\"")?;
-    let rest = &text[mean..];
-    let p = rest.find("\"point_estimate\":")? + "\"point_estimate\":".len();
-    let num: String = rest[p..]
-        .chars()
-        .take_while(|c| c.is_ascii_digit() || ".eE+-".contains(*c))
-        .collect();
-    num.parse().ok()
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v["mean"]["point_estimate"].as_f64()
 }
 
 /// All criterion results: (group/name, ns).

@@ -1,6 +1,6 @@
 //! `temp-fit`, `identify` and `fit`: from data to coefficients and blobs.
 use super::args::{FitArgs, IdentifyArgs, TempFitArgs};
-use super::{load, serial, w};
+use super::common::{load, serial, w};
 use crate::blob::{build_blob, F32_BOUND_G};
 use crate::data::table::{read_table, to_csv, TableRow};
 use crate::error::{HostError, Result};
@@ -29,7 +29,8 @@ pub(super) fn temp_fit(a: TempFitArgs, out: &mut dyn Write) -> Result<()> {
     let rows = read_table(&a.coeffs)?;
     let temps: Vec<f64> = rows.iter().map(|r| r.temp_c).collect();
     let basis = ModelChoice::from(&a.model).basis(&temps);
-    let fit = fit_table(&rows, &basis, a.t0).map_err(|e| HostError::in_file(&a.coeffs, e.message))?;
+    let fit =
+        fit_table(&rows, &basis, a.t0).map_err(|e| HostError::in_file(&a.coeffs, e.message))?;
     let d = ModelDescription::of(&fit, a.relative);
     if a.json {
         w(out, json(&d)?)

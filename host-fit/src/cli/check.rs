@@ -1,7 +1,7 @@
 //! `verify`, `inspect` and `fw-vectors`: a blob against a recording, a blob alone, and
 //! the firmware's expected outputs.
 use super::args::{ErrModel, FwVectorsArgs, InspectArgs, VerifyArgs};
-use super::{load, w};
+use super::common::{load, w};
 use crate::blob::{read_blob, Inspection, F32_BOUND_G};
 use crate::data::positions::Role;
 use crate::error::{HostError, Result};
@@ -111,7 +111,10 @@ pub(super) fn fw_vectors(a: FwVectorsArgs, out: &mut dyn Write) -> Result<()> {
     for l in lines {
         w(out, l)?;
     }
-    w(out, format!("f64-departure {worst:e} bound {F32_BOUND_G:e}"))?;
+    w(
+        out,
+        format!("f64-departure {worst:e} bound {F32_BOUND_G:e}"),
+    )?;
     if !crate::vectors::within_bound(worst) {
         return Err(HostError::msg(format!(
             "f32 departs from f64 by {worst:e} g, over the bound {F32_BOUND_G:e}"

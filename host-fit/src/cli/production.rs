@@ -1,6 +1,6 @@
 //! `batch`, `simulate` and `demo`: many units, the twin, and the main job.
 use super::args::{BatchArgs, DemoArgs, SimulateArgs};
-use super::w;
+use super::common::w;
 use crate::error::{HostError, Result};
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::simulate::SimConfig;
@@ -71,5 +71,8 @@ pub(super) fn demo(a: DemoArgs, out: &mut dyn Write) -> Result<()> {
         out,
         format!("summary: {}", a.out.join("summary.json").display()),
     )?;
-    w(out, format!("report:  {}", a.out.join("report.html").display()))
+    w(
+        out,
+        format!("report:  {}", a.out.join("report.html").display()),
+    )
 }

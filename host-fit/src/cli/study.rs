@@ -1,6 +1,6 @@
 //! `diagnose`, `report` and `blind`: looking into a recording, and testing the looking.
 use super::args::{BlindArgs, DiagnoseArgs, ReportArgs};
-use super::{load, serial, w};
+use super::common::{load, serial, w};
 use crate::analysis::{analyse, table};
 use crate::blob::build_blob;
 use crate::diagnose::contract::BlobNote;
@@ -48,8 +48,10 @@ pub(super) fn report(a: ReportArgs, out: &mut dyn Write, err: &mut dyn Write) ->
 }
 
 pub(super) fn blind(a: BlindArgs, out: &mut dyn Write) -> Result<()> {
+    use rayon::prelude::*;
+    // every case is independent and deterministic: run them on all cores
     let outcomes: Vec<_> = crate::blind::suite(a.long)
-        .iter()
+        .par_iter()
         .map(crate::blind::run)
         .collect();
     w(out, crate::blind::report(&outcomes))

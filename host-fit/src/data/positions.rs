@@ -227,7 +227,10 @@ fn parse_row<'a>(
     for (slot, (k, fname)) in v.iter_mut().zip([(xi, "fx"), (yi, "fy"), (zi, "fz")]) {
         *slot = fields::number(path, line_no, fname, get(k, fname)?)?;
     }
-    let role = match role_col.and_then(|k| fields.get(k)).filter(|s| !s.is_empty()) {
+    let role = match role_col
+        .and_then(|k| fields.get(k))
+        .filter(|s| !s.is_empty())
+    {
         None => None,
         Some(s) => Some(Role::parse(s).ok_or_else(|| {
             HostError::at_field(

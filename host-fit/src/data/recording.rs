@@ -1,7 +1,7 @@
 //! The recording reader, exactly per recording-format.md (version 1), and its dwells.
-use crate::error::{HostError, Result};
 use crate::data::fields::{self, number as parse_num, temperature as parse_temp};
 use crate::data::positions::Positions;
+use crate::error::{HostError, Result};
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -81,7 +81,6 @@ pub const MAX_DWELL_DRIFT_C: f64 = 0.5;
 
 const KNOWN_META: [&str; 5] = ["unit", "t0_c", "g_local", "format", "output_unit"];
 const REQUIRED: [&str; 6] = ["t_s", "position", "temp_c", "ux_v", "uy_v", "uz_v"];
-
 
 impl Recording {
     /// Read a recording file.

@@ -9,6 +9,18 @@ use crate::fit::noise::Noise;
 use crate::fit::temperature::Basis;
 use nalgebra::{DMatrix, DVector};
 
+/// The catalogue's effect ids, in the order candidates are tried.
+pub const EFFECT_IDS: [&str; 8] = [
+    "temp_curvature",
+    "thermal_lag",
+    "temp_rate",
+    "hysteresis",
+    "nonlinearity_k2",
+    "scale_asymmetry",
+    "fixture_error",
+    "warmup_drift",
+];
+
 /// An effect added to the baseline model.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Extra {
@@ -144,9 +156,17 @@ impl Data<'_> {
         let ophis: Vec<Vec<f64>> = temps.iter().map(|t| obasis.eval(self.t0, *t)).collect();
         let (mut cols, mut labels) = (Vec::new(), Vec::new());
         for i in 0..3 {
-            let inputs: Vec<usize> = if spec.cross { vec![0, 1, 2, 3] } else { vec![i, 3] };
+            let inputs: Vec<usize> = if spec.cross {
+                vec![0, 1, 2, 3]
+            } else {
+                vec![i, 3]
+            };
             for j in inputs {
-                let (count, ph) = if j == 3 { (obasis.len(), &ophis) } else { (nb, &phis) };
+                let (count, ph) = if j == 3 {
+                    (obasis.len(), &ophis)
+                } else {
+                    (nb, &phis)
+                };
                 for k in 0..count {
                     let mut c = Vec::with_capacity(self.obs.len());
                     for (r, o) in self.obs.iter().enumerate() {
@@ -213,7 +233,6 @@ impl Data<'_> {
     /// Build the stacked design (rows: obs x axis) for `spec`; `base` provides K(T) for
     /// fixture columns.
     fn design(&self, spec: &Spec, temps: &[f64], base: Option<&Fit>) -> Design {
-
         let (mut cols, mut labels) = self.baseline_columns(spec, temps);
         for e in &spec.extras {
             match e {

@@ -105,4 +105,3 @@ pub fn locate(data: &Data, fit: &Fit) -> Vec<Hotspot> {
     out.sort_by(|a, b| b.rms_sigma.total_cmp(&a.rms_sigma));
     out
 }
-

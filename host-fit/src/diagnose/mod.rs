@@ -28,21 +28,8 @@ use findings::{Ambiguity, Finding};
 use location::{locate, Hotspot};
 use observations::{observations, series, DObs};
 
-/// A candidate must lower BIC by more than this to be accepted ("clearly").
-pub const BIC_MARGIN: f64 = 10.0;
-/// Two candidates within this much BIC of each other explain the data equally well.
-pub const AMBIGUITY_MARGIN: f64 = 6.0;
-/// The catalogue's effect ids, in the order candidates are tried.
-pub const EFFECT_IDS: [&str; 8] = [
-    "temp_curvature",
-    "thermal_lag",
-    "temp_rate",
-    "hysteresis",
-    "nonlinearity_k2",
-    "scale_asymmetry",
-    "fixture_error",
-    "warmup_drift",
-];
+pub use design::EFFECT_IDS;
+pub use search::{AMBIGUITY_MARGIN, BIC_MARGIN};
 
 /// The whole diagnosis.
 #[derive(Debug, Clone)]
@@ -85,7 +72,12 @@ fn final_table(data: &Data, f: &Fit, tmin: f64, tmax: f64) -> Vec<(f64, [f64; 12
     let (ks, us) = data.coefficients_at(&f.spec, &f.x, &f.labels, &grid);
     grid.iter()
         .zip(ks.iter().zip(&us))
-        .map(|(t, (k, u))| (*t, firmware_core::model::Coeffs { k: *k, u0: *u }.to_array()))
+        .map(|(t, (k, u))| {
+            (
+                *t,
+                firmware_core::model::Coeffs { k: *k, u0: *u }.to_array(),
+            )
+        })
         .collect()
 }
 

@@ -179,4 +179,3 @@ pub(crate) fn lagged_temps(rec: &Recording, obs: &[DObs], tau: f64) -> Vec<f64> 
         .map(|o| f[o.start..o.end].iter().sum::<f64>() / o.n as f64)
         .collect()
 }
-

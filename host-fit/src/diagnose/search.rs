@@ -2,12 +2,16 @@
 //! order by BIC), then catalogue effects added greedily while one lowers BIC clearly and
 //! improves the held-out folds; time constants profiled; equally good rivals reported as
 //! ambiguous.
+use crate::diagnose::design::EFFECT_IDS;
 use crate::diagnose::design::{Data, Extra, Fit, Spec};
 use crate::diagnose::findings::{evidence_for, finding, needed, Ambiguity, Finding};
 use crate::diagnose::metrics::bic;
-use crate::diagnose::{AMBIGUITY_MARGIN, BIC_MARGIN, EFFECT_IDS};
 use crate::fit::temperature::{temperature_clusters, Basis};
 
+/// A candidate must lower BIC by more than this to be accepted ("clearly").
+pub const BIC_MARGIN: f64 = 10.0;
+/// Two candidates within this much BIC of each other explain the data equally well.
+pub const AMBIGUITY_MARGIN: f64 = 6.0;
 /// The baseline fit and what it could not identify; `None` when the positions present
 /// do not determine even the per-axis offset and scale.
 pub fn baseline(data: &Data) -> Option<(Fit, Vec<String>)> {

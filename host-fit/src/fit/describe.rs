@@ -114,7 +114,11 @@ impl ModelDescription {
         let num = |v: f64| serde_json::to_string(&v).unwrap_or_default();
         let mut s = format!("model {}  T0 {} C\n", basis.describe(), self.t0_c);
         for i in self.intervals.iter().flatten() {
-            s.push_str(&format!("interval {} .. {} C:\n", num(i.from_c), num(i.to_c)));
+            s.push_str(&format!(
+                "interval {} .. {} C:\n",
+                num(i.from_c),
+                num(i.to_c)
+            ));
             for (k, v) in &i.coefficients {
                 s.push_str(&format!("  {k:<10} {v:>14.6e}\n"));
             }

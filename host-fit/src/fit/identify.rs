@@ -63,12 +63,7 @@ pub fn observations(rec: &Recording, select: &dyn Fn(usize) -> bool, span_c: f64
 
 /// Split a dwell into consecutive windows (absolute row ranges) whose temperature spans
 /// at most `span_c` and whose time at most `max_s`.
-pub fn windows(
-    rec: &Recording,
-    d: &Dwell,
-    span_c: f64,
-    max_s: f64,
-) -> Vec<(usize, usize)> {
+pub fn windows(rec: &Recording, d: &Dwell, span_c: f64, max_s: f64) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
     let mut start = d.start;
     while start < d.end {

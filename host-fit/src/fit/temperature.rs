@@ -252,8 +252,8 @@ pub fn fit_joint(
     let mut k2 = [None; 3];
     let (mut chi2, mut n_params) = (0.0, 0);
     for axis in 0..3 {
-        let (s, with_k2) = fit_axis(obs, &phis, noise, axis)
-            .ok_or_else(|| rank_error(obs, path, basis))?;
+        let (s, with_k2) =
+            fit_axis(obs, &phis, noise, axis).ok_or_else(|| rank_error(obs, path, basis))?;
         let slots = [
             K_INDEX[axis][0],
             K_INDEX[axis][1],
@@ -430,4 +430,3 @@ pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> 
         n_params: 12 * nb,
     })
 }
-

@@ -225,4 +225,3 @@ fn worst(m: &DemoModel) -> f64 {
         .map(|t| t.max_abs_dg_mg)
         .fold(0.0, f64::max)
 }
-

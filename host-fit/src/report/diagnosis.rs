@@ -8,10 +8,7 @@ use crate::report::plot::{Plot, Series, PALETTE};
 
 /// The diagnosis report: residuals against time, temperature and position, before and
 /// after the findings.
-pub fn diagnosis_report(
-    rec: &Recording,
-    d: &Diagnosis,
-) -> Result<String> {
+pub fn diagnosis_report(rec: &Recording, d: &Diagnosis) -> Result<String> {
     let mut plots = Vec::new();
     for (tag, fit) in [("before", &d.baseline), ("after", &d.final_fit)] {
         let per_axis = |x: &dyn Fn(usize) -> f64| -> Vec<Series> {

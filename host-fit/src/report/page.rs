@@ -51,4 +51,3 @@ pub fn html(title: &str, intro: &str, sections: &[(String, String, Vec<Plot>)]) 
     h.push_str("</body>\n</html>\n");
     Ok(h)
 }
-

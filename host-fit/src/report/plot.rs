@@ -188,4 +188,3 @@ struct SeriesData<'a> {
     points: Vec<[f64; 2]>,
     errors: Option<&'a [f64]>,
 }
-

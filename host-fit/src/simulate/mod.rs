@@ -6,8 +6,8 @@ pub mod config;
 pub mod unit;
 
 pub use config::{
-    parse_config, Chamber, Curvature, Effects, Fixture, PerAxis, Schedule, Sensor, SimConfig,
-    Stop, Unit, Warmup,
+    parse_config, Chamber, Curvature, Effects, Fixture, PerAxis, Schedule, Sensor, SimConfig, Stop,
+    Unit, Warmup,
 };
 pub use unit::{TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
 
@@ -295,8 +295,16 @@ impl RecordingWriter {
             cfg.unit.serial, cfg.t0_c, cfg.seed
         );
         let mut csv = csv::Writer::from_writer(Vec::new());
-        csv.write_record(["t_s", "position", "temp_c", "chamber_c", "ux_v", "uy_v", "uz_v"])
-            .map_err(Self::err)?;
+        csv.write_record([
+            "t_s",
+            "position",
+            "temp_c",
+            "chamber_c",
+            "ux_v",
+            "uy_v",
+            "uz_v",
+        ])
+        .map_err(Self::err)?;
         Ok(RecordingWriter { head, csv, rows: 0 })
     }
 

@@ -1,0 +1,69 @@
+//! The README's quoted figures are the ones the commands produce today: every block
+//! marked `<!-- figure: ID -->` in README.md is compared, line by line, with the output
+//! of the command that produces it (`tests::figures`). A change of behaviour that moves
+//! a figure fails here until the README says the new one.
+use tests::{figures, repo};
+
+/// The fenced block right after the marker `<!-- figure: id -->`.
+fn block(readme: &str, id: &str) -> String {
+    let marker = format!("<!-- figure: {id} -->");
+    let at = readme
+        .find(&marker)
+        .unwrap_or_else(|| panic!("README.md has no `{marker}`"));
+    let mut lines = readme[at + marker.len()..]
+        .lines()
+        .skip_while(|l| !l.starts_with("```"))
+        .skip(1);
+    let body: Vec<&str> = lines.by_ref().take_while(|l| *l != "```").collect();
+    body.join("\n")
+}
+
+fn same(id: &str, want: &str) {
+    let readme = std::fs::read_to_string(repo().join("README.md")).unwrap();
+    let have = block(&readme, id);
+    let norm = |s: &str| {
+        s.lines()
+            .map(str::trim_end)
+            .collect::<Vec<_>>()
+            .join("\n")
+            .trim()
+            .to_string()
+    };
+    assert_eq!(
+        norm(&have),
+        norm(want),
+        "README.md's figure `{id}` is not what the command gives today; update the README (or the regression):\n--- README\n{have}\n--- now\n{want}"
+    );
+}
+
+#[test]
+fn demo_table() {
+    same("demo", &figures::demo_table());
+}
+
+#[test]
+fn golden_table3() {
+    same("golden", &figures::golden_table3().1);
+}
+
+#[test]
+fn physics_blob() {
+    same("physics-blob", &figures::physics_blob().2);
+}
+
+#[test]
+fn cats_tag_diagnosis() {
+    same("cats-tag", &figures::cats_tag());
+}
+
+#[test]
+fn blind_long_suite() {
+    same("blind-long", &figures::blind_long());
+}
+
+#[test]
+fn the_check_can_fail() {
+    let readme = "x\n<!-- figure: t -->\n```text\na  \nb\n```\n<!-- figure: e -->\n```\n```\n";
+    assert_eq!(block(readme, "t"), "a  \nb");
+    assert_eq!(block(readme, "e"), "");
+}

@@ -41,6 +41,7 @@ pub mod blob;
 pub mod compensate;
 pub mod crc;
 pub mod error;
+pub mod inflight;
 pub mod model;
 pub mod real;
 pub mod temperature;

@@ -4,8 +4,7 @@
 //! within 3 sigma and bring the residual to within 1.5x the noise.
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
-use crate::diagnose::design::Data;
-use crate::diagnose::design::EFFECT_IDS;
+use crate::diagnose::EFFECT_IDS;
 use crate::diagnose::diagnose;
 use crate::diagnose::findings::Finding;
 use crate::diagnose::metrics::normalized_rms;
@@ -193,12 +192,7 @@ pub fn run(case: &Case) -> Outcome {
     want.dedup();
     let exact = named == want && (!expect_ambiguity || !ambiguous.is_empty());
     let params_ok = params_within_3_sigma(&cfg, &d.findings);
-    let data = Data {
-        rec: &rec,
-        obs: d.obs.clone(),
-        noise: d.noise,
-        t0: rec.t0_c,
-    };
+    let data = d.data(&rec);
     let final_over_noise = normalized_rms(&data, &d.final_fit);
     Outcome {
         case: case.clone(),

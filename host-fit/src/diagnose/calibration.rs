@@ -1,63 +1,95 @@
 //! The extended model as a firmware calibration, for `diagnose --out`: the final model's
-//! coefficients as a piecewise-linear table and the in-flight physics terms it found.
-use crate::diagnose::design::Extra;
+//! coefficients as a piecewise-linear table and the in-flight physics terms it found, in
+//! exactly the form that was fitted (a form the firmware cannot apply is refused, never
+//! approximated).
+use crate::diagnose::effects::{Extra, Restart};
 use crate::diagnose::params::{Param, Term};
 use crate::diagnose::Diagnosis;
+use crate::error::{HostError, Result};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
 
 impl Diagnosis {
-    /// The final model's value of a per-axis term (0 where it was not fitted).
-    fn term(&self, term: Term) -> [f64; 3] {
+    /// The final model's values of a per-axis term of extra `e` (0 where not fitted).
+    fn term(&self, e: usize, term: Term) -> [f64; 3] {
         let f = &self.final_fit;
         std::array::from_fn(|axis| {
             f.labels
                 .iter()
-                .position(|l| *l == Param::Effect { term, axis })
+                .position(|l| *l == Param::Effect { term, axis, extra: e })
                 .map(|j| f.x[j])
                 .unwrap_or(0.0)
         })
     }
 
-    /// The extended model as a firmware calibration: the final model's coefficients as a
-    /// piecewise-linear table (up to 16 points, which also carries a temp_curvature
-    /// finding), and the in-flight physics terms of the findings (fixture_error only
-    /// corrects the calibration, which the final fit already does).
-    pub fn calibration(&self, t0: f64) -> Calibration<f64> {
+    /// The in-flight terms in the firmware's form; `None` when there are none.
+    fn physics(&self) -> Result<Option<Physics<f64>>> {
         let dt = self.sample_period_s;
         let mut ph = Physics {
             sample_period_s: dt,
             lag_alpha: 1.0,
             rate: [0.0; 3],
-            rate_alpha: 1.0 - (-dt / 30.0f64).exp(),
+            rate_alpha: 1.0,
             hysteresis: [0.0; 3],
             hysteresis_threshold_c: 0.5,
-            hysteresis_initial: self.initial_direction,
+            hysteresis_initial: 0.0,
             k2: [0.0; 3],
             asymmetry: [0.0; 3],
             warmup: [0.0; 3],
             warmup_decay: 1.0,
         };
+        let refuse = |what: &str| {
+            Err(HostError::msg(format!(
+                "the fitted {what} cannot be flashed by this firmware's physics block; the blob would not compensate what was fitted"
+            )))
+        };
         let mut any = false;
-        for e in &self.final_fit.spec.extras {
-            any |= !matches!(e, Extra::Curvature(_) | Extra::Fixture(_));
-            match e {
-                Extra::Lag(tau) => ph.lag_alpha = 1.0 - (-dt / tau).exp(),
-                Extra::Rate => ph.rate = self.term(Term::Rate),
-                Extra::Hysteresis => ph.hysteresis = self.term(Term::Hysteresis),
-                Extra::K2 => ph.k2 = self.term(Term::K2),
-                Extra::Asymmetry => ph.asymmetry = self.term(Term::Asymmetry),
-                Extra::Warmup(tau) => {
-                    ph.warmup = self.term(Term::Warmup);
-                    ph.warmup_decay = (-dt / tau).exp();
+        for (e, x) in self.final_fit.spec.extras.iter().enumerate() {
+            any |= !matches!(x, Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(_));
+            match x {
+                Extra::Lag { taus } => {
+                    if taus.iter().any(|t| *t != taus[0] || t[1] > 0.0) {
+                        return refuse("thermal lag (per-axis or two-pole)");
+                    }
+                    ph.lag_alpha = crate::diagnose::regressors::alpha(dt, taus[0][0]);
                 }
-                Extra::Curvature(_) | Extra::Fixture(_) => {}
+                Extra::Rate { tau_s } => {
+                    ph.rate = self.term(e, Term::Rate);
+                    ph.rate_alpha = crate::diagnose::regressors::alpha(dt, *tau_s);
+                }
+                Extra::Hysteresis { threshold_c, initial, scale } => {
+                    if *scale {
+                        return refuse("hysteresis of the scale factors");
+                    }
+                    ph.hysteresis = self.term(e, Term::Hysteresis);
+                    ph.hysteresis_threshold_c = *threshold_c;
+                    ph.hysteresis_initial = *initial;
+                }
+                Extra::K2 => ph.k2 = self.term(e, Term::K2),
+                Extra::Asymmetry => ph.asymmetry = self.term(e, Term::Asymmetry),
+                Extra::Warmup { tau_s, restart } => {
+                    if ph.warmup != [0.0; 3] {
+                        return refuse("second warm-up time constant");
+                    }
+                    let _ = matches!(restart, Restart::Start);
+                    ph.warmup = self.term(e, Term::Warmup);
+                    ph.warmup_decay = (-dt / tau_s).exp();
+                }
+                Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(_) => {}
             }
         }
+        Ok(any.then_some(ph))
+    }
+
+    /// The extended model as a firmware calibration: the final model's coefficients as a
+    /// piecewise-linear table (up to 16 points, which also carries a temp_curvature
+    /// finding), and the in-flight physics terms (fixture_error only corrects the
+    /// calibration, which the final fit already does).
+    pub fn calibration(&self, t0: f64) -> Result<Calibration<f64>> {
         let (lo, hi) = (
             self.table.first().map(|r| r.0).unwrap_or(t0 - 1.0),
             self.table.last().map(|r| r.0).unwrap_or(t0 + 1.0),
         );
-        Calibration {
+        Ok(Calibration {
             t0_c: t0,
             t_min_c: lo,
             t_max_c: hi.max(lo + 1.0),
@@ -67,7 +99,7 @@ impl Diagnosis {
                 breakpoints: self.table.iter().map(|r| r.0).collect(),
                 values: self.table.iter().map(|r| r.1).collect(),
             },
-            physics: any.then_some(ph),
-        }
+            physics: self.physics()?,
+        })
     }
 }

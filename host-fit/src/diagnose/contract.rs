@@ -1,11 +1,15 @@
 //! The `at-diagnosis/1` JSON contract as typed structs (the text output is rendered from
-//! the same structs).
+//! the same structs). Fields beyond the first version: `floor`, `dispersion`, `quality`,
+//! `unexplained`, the verdict `unexplained`, and per finding `form`, `share`,
+//! `heldout_gain`.
 use crate::data::recording::Recording;
-use crate::diagnose::design::Data;
 use crate::diagnose::findings::{Ambiguity, Finding};
 use crate::diagnose::location::Hotspot;
-use crate::diagnose::metrics::{max_dg, normalized_rms, residual_rms};
+use crate::diagnose::metrics::{dispersion, max_dg, normalized_rms, residual_rms};
+use crate::diagnose::quality::QualityNote;
+use crate::diagnose::search::AT_FLOOR_RMS;
 use crate::diagnose::Diagnosis;
+use firmware_core::model::AXES;
 use serde::Serialize;
 
 /// The whole contract.
@@ -13,30 +17,70 @@ use serde::Serialize;
 pub struct Contract {
     /// Always `at-diagnosis/1`.
     pub format: &'static str,
-    /// Residual RMS expected from noise alone, per window (output units).
+    /// Residual RMS expected from the floor alone, per window (output units).
     pub noise_rms: f64,
-    /// Per-sample noise per axis (output units).
+    /// Per-sample noise per axis (output units; the baseline's scatter when the floor is
+    /// not measurable).
     pub noise_sigma_per_sample: [f64; 3],
     /// The recording's output unit.
     pub output_unit: String,
+    /// The error floor.
+    pub floor: FloorFigures,
+    /// Residual chi-square per degree of freedom in floor units (at least 1).
+    pub dispersion: Dispersion,
     /// The baseline model.
     pub baseline: ModelFigures,
-    /// Where the baseline residual exceeds the noise (at most 12 groups, worst first).
+    /// Where the baseline residual exceeds the floor (at most 12 groups, worst first).
     pub located: Vec<Hotspot>,
-    /// Accepted findings, in the order they were accepted.
+    /// Findings of the final joint model.
     pub findings: Vec<Finding>,
     /// Candidates the data cannot tell apart.
     pub ambiguous: Vec<Ambiguity>,
     /// What this recording cannot identify.
     pub not_identifiable: Vec<String>,
+    /// Notes on the data (spikes, gaps, coloured noise, sensor against chamber, ...).
+    pub quality: Vec<QualityNote>,
+    /// What the final model leaves above the floor, located; none at the floor.
+    pub unexplained: Option<Unexplained>,
     /// The final model.
     #[serde(rename = "final")]
     pub final_model: FinalFigures,
-    /// `none`, `explained` or `partly_explained`.
+    /// `none` (at the floor, nothing found), `explained` (findings bring it to the
+    /// floor), `partly_explained` (findings, but above the floor), `unexplained` (above
+    /// the floor, nothing in the catalogue explains it).
     pub verdict: &'static str,
     /// The blob written with `--out`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub blob: Option<BlobNote>,
+}
+
+/// The floor per axis.
+#[derive(Debug, Clone, Serialize)]
+pub struct FloorFigures {
+    /// Measured inside the dwells (false: the baseline's scatter stands in).
+    pub measured: bool,
+    /// Per axis x, y, z.
+    pub axes: Vec<AxisFloorFigures>,
+}
+
+/// The floor of one axis: `v(n) = white^2 / n + flat^2` for a mean of n samples.
+#[derive(Debug, Clone, Serialize)]
+pub struct AxisFloorFigures {
+    /// Axis.
+    pub axis: &'static str,
+    /// White part, per sample (output units).
+    pub white_sigma: f64,
+    /// Part that does not average down (output units).
+    pub flat_sigma: f64,
+}
+
+/// Dispersions.
+#[derive(Debug, Clone, Serialize)]
+pub struct Dispersion {
+    /// Of the baseline.
+    pub baseline: f64,
+    /// Of the final model.
+    pub final_model: f64,
 }
 
 /// Figures of the baseline model.
@@ -46,22 +90,33 @@ pub struct ModelFigures {
     pub temperature_model: String,
     /// Residual RMS (output units).
     pub residual_rms: f64,
-    /// Residual RMS in noise units.
+    /// Residual RMS in floor units.
     pub residual_rms_over_noise: f64,
     /// Worst |dg| in the static windows, mg.
     pub max_abs_dg_mg: f64,
 }
 
+/// What stays above the floor.
+#[derive(Debug, Clone, Serialize)]
+pub struct Unexplained {
+    /// Final residual RMS in floor units.
+    pub residual_rms_over_noise: f64,
+    /// Where it sits (at most 12 groups, worst first).
+    pub located: Vec<Hotspot>,
+}
+
 /// Figures of the final model.
 #[derive(Debug, Clone, Serialize)]
 pub struct FinalFigures {
+    /// The effects in it, with their forms.
+    pub model: Vec<String>,
     /// Residual RMS (output units).
     pub residual_rms: f64,
-    /// Residual RMS in noise units.
+    /// Residual RMS in floor units.
     pub residual_rms_over_noise: f64,
     /// Worst |dg| in the static windows, mg.
     pub max_abs_dg_mg: f64,
-    /// Held-out chi-square of the baseline.
+    /// Held-out chi-square of the baseline (every time chunk predicted without its fold).
     pub heldout_chi2_before: f64,
     /// Held-out chi-square of the final model.
     pub heldout_chi2_after: f64,
@@ -81,36 +136,56 @@ pub struct BlobNote {
 }
 
 impl Diagnosis {
+    fn floor_figures(&self) -> FloorFigures {
+        FloorFigures {
+            measured: self.floor_measured,
+            axes: (0..3)
+                .map(|i| {
+                    let (a, b) = self.floor.axes[i].model().unwrap_or((f64::NAN, f64::NAN));
+                    AxisFloorFigures {
+                        axis: AXES[i],
+                        white_sigma: a.sqrt(),
+                        flat_sigma: b.sqrt(),
+                    }
+                })
+                .collect(),
+        }
+    }
+
+    /// The verdict (see [`Contract::verdict`]).
+    pub fn verdict(&self, at_floor: bool) -> &'static str {
+        match (self.findings.is_empty() && self.ambiguous.is_empty(), at_floor) {
+            (true, true) => "none",
+            (true, false) => "unexplained",
+            (false, true) => "explained",
+            (false, false) => "partly_explained",
+        }
+    }
+
     /// The contract of this diagnosis of `rec`.
     pub fn contract(&self, rec: &Recording) -> Contract {
-        let verdict = if self.findings.is_empty() && self.ambiguous.is_empty() {
-            "none"
-        } else if residual_rms(&self.final_fit) <= 1.5 * self.noise_rms {
-            "explained"
-        } else {
-            "partly_explained"
-        };
-        let data = Data {
-            rec,
-            obs: self.obs.clone(),
-            noise: self.noise,
-            t0: rec.t0_c,
-        };
-        let b = &self.baseline;
+        let data = self.data(rec);
+        let (b, f) = (&self.baseline, &self.final_fit);
+        let final_rms = normalized_rms(&data, f);
+        let sigma: [f64; 3] = std::array::from_fn(|i| match self.floor.axes[i].sample_sigma() {
+            Some(s) if self.floor_measured => s,
+            _ => (1.0 / self.w[i]).sqrt(),
+        });
         Contract {
             format: "at-diagnosis/1",
             noise_rms: self.noise_rms,
-            noise_sigma_per_sample: self.noise.sigma,
+            noise_sigma_per_sample: sigma,
             output_unit: rec.output_unit.clone(),
+            floor: self.floor_figures(),
+            dispersion: Dispersion {
+                baseline: dispersion(&data, b),
+                final_model: dispersion(&data, f),
+            },
             baseline: ModelFigures {
                 temperature_model: format!(
                     "{}{}",
                     b.spec.basis.describe(),
-                    if b.spec.cross {
-                        ""
-                    } else {
-                        ", cross-sensitivities fixed at 0"
-                    }
+                    if b.spec.cross { "" } else { ", cross-sensitivities fixed at 0" }
                 ),
                 residual_rms: residual_rms(b),
                 residual_rms_over_noise: normalized_rms(&data, b),
@@ -120,14 +195,20 @@ impl Diagnosis {
             findings: self.findings.clone(),
             ambiguous: self.ambiguous.clone(),
             not_identifiable: self.not_identifiable.clone(),
+            quality: self.quality.clone(),
+            unexplained: (!self.unexplained.is_empty()).then(|| Unexplained {
+                residual_rms_over_noise: final_rms,
+                located: self.unexplained.iter().take(12).cloned().collect(),
+            }),
             final_model: FinalFigures {
-                residual_rms: residual_rms(&self.final_fit),
-                residual_rms_over_noise: normalized_rms(&data, &self.final_fit),
-                max_abs_dg_mg: max_dg(&data, &self.final_fit),
+                model: f.spec.extras.iter().map(|e| format!("{}: {}", e.id(), e.form())).collect(),
+                residual_rms: residual_rms(f),
+                residual_rms_over_noise: final_rms,
+                max_abs_dg_mg: max_dg(&data, f),
                 heldout_chi2_before: b.heldout,
-                heldout_chi2_after: self.final_fit.heldout,
+                heldout_chi2_after: f.heldout,
             },
-            verdict,
+            verdict: self.verdict(final_rms <= AT_FLOOR_RMS),
             blob: None,
         }
     }
@@ -138,27 +219,36 @@ impl Contract {
     pub fn text(&self) -> String {
         let b = &self.baseline;
         let mut s = format!(
-            "noise (in-dwell, per window): {:.3e}\nbaseline {}: residual {:.3e} ({:.1}x noise), max |dg| {:.3} mg\n",
-            self.noise_rms, b.temperature_model, b.residual_rms, b.residual_rms_over_noise, b.max_abs_dg_mg
+            "floor (window means, {}): {:.3e} {}\nbaseline {}: residual {:.3e} ({:.1}x the floor), max |dg| {:.3} mg\n",
+            if self.floor.measured { "measured in the dwells" } else { "the baseline's scatter: not measurable" },
+            self.noise_rms,
+            self.output_unit,
+            b.temperature_model,
+            b.residual_rms,
+            b.residual_rms_over_noise,
+            b.max_abs_dg_mg
         );
+        for q in &self.quality {
+            s.push_str(&format!("data: {}: {}\n", q.kind, q.text));
+        }
         if !self.located.is_empty() {
-            s.push_str("where the baseline residual exceeds noise (RMS in noise units):\n");
+            s.push_str("where the baseline residual exceeds the floor (RMS in floor units):\n");
         }
         for x in self.located.iter().take(8) {
-            s.push_str(&format!(
-                "  {:<12} {:<22} axis {}  {:.1}x  (mean {:.3e}, {} windows)\n",
-                x.group, x.value, x.axis, x.rms_sigma, x.mean, x.count
-            ));
+            s.push_str(&hotspot_line(x));
         }
         for n in &self.not_identifiable {
             s.push_str(&format!("not identifiable: {n}\n"));
         }
         for x in &self.findings {
             s.push_str(&format!(
-                "finding: {} on axes {} (dBIC {:.0})\n",
+                "finding: {} on axes {} ({}; dBIC {:.0}, {:.0}% of the excess, held-out gain {:.1} per parameter)\n",
                 x.effect,
                 serde_json::to_string(&x.axes).unwrap_or_default(),
-                x.delta_bic
+                x.form,
+                x.delta_bic,
+                100.0 * x.share,
+                x.heldout_gain
             ));
             for (k, v) in &x.parameters {
                 let u = x.uncertainties.get(k).copied().unwrap_or(f64::NAN);
@@ -173,11 +263,33 @@ impl Contract {
                 x.needed
             ));
         }
+        if let Some(u) = &self.unexplained {
+            s.push_str(&format!(
+                "unexplained: the final residual is {:.1}x the floor; nothing in the catalogue explains it here:\n",
+                u.residual_rms_over_noise
+            ));
+            for x in u.located.iter().take(6) {
+                s.push_str(&hotspot_line(x));
+            }
+        }
         let f = &self.final_model;
         s.push_str(&format!(
-            "final: residual {:.3e} ({:.1}x noise), max |dg| {:.3} mg; held-out chi2 {:.0} -> {:.0}\nverdict: {}",
+            "final: residual {:.3e} ({:.1}x the floor), max |dg| {:.3} mg; held-out chi2 {:.0} -> {:.0}\nverdict: {}",
             f.residual_rms, f.residual_rms_over_noise, f.max_abs_dg_mg, f.heldout_chi2_before, f.heldout_chi2_after, self.verdict
         ));
         s
     }
+}
+
+fn hotspot_line(x: &Hotspot) -> String {
+    format!(
+        "  {:<12} {:<24} axis {}  {:.1}x  ({:.0}% of the sum of squares, mean {:.3e}, {} windows)\n",
+        x.group,
+        x.value,
+        x.axis,
+        x.rms_sigma,
+        100.0 * x.share,
+        x.mean,
+        x.count
+    )
 }

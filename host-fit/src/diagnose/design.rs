@@ -1,74 +1,14 @@
 //! What the diagnosis fits: a baseline (per axis the temperature models of the K row and
 //! offset) plus candidate effects as extra columns, all three axes in one weighted least
-//! squares, with the chi-square of held-out folds.
+//! squares (weights from the error floor), with the chi-square of held-out time chunks.
 use crate::data::recording::Recording;
-use crate::diagnose::observations::{lagged_temps, DObs};
+use crate::diagnose::effects::{Extra, Restart};
+use crate::diagnose::observations::{window_means, DObs};
 use crate::diagnose::params::{Param, Term};
+use crate::diagnose::regressors::{self, Events};
 use crate::fit::lsq::Normal;
-use crate::fit::noise::Noise;
 use crate::fit::temperature::Basis;
 use nalgebra::{DMatrix, DVector};
-
-/// The catalogue's effect ids, in the order candidates are tried.
-pub const EFFECT_IDS: [&str; 8] = [
-    "temp_curvature",
-    "thermal_lag",
-    "temp_rate",
-    "hysteresis",
-    "nonlinearity_k2",
-    "scale_asymmetry",
-    "fixture_error",
-    "warmup_drift",
-];
-
-/// An effect added to the baseline model.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Extra {
-    /// `temp_curvature`: the offsets' temperature basis replaced by a fine piecewise-linear one.
-    Curvature(Vec<f64>),
-    /// `thermal_lag`: the model evaluated at the low-passed temperature.
-    Lag(f64),
-    /// `temp_rate`: U0_i += r_i dT/dt.
-    Rate,
-    /// `hysteresis`: U0_i += h_i dir / 2.
-    Hysteresis,
-    /// `nonlinearity_k2`: U_i += K2_i a_i^2.
-    K2,
-    /// `scale_asymmetry`: U_i += c_i |a_i| (c_i = K_ii delta_i).
-    Asymmetry,
-    /// `warmup_drift`: U0_i += d_i exp(-t_since / tau).
-    Warmup(f64),
-    /// `fixture_error`: position p rotated by two small angles.
-    Fixture(usize),
-}
-
-impl Extra {
-    /// The catalogue id.
-    pub fn id(&self) -> &'static str {
-        match self {
-            Extra::Curvature(_) => "temp_curvature",
-            Extra::Lag(_) => "thermal_lag",
-            Extra::Rate => "temp_rate",
-            Extra::Hysteresis => "hysteresis",
-            Extra::K2 => "nonlinearity_k2",
-            Extra::Asymmetry => "scale_asymmetry",
-            Extra::Warmup(_) => "warmup_drift",
-            Extra::Fixture(_) => "fixture_error",
-        }
-    }
-
-    /// The per-axis term this effect adds, if it adds one column per axis.
-    pub fn term(&self) -> Option<Term> {
-        match self {
-            Extra::Rate => Some(Term::Rate),
-            Extra::Hysteresis => Some(Term::Hysteresis),
-            Extra::K2 => Some(Term::K2),
-            Extra::Asymmetry => Some(Term::Asymmetry),
-            Extra::Warmup(_) => Some(Term::Warmup),
-            _ => None,
-        }
-    }
-}
 
 /// What is fitted.
 #[derive(Debug, Clone, PartialEq)]
@@ -81,29 +21,62 @@ pub struct Spec {
     pub extras: Vec<Extra>,
 }
 
+impl Spec {
+    /// The spec without its extra number `e`.
+    pub fn without(&self, e: usize) -> Spec {
+        let mut s = self.clone();
+        s.extras.remove(e);
+        s
+    }
+
+    /// The spec with `extra` added.
+    pub fn with(&self, extra: Extra) -> Spec {
+        let mut s = self.clone();
+        s.extras.push(extra);
+        s
+    }
+
+    /// Structural unknowns profiled, over all extras.
+    pub fn structural(&self) -> usize {
+        self.extras.iter().map(Extra::structural).sum()
+    }
+}
+
 /// A fitted spec.
 #[derive(Debug, Clone)]
 pub struct Fit {
     /// What was fitted.
     pub spec: Spec,
-    /// Chi-square (weights n / sigma^2).
+    /// Chi-square (weights from the floor).
     pub chi2: f64,
-    /// Number of parameters.
+    /// Number of linear parameters.
     pub k: usize,
     /// Parameters.
     pub x: DVector<f64>,
-    /// Covariance of the parameters (unscaled).
-    pub cov: DMatrix<f64>,
+    /// Covariance of the parameters at unit dispersion (None when only profiling).
+    pub cov: Option<DMatrix<f64>>,
+    /// Delete-one-chunk jackknife standard error of every parameter (None when only
+    /// profiling): it holds residuals correlated in time, which the covariance does not.
+    pub jackknife: Option<Vec<f64>>,
     /// What each parameter is.
     pub labels: Vec<Param>,
     /// Residual per observation and axis (output units).
     pub resid: Vec<[f64; 3]>,
-    /// Model K(T) at each observation (for fixture-error columns and dg).
+    /// Model K(T) at each observation (row i at axis i's temperature), bends included.
     pub k_at: Vec<[[f64; 3]; 3]>,
-    /// Model U0(T) at each observation.
+    /// Model U0(T) at each observation, bends included.
     pub u0_at: Vec<[f64; 3]>,
-    /// Chi-square of the held-out halves (each fitted on the other).
+    /// Held-out chi-square: every time chunk predicted by the fit without it.
     pub heldout: f64,
+    /// Held-out chi-square per observation row (3 per observation).
+    pub heldout_rows: Vec<f64>,
+}
+
+impl Fit {
+    /// All parameters, linear and structural.
+    pub fn params(&self) -> usize {
+        self.k + self.spec.structural()
+    }
 }
 
 /// The data of a diagnosis.
@@ -112,246 +85,263 @@ pub struct Data<'a> {
     pub rec: &'a Recording,
     /// Observations.
     pub obs: Vec<DObs>,
-    /// Noise.
-    pub noise: Noise,
+    /// Rows left out as spikes (sorted).
+    pub spikes: Vec<usize>,
+    /// Weight of every residual row (observation x axis): 1 / floor variance.
+    pub w: Vec<f64>,
     /// Reference temperature.
     pub t0: f64,
+    /// Gaps and handling.
+    pub events: Events,
+    /// Each observation's temperature rate (the firmware's estimate, 60 s), C/s: where
+    /// the temperature moves (for locating and for the static dg).
+    pub rate: Vec<f64>,
+    /// Each observation's direction of the last change of more than 0.5 C (0 before
+    /// the first), for locating.
+    pub dir: Vec<f64>,
 }
 
-/// Sparse columns: (row, value) pairs, rows being observation x axis.
-type Columns = Vec<Vec<(usize, f64)>>;
-/// A design matrix, the observations and what each column is.
-type Design = (DMatrix<f64>, DVector<f64>, Vec<Param>);
+/// One row of the design: `(column, value)` of its nonzero entries.
+type Row = Vec<(usize, f64)>;
 
-impl Data<'_> {
-    fn weights(&self) -> Vec<f64> {
-        let mut w = Vec::with_capacity(3 * self.obs.len());
-        for o in &self.obs {
-            for i in 0..3 {
-                w.push(o.n as f64 / (self.noise.sigma[i] * self.noise.sigma[i]));
+/// A built design: rows (3 per observation), labels, and each observation's temperature
+/// per axis.
+struct Design {
+    rows: Vec<Row>,
+    labels: Vec<Param>,
+    temps: Vec<[f64; 3]>,
+}
+
+impl Design {
+    fn push_column(&mut self, label: Param, entries: impl IntoIterator<Item = (usize, f64)>) {
+        let col = self.labels.len();
+        self.labels.push(label);
+        for (r, v) in entries {
+            if v != 0.0 {
+                self.rows[r].push((col, v));
             }
         }
-        w
+    }
+}
+
+impl Data<'_> {
+    /// Residual rows.
+    pub fn n_rows(&self) -> usize {
+        3 * self.obs.len()
     }
 
-    /// The temperature each observation's model is evaluated at: the sensor's, or its
-    /// low-pass with the thermal-lag time constant of the spec.
-    fn model_temps(&self, spec: &Spec) -> Vec<f64> {
-        match spec.extras.iter().find_map(|e| match e {
-            Extra::Lag(t) => Some(*t),
+    /// Window means of a per-row series.
+    fn means(&self, series: &[f64]) -> Vec<f64> {
+        window_means(&self.obs, series, &self.spikes)
+    }
+
+    /// Each observation's temperature per axis: the sensor's, or the element's through
+    /// the spec's thermal lag.
+    fn temps(&self, spec: &Spec) -> Vec<[f64; 3]> {
+        let lag = spec.extras.iter().find_map(|e| match e {
+            Extra::Lag { taus } => Some(taus),
             _ => None,
-        }) {
-            Some(tau) => lagged_temps(self.rec, &self.obs, tau),
-            None => self.obs.iter().map(|o| o.temp_c).collect(),
+        });
+        match lag {
+            Some(taus) => {
+                let per_axis = regressors::lagged(self.rec, taus).map(|s| self.means(&s));
+                (0..self.obs.len())
+                    .map(|r| std::array::from_fn(|i| per_axis[i][r]))
+                    .collect()
+            }
+            None => self.obs.iter().map(|o| [o.temp_c; 3]).collect(),
         }
     }
 
     /// The baseline's columns: per axis, K row (or scale only) and offset times the
-    /// temperature basis.
-    fn baseline_columns(&self, spec: &Spec, temps: &[f64]) -> (Columns, Vec<Param>) {
-        let nb = spec.basis.len();
-        let phis: Vec<Vec<f64>> = temps.iter().map(|t| spec.basis.eval(self.t0, *t)).collect();
-        // temp_curvature bends the offsets: their basis becomes a fine piecewise-linear one
+    /// temperature basis (the offsets' basis is the fine one of a `Curvature` extra).
+    fn baseline(&self, spec: &Spec, d: &mut Design) {
         let obasis = offset_basis(spec);
-        let ophis: Vec<Vec<f64>> = temps.iter().map(|t| obasis.eval(self.t0, *t)).collect();
-        let (mut cols, mut labels) = (Vec::new(), Vec::new());
         for i in 0..3 {
-            let inputs: Vec<usize> = if spec.cross {
-                vec![0, 1, 2, 3]
-            } else {
-                vec![i, 3]
-            };
+            let phis: Vec<Vec<f64>> = d.temps.iter().map(|t| spec.basis.eval(self.t0, t[i])).collect();
+            let ophis: Vec<Vec<f64>> = d.temps.iter().map(|t| obasis.eval(self.t0, t[i])).collect();
+            let inputs: Vec<usize> = if spec.cross { vec![0, 1, 2] } else { vec![i] };
             for j in inputs {
-                let (count, ph) = if j == 3 {
-                    (obasis.len(), &ophis)
-                } else {
-                    (nb, &phis)
-                };
-                for k in 0..count {
-                    let mut c = Vec::with_capacity(self.obs.len());
-                    for (r, o) in self.obs.iter().enumerate() {
-                        let g = if j == 3 { 1.0 } else { o.a[j] };
-                        if g != 0.0 {
-                            c.push((3 * r + i, g * ph[r][k]));
+                for k in 0..spec.basis.len() {
+                    let col = self.obs.iter().enumerate().map(|(r, o)| (3 * r + i, o.a[j] * phis[r][k]));
+                    d.push_column(Param::K { i, j, k }, col.collect::<Vec<_>>());
+                }
+            }
+            for k in 0..obasis.len() {
+                let col = (0..self.obs.len()).map(|r| (3 * r + i, ophis[r][k]));
+                d.push_column(Param::U0 { i, k }, col.collect::<Vec<_>>());
+            }
+        }
+    }
+
+    /// A per-axis effect column for every axis: `value(observation, axis)`.
+    fn per_axis(&self, d: &mut Design, term: Term, extra: usize, value: &dyn Fn(usize, usize) -> f64) {
+        for axis in 0..3 {
+            let col: Vec<(usize, f64)> = (0..self.obs.len()).map(|r| (3 * r + axis, value(r, axis))).collect();
+            d.push_column(Param::Effect { term, axis, extra }, col);
+        }
+    }
+
+    /// The restart rows of a warm-up clock.
+    fn restarts(&self, restart: Restart) -> Vec<usize> {
+        let mut v = match restart {
+            Restart::Start => Vec::new(),
+            Restart::Gaps => self.events.gaps.clone(),
+            Restart::Handling => [self.events.gaps.clone(), self.events.handling.clone()].concat(),
+        };
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
+
+    /// The columns of extra number `e`; `base` gives K(T) for fixture columns.
+    fn extra(&self, e: usize, extra: &Extra, d: &mut Design, base: Option<&Fit>) {
+        let obs = &self.obs;
+        match extra {
+            Extra::Curvature(_) | Extra::Lag { .. } => {}
+            Extra::Bend { knot_c } => {
+                let h: Vec<[f64; 3]> = d.temps.iter().map(|t| t.map(|v| (v - knot_c).max(0.0))).collect();
+                self.per_axis(d, Term::BendOffset, e, &|r, i| h[r][i]);
+                self.per_axis(d, Term::BendScale, e, &|r, i| obs[r].a[i] * h[r][i]);
+            }
+            Extra::Rate { tau_s } => {
+                let m = self.means(&regressors::rates(self.rec, *tau_s));
+                self.per_axis(d, Term::Rate, e, &|r, _| m[r]);
+            }
+            Extra::Hysteresis { threshold_c, initial, scale } => {
+                let m = self.means(&regressors::directions(self.rec, *threshold_c, *initial));
+                self.per_axis(d, Term::Hysteresis, e, &|r, _| m[r] / 2.0);
+                if *scale {
+                    self.per_axis(d, Term::HysteresisScale, e, &|r, i| obs[r].a[i] * m[r] / 2.0);
+                }
+            }
+            Extra::K2 => self.per_axis(d, Term::K2, e, &|r, i| obs[r].a[i] * obs[r].a[i]),
+            Extra::Asymmetry => self.per_axis(d, Term::Asymmetry, e, &|r, i| obs[r].a[i].abs()),
+            Extra::Warmup { tau_s, restart } => {
+                let m = self.means(&regressors::warmup(self.rec, *tau_s, &self.restarts(*restart)));
+                self.per_axis(d, Term::Warmup, e, &|r, _| m[r]);
+            }
+            Extra::Fixture(p) => {
+                let Some(b) = base else { return };
+                for (n, dirv) in fixture_directions(self.rec.positions.vector(*p)).iter().enumerate() {
+                    let mut col = Vec::new();
+                    for (r, o) in obs.iter().enumerate().filter(|(_, o)| o.position == *p) {
+                        let _ = o;
+                        for (i, row) in b.k_at[r].iter().enumerate() {
+                            col.push((3 * r + i, row[0] * dirv[0] + row[1] * dirv[1] + row[2] * dirv[2]));
                         }
                     }
-                    cols.push(c);
-                    labels.push(if j == 3 {
-                        Param::U0 { i, k }
-                    } else {
-                        Param::K { i, j, k }
-                    });
+                    d.push_column(Param::FixtureAngle { n: n as u8 + 1, extra: e }, col);
                 }
             }
         }
-        (cols, labels)
     }
 
-    /// The two fixture-error columns of position `p`: K(T) times the two directions
-    /// perpendicular to its vector.
-    fn fixture_columns(&self, p: usize, base: &Fit) -> Columns {
-        let a = self.rec.positions.vector(p);
-        let helper = if a[0].abs() < 0.9 {
-            [1.0, 0.0, 0.0]
+    fn design(&self, spec: &Spec, base: Option<&Fit>) -> Design {
+        let mut d = Design {
+            rows: vec![Vec::new(); self.n_rows()],
+            labels: Vec::new(),
+            temps: self.temps(spec),
+        };
+        self.baseline(spec, &mut d);
+        for (e, x) in spec.extras.iter().enumerate() {
+            self.extra(e, x, &mut d, base);
+        }
+        d
+    }
+
+    /// Fit a spec; `None` when the data do not determine it. With `full`, also the
+    /// covariance and the held-out chi-square (profiling needs neither). A spec with
+    /// fixture errors linearises them around `base`'s K(T) (or the spec's own without them).
+    pub fn fit(&self, spec: &Spec, base: Option<&Fit>, full: bool) -> Option<Fit> {
+        let own_base;
+        let base = match base {
+            Some(b) => Some(b),
+            None if spec.extras.iter().any(|e| matches!(e, Extra::Fixture(_))) => {
+                let mut s = spec.clone();
+                s.extras.retain(|e| !matches!(e, Extra::Fixture(_)));
+                own_base = self.fit(&s, None, false)?;
+                Some(&own_base)
+            }
+            None => None,
+        };
+        let d = self.design(spec, base);
+        let p = d.labels.len();
+        let b: Vec<f64> = self.obs.iter().flat_map(|o| o.u).collect();
+        let n_chunks = self.obs.iter().map(|o| o.chunk + 1).max().unwrap_or(1);
+        let mut chunks: Vec<Normal> = (0..n_chunks).map(|_| Normal::new(p)).collect();
+        for (r, row) in d.rows.iter().enumerate() {
+            chunks[self.obs[r / 3].chunk].add_sparse(row, b[r], self.w[r]);
+        }
+        let total = chunks.iter().fold(Normal::new(p), |a, f| a.plus(f));
+        let predict = |x: &DVector<f64>, r: usize| d.rows[r].iter().map(|(c, v)| v * x[*c]).sum::<f64>();
+        let (x, cov) = if full {
+            let s = total.solve()?;
+            (s.x, Some(s.cov))
         } else {
-            [0.0, 1.0, 0.0]
+            (total.solve_x()?, None)
         };
-        let e1 = normalize(cross(a, helper));
-        let e2 = cross(a, e1);
-        [e2, e1.map(|v| -v)]
+        let resid_rows: Vec<f64> = (0..b.len()).map(|r| b[r] - predict(&x, r)).collect();
+        let chi2 = resid_rows.iter().zip(&self.w).map(|(r, w)| w * r * r).sum();
+        // each chunk predicted by the fit without it (a chunk the others cannot predict
+        // keeps its in-sample residual); the same solutions give the jackknife
+        let mut heldout_rows = vec![0.0; b.len()];
+        let mut jackknife = None;
+        if full {
+            let sols: Vec<DVector<f64>> = chunks
+                .iter()
+                .map(|c| total.minus(c).solve_x().unwrap_or_else(|| x.clone()))
+                .collect();
+            for (r, h) in heldout_rows.iter_mut().enumerate() {
+                let e = b[r] - predict(&sols[self.obs[r / 3].chunk], r);
+                *h = self.w[r] * e * e;
+            }
+            jackknife = Some(jackknife_sigma(&sols, &x));
+        }
+        let (k_at, u0_at): (Vec<_>, Vec<_>) = d
+            .temps
             .iter()
-            .map(|dirv| {
-                let mut c = Vec::new();
-                for (r, o) in self.obs.iter().enumerate() {
-                    if o.position == p {
-                        let kk = base.k_at[r];
-                        for (i, row) in kk.iter().enumerate() {
-                            c.push((
-                                3 * r + i,
-                                row[0] * dirv[0] + row[1] * dirv[1] + row[2] * dirv[2],
-                            ));
-                        }
-                    }
-                }
-                c
-            })
-            .collect()
-    }
-
-    /// The value of a per-axis effect term at observation `o`, axis `i`.
-    fn term_value(e: &Extra, o: &DObs, i: usize) -> f64 {
-        match e {
-            Extra::Rate => o.dtdt,
-            Extra::Hysteresis => o.dir / 2.0,
-            Extra::K2 => o.a[i] * o.a[i],
-            Extra::Asymmetry => o.a[i].abs(),
-            Extra::Warmup(tau) => (-o.since_event_s / tau).exp(),
-            _ => 0.0,
-        }
-    }
-
-    /// Build the stacked design (rows: obs x axis) for `spec`; `base` provides K(T) for
-    /// fixture columns.
-    fn design(&self, spec: &Spec, temps: &[f64], base: Option<&Fit>) -> Design {
-        let (mut cols, mut labels) = self.baseline_columns(spec, temps);
-        for e in &spec.extras {
-            match e {
-                Extra::Curvature(_) | Extra::Lag(_) => {}
-                Extra::Fixture(p) => {
-                    let Some(b) = base else { continue };
-                    cols.extend(self.fixture_columns(*p, b));
-                    labels.extend([Param::FixtureAngle(1), Param::FixtureAngle(2)]);
-                }
-                _ => {
-                    let Some(term) = e.term() else { continue };
-                    for axis in 0..3 {
-                        let c = self
-                            .obs
-                            .iter()
-                            .enumerate()
-                            .map(|(r, o)| (3 * r + axis, Self::term_value(e, o, axis)))
-                            .filter(|(_, v)| *v != 0.0)
-                            .collect();
-                        cols.push(c);
-                        labels.push(Param::Effect { term, axis });
-                    }
-                }
-            }
-        }
-        let mut a = DMatrix::zeros(3 * self.obs.len(), cols.len());
-        for (j, c) in cols.iter().enumerate() {
-            for (r, v) in c {
-                a[(*r, j)] = *v;
-            }
-        }
-        let b = DVector::from_iterator(3 * self.obs.len(), self.obs.iter().flat_map(|o| o.u));
-        (a, b, labels)
-    }
-
-    /// Fit a spec; `None` when the data do not determine it.
-    pub fn fit(&self, spec: &Spec, base: Option<&Fit>) -> Option<Fit> {
-        let temps = self.model_temps(spec);
-        let (a, b, labels) = self.design(spec, &temps, base);
-        let w = self.weights();
-        let dbg = std::env::var_os("HOSTFIT_DEBUG").is_some();
-        // the normal equations of the two held-out folds; the full fit's are their sum
-        let in_fold = |fold: usize| move |r: usize| self.obs[r / 3].fold == fold;
-        let folds = [0, 1].map(|fold| Normal::of_rows(&a, &b, &w, in_fold(fold)));
-        let Some(s) = folds[0].plus(&folds[1]).solve() else {
-            if dbg {
-                eprintln!("  rank deficient: {:?}", spec.extras.last());
-            }
-            return None;
-        };
-        let r = &b - &a * &s.x;
-        let chi2: f64 = r.iter().zip(&w).map(|(r, w)| w * r * r).sum();
-        // held out: each fold fitted alone, its chi2 on the other fold
-        let mut heldout = 0.0;
-        for (fold, eq) in folds.iter().enumerate() {
-            let Some(sf) = eq.solve() else {
-                if dbg {
-                    eprintln!("  fold {fold} rank deficient: {:?}", spec.extras.last());
-                }
-                return None;
-            };
-            let rf = &b - &a * &sf.x;
-            heldout += (0..rf.len())
-                .filter(|&k| !in_fold(fold)(k))
-                .map(|k| w[k] * rf[k] * rf[k])
-                .sum::<f64>();
-        }
-        let resid = (0..self.obs.len())
-            .map(|o| [r[3 * o], r[3 * o + 1], r[3 * o + 2]])
-            .collect();
-        let (k_at, u0_at) = self.coefficients_at(spec, &s.x, &labels, &temps);
+            .map(|t| static_at(spec, &d.labels, &x, self.t0, *t))
+            .unzip();
         Some(Fit {
             spec: spec.clone(),
             chi2,
-            k: s.x.len(),
-            x: s.x,
-            cov: s.cov,
-            labels,
-            resid,
+            k: p,
+            cov,
+            jackknife,
+            labels: d.labels,
+            resid: resid_rows.chunks(3).map(|c| [c[0], c[1], c[2]]).collect(),
             k_at,
             u0_at,
-            heldout,
+            heldout: heldout_rows.iter().sum(),
+            heldout_rows,
+            x,
         })
     }
 
-    /// K(T) and U0(T) of a fitted spec at the (effective) temperatures `temps`.
-    pub fn coefficients_at(
-        &self,
-        spec: &Spec,
-        x: &DVector<f64>,
-        labels: &[Param],
-        temps: &[f64],
-    ) -> (Vec<[[f64; 3]; 3]>, Vec<[f64; 3]>) {
-        let obasis = offset_basis(spec);
-        let mut ks = Vec::with_capacity(temps.len());
-        let mut us = Vec::with_capacity(temps.len());
-        for &t in temps {
-            let phi = spec.basis.eval(self.t0, t);
-            let ophi = obasis.eval(self.t0, t);
-            let mut k = [[0.0; 3]; 3];
-            let mut u0 = [0.0; 3];
-            for (j, l) in labels.iter().enumerate() {
-                match *l {
-                    Param::K { i, j: c, k: b } => {
-                        k[i][c] += x[j] * phi.get(b).copied().unwrap_or(0.0)
-                    }
-                    Param::U0 { i, k: b } => u0[i] += x[j] * ophi.get(b).copied().unwrap_or(0.0),
-                    _ => {}
-                }
-            }
-            ks.push(k);
-            us.push(u0);
-        }
-        (ks, us)
+    /// K(T) and U0(T) of a fitted spec at the temperatures `temps` (bends included).
+    pub fn coefficients_at(&self, f: &Fit, temps: &[f64]) -> Vec<([[f64; 3]; 3], [f64; 3])> {
+        temps
+            .iter()
+            .map(|&t| static_at(&f.spec, &f.labels, &f.x, self.t0, [t; 3]))
+            .collect()
     }
 }
 
-/// The offsets' temperature basis: temp_curvature bends them with a fine piecewise-linear
-/// one; otherwise the baseline's.
+/// Delete-one-chunk jackknife standard errors: `sqrt((g-1)/g sum (x_(-c) - mean)^2)` over
+/// the g chunk-deleted solutions (a chunk whose removal leaves the fit undetermined
+/// contributes the full solution).
+fn jackknife_sigma(sols: &[DVector<f64>], x: &DVector<f64>) -> Vec<f64> {
+    let g = sols.len() as f64;
+    (0..x.len())
+        .map(|j| {
+            let mean = sols.iter().map(|s| s[j]).sum::<f64>() / g;
+            ((g - 1.0) / g * sols.iter().map(|s| (s[j] - mean).powi(2)).sum::<f64>()).sqrt()
+        })
+        .collect()
+}
+
+/// The offsets' temperature basis: a `Curvature` extra's fine one, else the baseline's.
 fn offset_basis(spec: &Spec) -> Basis {
     spec.extras
         .iter()
@@ -362,6 +352,46 @@ fn offset_basis(spec: &Spec) -> Basis {
             _ => None,
         })
         .unwrap_or_else(|| spec.basis.clone())
+}
+
+/// K and U0 of a fitted spec (baseline and bends), row i at temperature `temps[i]`.
+fn static_at(spec: &Spec, labels: &[Param], x: &DVector<f64>, t0: f64, temps: [f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
+    let obasis = offset_basis(spec);
+    let phi = temps.map(|t| spec.basis.eval(t0, t));
+    let ophi = temps.map(|t| obasis.eval(t0, t));
+    let mut k = [[0.0; 3]; 3];
+    let mut u0 = [0.0; 3];
+    for (c, l) in labels.iter().enumerate() {
+        let v = x[c];
+        match *l {
+            Param::K { i, j, k: b } => k[i][j] += v * phi[i][b],
+            Param::U0 { i, k: b } => u0[i] += v * ophi[i][b],
+            Param::Effect { term, axis, extra } => {
+                if let Some(Extra::Bend { knot_c }) = spec.extras.get(extra) {
+                    let h = (temps[axis] - knot_c).max(0.0);
+                    match term {
+                        Term::BendOffset => u0[axis] += v * h,
+                        Term::BendScale => k[axis][axis] += v * h,
+                        _ => {}
+                    }
+                }
+            }
+            Param::FixtureAngle { .. } => {}
+        }
+    }
+    (k, u0)
+}
+
+/// Two directions perpendicular to `a` (the fixture error's rotation axes, applied to a).
+pub fn fixture_directions(a: [f64; 3]) -> [[f64; 3]; 2] {
+    let helper = if a[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let e1 = normalize(cross(a, helper));
+    let e2 = cross(a, e1);
+    [e2, e1.map(|v| -v)]
 }
 
 fn cross(u: [f64; 3], v: [f64; 3]) -> [f64; 3] {

@@ -1,10 +1,13 @@
-//! A finding of the diagnosis: the effect, where it is significant, its parameters with
-//! uncertainties, and the evidence in one sentence; and the candidates the data cannot
-//! tell apart, with the measurement that would.
-use crate::diagnose::design::{Data, Extra, Fit};
+//! A finding of the diagnosis, taken from the final joint model: the effect and its form,
+//! the axes where it matters, its parameters with uncertainties scaled by the dispersion,
+//! where it shows, and how much it improves held-out data; and the candidates the data
+//! cannot tell apart, with the measurement that would.
+use crate::diagnose::design::{Data, Fit};
+use crate::diagnose::effects::Extra;
 use crate::diagnose::location::locate;
-use crate::diagnose::metrics::{max_dg, normalized_rms, residual_rms};
+use crate::diagnose::metrics::{dispersion, max_dg, residual_rms};
 use crate::diagnose::params::{Param, Term};
+use crate::diagnose::search::{contribution, judge, sigma, Z_SIGNIFICANT};
 use firmware_core::model::AXES;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -14,19 +17,25 @@ use std::collections::BTreeMap;
 pub struct Finding {
     /// Catalogue id.
     pub effect: String,
-    /// Axes where the effect is significant.
+    /// The form found (time constants, switching, restarts, where a bend sits).
+    pub form: String,
+    /// Axes where the effect matters (removing it worsens that axis significantly).
     pub axes: Vec<String>,
-    /// Parameters.
+    /// Parameters, from the final joint fit.
     pub parameters: BTreeMap<String, f64>,
-    /// 1-sigma uncertainties.
+    /// 1-sigma uncertainties, scaled by the final dispersion.
     pub uncertainties: BTreeMap<String, f64>,
-    /// BIC change when added.
+    /// Quasi-BIC change of the final model against the final model without it.
     pub delta_bic: f64,
-    /// Residual RMS after adding it.
+    /// Share of the chi-square above the floor (of the model without it) it explains.
+    pub share: f64,
+    /// Held-out chi-square drop per parameter, in floor units.
+    pub heldout_gain: f64,
+    /// Residual RMS of the final model (output units).
     pub residual_rms_after: f64,
-    /// max |dg| after adding it, mg.
+    /// max |dg| of the final model, mg.
     pub max_abs_dg_mg_after: f64,
-    /// One sentence.
+    /// Where it shows, in one sentence.
     pub evidence: String,
     /// The position, for fixture_error.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -42,123 +51,167 @@ pub struct Ambiguity {
     pub needed: String,
 }
 
-/// The finding of the effect `f` added to `prev` (lowering BIC by `-d`).
-pub fn finding(data: &Data, f: &Fit, prev: &Fit, d: f64, evidence: String) -> Finding {
-    let e = f.spec.extras.last().cloned().unwrap_or(Extra::Rate);
-    let dof = (3 * data.obs.len()).saturating_sub(f.k).max(1) as f64;
-    let scale = (f.chi2 / dof).max(1.0).sqrt();
-    let mut parameters = BTreeMap::new();
-    let mut unc = BTreeMap::new();
-    let mut axes: Vec<String> = Vec::new();
-    for j in prev.k..f.k {
-        let label = f.labels[j];
-        let mut v = f.x[j];
-        let mut s = f.cov[(j, j)].max(0.0).sqrt() * scale;
-        let name = match label {
-            Param::Effect {
-                term: Term::Asymmetry,
-                axis,
-            } => {
-                // c_i = K_ii delta_i: report delta_i, relative
-                let kii = f.k_at.first().map(|k| k[axis][axis]).unwrap_or(1.0);
-                v /= kii;
-                s /= kii.abs();
-                format!("delta_{}", AXES[axis])
+/// The per-axis held-out chi-square increase (floor units / dispersion) when extra `e`
+/// is removed: an axis counts where the effect improves data it was not fitted on.
+fn axis_gains(data: &Data, full: &Fit, reduced: &Fit, phi: f64) -> [f64; 3] {
+    std::array::from_fn(|i| {
+        (0..data.obs.len())
+            .map(|r| reduced.heldout_rows[3 * r + i] - full.heldout_rows[3 * r + i])
+            .sum::<f64>()
+            / phi
+    })
+}
+
+/// The linear parameters of extra `e` and their scaled 1-sigma.
+fn linear_parameters(full: &Fit, e: usize, phi: f64) -> Vec<(String, f64, f64)> {
+    full.labels
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.extra() == Some(e))
+        .map(|(j, l)| {
+            let (v, s) = (full.x[j], sigma(full, j, phi));
+            match *l {
+                Param::Effect {
+                    term: Term::Asymmetry,
+                    axis,
+                    ..
+                } => {
+                    // c_i = K_ii delta_i: reported as delta_i, relative
+                    let kii = full.k_at.first().map(|k| k[axis][axis]).unwrap_or(1.0);
+                    (format!("delta_{}", AXES[axis]), v / kii, s / kii.abs())
+                }
+                _ => (l.to_string(), v, s),
             }
-            _ => label.to_string(),
+        })
+        .collect()
+}
+
+/// The time constants of a form, with their 1-sigma where the profile defines one
+/// (chi-square up by the dispersion).
+fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<(String, f64, f64)> {
+    let extra = &full.spec.extras[e];
+    let sigma = |make: &dyn Fn(f64) -> Extra, tau: f64| {
+        let at = |t: f64| {
+            let mut s = full.spec.clone();
+            s.extras[e] = make(t);
+            data.fit(&s, None, false).map(|f| f.chi2).unwrap_or(f64::INFINITY)
         };
-        parameters.insert(name.clone(), v);
-        unc.insert(name, s);
-        if let Some(axis) = label.effect_axis() {
-            let ax = AXES[axis].to_string();
-            if v.abs() > 3.0 * s && !axes.contains(&ax) {
-                axes.push(ax);
+        let h = 0.05;
+        let curv = (at(tau * (1.0 + h)) + at(tau * (1.0 - h)) - 2.0 * full.chi2) / (h * tau).powi(2);
+        if curv > 0.0 {
+            (2.0 * phi / curv).sqrt()
+        } else {
+            f64::INFINITY
+        }
+    };
+    match extra {
+        Extra::Warmup { tau_s, restart } => {
+            let r = *restart;
+            vec![("tau_s".into(), *tau_s, sigma(&|t| Extra::Warmup { tau_s: t, restart: r }, *tau_s))]
+        }
+        Extra::Lag { taus } => {
+            let same = taus.iter().all(|t| *t == taus[0]);
+            if same && taus[0][1] == 0.0 {
+                vec![("tau_s".into(), taus[0][0], sigma(&|t| Extra::Lag { taus: [[t, 0.0]; 3] }, taus[0][0]))]
+            } else {
+                let mut v = Vec::new();
+                for (i, t) in taus.iter().enumerate() {
+                    v.push((format!("tau1_{}_s", AXES[i]), t[0], f64::NAN));
+                    if t[1] > 0.0 {
+                        v.push((format!("tau2_{}_s", AXES[i]), t[1], f64::NAN));
+                    }
+                }
+                v
             }
         }
+        Extra::Rate { tau_s } => vec![("rate_tau_s".into(), *tau_s, f64::NAN)],
+        Extra::Hysteresis { threshold_c, initial, .. } => vec![
+            ("threshold_c".into(), *threshold_c, f64::NAN),
+            ("initial_direction".into(), *initial, f64::NAN),
+        ],
+        Extra::Bend { knot_c } => vec![("knot_c".into(), *knot_c, f64::NAN)],
+        Extra::Curvature(b) => vec![("breakpoints".into(), b.len() as f64, 0.0)],
+        _ => Vec::new(),
     }
-    let all_axes = || AXES.iter().map(|a| a.to_string()).collect::<Vec<_>>();
-    let mut position = None;
-    match &e {
-        Extra::Lag(tau) | Extra::Warmup(tau) => {
-            parameters.insert("tau_s".into(), *tau);
-            unc.insert("tau_s".into(), tau_sigma(data, f, prev, *tau) * scale);
-            if matches!(e, Extra::Lag(_)) {
-                axes = all_axes();
-            }
-        }
-        Extra::Curvature(b) => {
-            parameters.insert("breakpoints".into(), b.len() as f64);
-            unc.insert("breakpoints".into(), 0.0);
-            axes = all_axes();
-        }
-        Extra::Fixture(p) => {
-            position = Some(data.rec.positions.name(*p).to_string());
-            axes = all_axes();
-        }
-        _ => {}
+}
+
+/// The finding of extra `e` of the final model `full`; `reduced` is `full` without it.
+/// `None` when it matters on no axis.
+pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Finding> {
+    let phi = dispersion(data, full);
+    let gains = axis_gains(data, full, reduced, phi);
+    // where the effect has its own per-axis terms, one of them must be significant too
+    let term_z = |i: usize| {
+        (0..full.k)
+            .filter(|&j| full.labels[j].extra() == Some(e) && full.labels[j].effect_axis() == Some(i))
+            .map(|j| full.x[j].abs() / sigma(full, j, phi))
+            .reduce(f64::max)
+    };
+    let axes: Vec<String> = (0..3)
+        .filter(|&i| gains[i] >= Z_SIGNIFICANT * Z_SIGNIFICANT && term_z(i).is_none_or(|z| z >= Z_SIGNIFICANT))
+        .map(|i| AXES[i].to_string())
+        .collect();
+    if axes.is_empty() {
+        return None;
     }
-    Finding {
-        effect: e.id().into(),
+    let extra = &full.spec.extras[e];
+    let (mut parameters, mut uncertainties) = (BTreeMap::new(), BTreeMap::new());
+    for (k, v, s) in linear_parameters(full, e, phi)
+        .into_iter()
+        .chain(structural_parameters(data, full, e, phi))
+    {
+        parameters.insert(k.clone(), v);
+        uncertainties.insert(k, s);
+    }
+    let j = judge(data, reduced, full, e);
+    Some(Finding {
+        effect: extra.id().into(),
+        form: extra.form(),
         axes,
         parameters,
-        uncertainties: unc,
-        delta_bic: d,
-        residual_rms_after: residual_rms(f),
-        max_abs_dg_mg_after: max_dg(data, f),
-        evidence,
-        position,
-    }
+        uncertainties,
+        delta_bic: -j.gain,
+        share: j.share,
+        heldout_gain: j.heldout_gain,
+        residual_rms_after: residual_rms(full),
+        max_abs_dg_mg_after: max_dg(data, full),
+        evidence: evidence(data, full, reduced, extra),
+        position: match extra {
+            Extra::Fixture(p) => Some(data.rec.positions.name(*p).to_string()),
+            _ => None,
+        },
+    })
 }
 
-/// 1-sigma of a profiled time constant: where chi2 rises by 1 (parabola in tau).
-fn tau_sigma(data: &Data, f: &Fit, base: &Fit, tau: f64) -> f64 {
-    let at = |t: f64| -> f64 {
-        let mut s = f.spec.clone();
-        if let Some(last) = s.extras.last_mut() {
-            *last = match last {
-                Extra::Lag(_) => Extra::Lag(t),
-                _ => Extra::Warmup(t),
-            };
-        }
-        data.fit(&s, Some(base))
-            .map(|g| g.chi2)
-            .unwrap_or(f64::INFINITY)
-    };
-    let h = 0.05;
-    let (c0, cp, cm) = (f.chi2, at(tau * (1.0 + h)), at(tau * (1.0 - h)));
-    let curv = (cp + cm - 2.0 * c0) / (h * tau).powi(2);
-    if curv > 0.0 {
-        (2.0 / curv).sqrt()
-    } else {
-        f64::INFINITY
-    }
-}
-
-/// The evidence sentence of effect `id` found by going from `before` to `after`.
-pub fn evidence_for(data: &Data, before: &Fit, after: &Fit, id: &str, d: f64) -> String {
-    let rb = normalized_rms(data, before);
-    let ra = normalized_rms(data, after);
-    let top = locate(data, before)
-        .into_iter()
+/// Where the effect shows: the groups where its contribution is largest, and the residual
+/// there with and without it.
+fn evidence(data: &Data, full: &Fit, reduced: &Fit, extra: &Extra) -> String {
+    let c = contribution(data, full, reduced);
+    let z: Vec<[f64; 3]> = c.chunks(3).map(|v| [v[0], v[1], v[2]]).collect();
+    let raw: Vec<[f64; 3]> = (0..data.obs.len())
+        .map(|r| std::array::from_fn(|i| reduced.resid[r][i] - full.resid[r][i]))
+        .collect();
+    let spots = locate(data, &z, &raw, 0.0);
+    let top: Vec<String> = spots
+        .iter()
+        .filter(|h| h.group != "direction" || matches!(extra, Extra::Hysteresis { .. }))
         .take(2)
-        .map(|h| format!("{} axis in {} {}", h.axis, h.group, h.value))
-        .collect::<Vec<_>>()
-        .join(" and ");
-    let why = match id {
-        "thermal_lag" => "the residual follows the temperature changes and scales with each coefficient's temperature slope, as a lagging element temperature does",
-        "temp_rate" => "the offset residual is proportional to dT/dt, not to any coefficient's temperature slope",
-        "hysteresis" => "the same temperature reached by heating and by cooling gives different offsets",
-        "nonlinearity_k2" => "the mid-point of the +1 g and -1 g readings differs from the 0 g readings and grows as a_i^2 in tilted positions",
-        "scale_asymmetry" => "the mid-point of the +1 g and -1 g readings differs from the 0 g readings and grows as |a_i| in tilted positions",
-        "fixture_error" => "one position disagrees with all others at every temperature",
-        "warmup_drift" => "the offset residual decays with time since power-on or handling, independent of temperature",
-        "temp_curvature" => "the coefficients bend between the temperatures more than the best polynomial the data support",
-        _ => "",
+        .map(|h| format!("{} axis in {} {} ({:.1}x the floor)", h.axis, h.group, h.value, h.rms_sigma))
+        .collect();
+    let why = match extra {
+        Extra::Lag { .. } => "the residual follows the temperature changes and scales with each coefficient's temperature slope, as a lagging element temperature does",
+        Extra::Rate { .. } => "the offset residual is proportional to dT/dt, not to any coefficient's temperature slope",
+        Extra::Hysteresis { .. } => "the same temperature reached by heating and by cooling gives different coefficients",
+        Extra::K2 => "the mid-point of the +1 g and -1 g readings differs from the 0 g readings and grows as a_i^2 in tilted positions",
+        Extra::Asymmetry => "the mid-point of the +1 g and -1 g readings differs from the 0 g readings and grows as |a_i| in tilted positions",
+        Extra::Fixture(_) => "one position disagrees with all others at every temperature",
+        Extra::Warmup { .. } => "the offset residual decays with time since power-on (or a restart), independent of temperature",
+        Extra::Curvature(_) | Extra::Bend { .. } => "the coefficients bend between the temperatures more than the best polynomial the data support",
     };
     format!(
-        "Baseline residual {rb:.1}x noise, largest on {}; {why}; modelling it lowers BIC by {:.0} and the residual to {ra:.1}x noise.",
-        if top.is_empty() { "no group".to_string() } else { top },
-        -d
+        "Shows most on {}; {why} ({}).",
+        if top.is_empty() { "no group".into() } else { top.join(" and ") },
+        extra.form()
     )
 }
 
@@ -174,8 +227,6 @@ pub fn needed(a: &str, b: &str) -> String {
     } else if pair("warmup_drift", "thermal_lag") || pair("warmup_drift", "temp_rate") {
         "a power cycle or handling at a steady temperature, away from any temperature change".into()
     } else {
-        format!(
-            "data that changes {a} and {b} differently (other positions, temperatures or timing)"
-        )
+        format!("data that changes {a} and {b} differently (other positions, temperatures or timing)")
     }
 }

@@ -1,102 +1,87 @@
-//! Where the residual exceeds the noise: grouped by position, temperature, time,
-//! temperature rate and heating/cooling direction, per axis.
-use crate::diagnose::design::{Data, Fit};
+//! Where a residual (or an effect's contribution) stands out from the floor: grouped by
+//! position, temperature, time, temperature rate and heating/cooling direction, per axis.
+use crate::diagnose::design::Data;
 use crate::fit::temperature::temperature_clusters;
 use firmware_core::model::AXES;
 use serde::Serialize;
 
-/// One located mismatch: a group of observations whose residual exceeds the noise.
-#[derive(Debug, Clone, Serialize)]
+/// One located group: its values in floor units.
+#[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Hotspot {
-    /// Grouping (axis, position, temperature, time, dT/dt, direction).
+    /// Grouping (position, temperature, time, dT/dt, direction).
     pub group: String,
     /// The group's value.
     pub value: String,
     /// Axis.
     pub axis: String,
-    /// RMS of the normalised residual (1 = noise).
+    /// RMS in floor units (1 = noise).
     pub rms_sigma: f64,
-    /// Mean residual, output units.
+    /// Mean of the values, output units.
     pub mean: f64,
+    /// Share of the whole sum of squares that sits in this group.
+    pub share: f64,
     /// Observations in the group.
     pub count: usize,
 }
 
-/// Every group of observations whose baseline residual exceeds twice the noise (RMS in
-/// noise units), worst first.
-pub fn locate(data: &Data, fit: &Fit) -> Vec<Hotspot> {
+/// The groups every observation belongs to: `(group, value)`.
+fn groups(data: &Data) -> Vec<(String, String, Vec<usize>)> {
     let mut groups: Vec<(String, String, Vec<usize>)> = Vec::new();
-    let mut add =
-        |g: &str, v: String, idx: usize| match groups.iter_mut().find(|x| x.0 == g && x.1 == v) {
-            Some(x) => x.2.push(idx),
-            None => groups.push((g.to_string(), v, vec![idx])),
-        };
+    let mut add = |g: &str, v: String, idx: usize| match groups.iter_mut().find(|x| x.0 == g && x.1 == v) {
+        Some(x) => x.2.push(idx),
+        None => groups.push((g.to_string(), v, vec![idx])),
+    };
     let temps: Vec<f64> = data.obs.iter().map(|o| o.temp_c).collect();
     let clusters = temperature_clusters(&temps);
-    let t_end = data.obs.iter().map(|o| o.t_s).fold(0.0, f64::max).max(1.0);
+    let (t_lo, t_hi) = data.obs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), o| (a.min(o.t_s), b.max(o.t_s)));
+    let span = (t_hi - t_lo).max(1.0);
     for (r, o) in data.obs.iter().enumerate() {
-        add(
-            "position",
-            data.rec.positions.name(o.position).to_string(),
-            r,
-        );
+        add("position", data.rec.positions.name(o.position).to_string(), r);
         let c = clusters
             .iter()
             .min_by(|a, b| (*a - o.temp_c).abs().total_cmp(&(*b - o.temp_c).abs()))
             .copied()
             .unwrap_or(0.0);
         add("temperature", format!("{c:.0} C"), r);
-        let bin = ((o.t_s / t_end) * 8.0).floor().min(7.0);
-        add(
-            "time",
-            format!(
-                "{:.1}-{:.1} h",
-                bin * t_end / 8.0 / 3600.0,
-                (bin + 1.0) * t_end / 8.0 / 3600.0
-            ),
-            r,
-        );
-        add(
-            "dT/dt",
-            if o.dtdt.abs() > 0.002 {
-                if o.dtdt > 0.0 {
-                    "heating >0.002 C/s"
-                } else {
-                    "cooling >0.002 C/s"
-                }
-            } else {
-                "steady"
-            }
-            .to_string(),
-            r,
-        );
-        add(
-            "direction",
-            match o.dir {
-                d if d > 0.5 => "after heating",
-                d if d < -0.5 => "after cooling",
-                _ => "unknown",
-            }
-            .to_string(),
-            r,
-        );
+        let bin = (((o.t_s - t_lo) / span) * 8.0).floor().min(7.0);
+        let h = |b: f64| (t_lo + b * span / 8.0) / 3600.0;
+        add("time", format!("{:.1}-{:.1} h", h(bin), h(bin + 1.0)), r);
+        let rate = data.rate[r];
+        let rate_group = if rate > 0.002 {
+            "heating >0.002 C/s"
+        } else if rate < -0.002 {
+            "cooling >0.002 C/s"
+        } else {
+            "steady"
+        };
+        add("dT/dt", rate_group.to_string(), r);
+        let dir = match data.dir[r] {
+            d if d > 0.5 => "after heating",
+            d if d < -0.5 => "after cooling",
+            _ => "before the first change",
+        };
+        add("direction", dir.to_string(), r);
     }
+    groups
+}
+
+/// Every group where `z` (per observation and axis, floor units) has an RMS above
+/// `min_rms`, worst first; `raw` gives the means in output units.
+pub fn locate(data: &Data, z: &[[f64; 3]], raw: &[[f64; 3]], min_rms: f64) -> Vec<Hotspot> {
+    let total: f64 = z.iter().flatten().map(|v| v * v).sum::<f64>().max(f64::MIN_POSITIVE);
     let mut out = Vec::new();
-    for (g, v, idx) in groups {
+    for (g, v, idx) in groups(data) {
         for i in 0..3 {
-            let z: Vec<f64> = idx
-                .iter()
-                .map(|&r| fit.resid[r][i] * (data.obs[r].n as f64).sqrt() / data.noise.sigma[i])
-                .collect();
-            let rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
-            let mean = idx.iter().map(|&r| fit.resid[r][i]).sum::<f64>() / idx.len() as f64;
-            if rms > 2.0 {
+            let ss: f64 = idx.iter().map(|&r| z[r][i] * z[r][i]).sum();
+            let rms = (ss / idx.len() as f64).sqrt();
+            if rms > min_rms {
                 out.push(Hotspot {
                     group: g.clone(),
                     value: v.clone(),
                     axis: AXES[i].into(),
                     rms_sigma: rms,
-                    mean,
+                    mean: idx.iter().map(|&r| raw[r][i]).sum::<f64>() / idx.len() as f64,
+                    share: ss / total,
                     count: idx.len(),
                 });
             }

@@ -1,41 +1,49 @@
 //! Diagnosis: when the model and a recording disagree, locate the mismatch, name the
-//! physics left out (physics-catalogue.md), model it, and show the fit improve.
+//! physics left out (physics-catalogue.md) where the data support it, model it, show the
+//! fit improve on held-out data, and say plainly what stays unexplained.
 //!
-//! All three axes are fitted in one weighted least squares (weights n / sigma^2 from the
-//! in-dwell noise): per axis the temperature models of its K row and offset, and the
-//! candidate effects as extra columns; effects with a nonlinear parameter (thermal lag
-//! and warm-up time constants) are profiled over it. A candidate is accepted when it
-//! lowers BIC by more than [`BIC_MARGIN`] and improves the chi-square of dwells it was
-//! not fitted on (two folds of alternate dwells); candidates that explain the data
-//! equally well are reported as ambiguous, with the measurement that would separate them.
-//!
-//! `HOSTFIT_DEBUG=1` prints every candidate's BIC change and held-out chi-square to stderr.
+//! The error floor is measured inside the dwells at every time scale ([`floor`]), every
+//! window weighted by it; the baseline and the catalogue's effects (their structural
+//! unknowns profiled, [`profile`]) are fitted in one weighted least squares over all three
+//! axes ([`design`]); an effect joins only when it passes every rule of [`search`] in the
+//! dispersion of the larger model, survives the backward check of the joint model, and
+//! explains the data where it acts. Findings take their parameters from the final joint
+//! fit. `HOSTFIT_DEBUG=1` prints every candidate's judgement to stderr.
 pub mod calibration;
 pub mod contract;
 pub mod design;
+pub mod effects;
 pub mod findings;
+pub mod floor;
 pub mod location;
 pub mod metrics;
 pub mod observations;
 pub mod params;
+pub mod profile;
+pub mod quality;
+pub mod regressors;
 pub mod search;
+
+pub use effects::EFFECT_IDS;
 
 use crate::data::recording::Recording;
 use crate::error::{HostError, Result};
-use crate::fit::noise::{noise, Noise};
+use crate::fit::temperature::temperature_clusters;
 use design::{Data, Fit};
 use findings::{Ambiguity, Finding};
+use floor::Floor;
 use location::{locate, Hotspot};
-use observations::{observations, series, DObs};
-
-pub use design::EFFECT_IDS;
-pub use search::{AMBIGUITY_MARGIN, BIC_MARGIN};
+use observations::{observations, window_means, DObs};
+use quality::QualityNote;
+use regressors::Events;
 
 /// The whole diagnosis.
 #[derive(Debug, Clone)]
 pub struct Diagnosis {
-    /// In-dwell noise per axis.
-    pub noise: Noise,
+    /// The measured error floor.
+    pub floor: Floor,
+    /// Whether the floor was measured (else the baseline's own scatter stands in).
+    pub floor_measured: bool,
     /// Baseline.
     pub baseline: Fit,
     /// Final model.
@@ -44,96 +52,200 @@ pub struct Diagnosis {
     pub findings: Vec<Finding>,
     /// Ambiguities.
     pub ambiguous: Vec<Ambiguity>,
-    /// Where the baseline residual exceeds noise.
+    /// Where the baseline residual exceeds the floor.
     pub hotspots: Vec<Hotspot>,
+    /// Where the final residual still exceeds the floor (empty when at the floor).
+    pub unexplained: Vec<Hotspot>,
     /// What cannot be identified from this recording.
     pub not_identifiable: Vec<String>,
-    /// The data.
+    /// Notes on the data.
+    pub quality: Vec<QualityNote>,
+    /// The observations.
     pub obs: Vec<DObs>,
-    /// Expected residual RMS from noise alone (output units, per window).
+    /// Their weights (per observation and axis).
+    pub w: Vec<f64>,
+    /// Spike rows.
+    pub spikes: Vec<usize>,
+    /// Gaps and handling.
+    pub events: Events,
+    /// Expected residual RMS from the floor alone (output units, per window).
     pub noise_rms: f64,
     /// The final model's coefficients on a grid over the data's temperatures (for the blob).
     pub table: Vec<(f64, [f64; 12])>,
     /// Median sample period of the recording, s.
     pub sample_period_s: f64,
-    /// Direction of the hysteresis state at the start of the recording.
-    pub initial_direction: f64,
+}
+
+impl Diagnosis {
+    /// The data the diagnosis was made on (to evaluate its fits again).
+    pub fn data<'a>(&self, rec: &'a Recording) -> Data<'a> {
+        make_data(rec, self.obs.clone(), self.spikes.clone(), self.w.clone(), self.events.clone())
+    }
+}
+
+fn make_data(rec: &Recording, obs: Vec<DObs>, spikes: Vec<usize>, w: Vec<f64>, events: Events) -> Data<'_> {
+    let rate = window_means(&obs, &regressors::rates(rec, 60.0), &spikes);
+    let dir = window_means(&obs, &regressors::directions(rec, 0.5, 0.0), &spikes);
+    Data {
+        rec,
+        obs,
+        spikes,
+        w,
+        t0: rec.t0_c,
+        events,
+        rate,
+        dir,
+    }
 }
 
 /// The final model's coefficients on a grid of up to 16 points, about one per 2 C, over
 /// the data's temperature range.
-fn final_table(data: &Data, f: &Fit, tmin: f64, tmax: f64) -> Vec<(f64, [f64; 12])> {
-    let nb = 16usize
-        .min(((tmax - tmin) / 2.0).floor() as usize + 1)
-        .max(2);
+fn final_table(data: &Data, f: &Fit) -> Vec<(f64, [f64; 12])> {
+    let (tmin, tmax) = data
+        .obs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), o| (a.min(o.temp_c), b.max(o.temp_c)));
+    let nb = 16usize.min(((tmax - tmin) / 2.0).floor() as usize + 1).max(2);
     let grid: Vec<f64> = (0..nb)
         .map(|k| tmin + (tmax - tmin) * k as f64 / (nb - 1) as f64)
         .collect();
-    let (ks, us) = data.coefficients_at(&f.spec, &f.x, &f.labels, &grid);
     grid.iter()
-        .zip(ks.iter().zip(&us))
-        .map(|(t, (k, u))| {
-            (
-                *t,
-                firmware_core::model::Coeffs { k: *k, u0: *u }.to_array(),
-            )
-        })
+        .zip(data.coefficients_at(f, &grid))
+        .map(|(t, (k, u0))| (*t, firmware_core::model::Coeffs { k, u0 }.to_array()))
         .collect()
 }
 
-/// The median time between rows, s.
-fn sample_period(rec: &Recording) -> f64 {
-    let mut gaps: Vec<f64> = rec
-        .rows
-        .windows(2)
-        .map(|w| w[1].t_s - w[0].t_s)
-        .filter(|d| *d > 0.0)
-        .collect();
-    gaps.sort_by(f64::total_cmp);
-    gaps.get(gaps.len() / 2).copied().unwrap_or(1.0)
+/// Weights from the floor, or (floor not measurable) from the baseline's own scatter per
+/// axis.
+fn weights(data: &mut Data, floor: &Floor) -> bool {
+    let measured = floor.axes.iter().all(|a| !a.scales.is_empty());
+    if measured {
+        data.w = data
+            .obs
+            .iter()
+            .flat_map(|o| (0..3).map(move |i| 1.0 / floor.axes[i].var_of_mean(o.n as f64).unwrap_or(1.0)))
+            .collect();
+        return true;
+    }
+    data.w = vec![1.0; data.n_rows()];
+    if let Some((b, _)) = search::baseline(data) {
+        let per_axis: [f64; 3] = std::array::from_fn(|i| {
+            let ss: f64 = b.resid.iter().map(|r| r[i] * r[i]).sum();
+            (ss / (data.obs.len().saturating_sub(b.k / 3)).max(1) as f64).max(1e-300)
+        });
+        data.w = (0..data.n_rows()).map(|r| 1.0 / per_axis[r % 3]).collect();
+    }
+    false
+}
+
+/// What this recording can judge.
+fn scope(data: &Data, measured: bool, n_temps: usize, notes: &mut Vec<String>) -> search::Scope {
+    let moving = data.rate.iter().any(|r| r.abs() > 2e-4);
+    let reversals = data.dir.iter().any(|d| *d > 0.5) && data.dir.iter().any(|d| *d < -0.5);
+    let s = search::Scope {
+        temperature: n_temps > 1,
+        dynamics: measured && moving && n_temps > 1,
+        reversals,
+        max_order: search::max_order(data),
+    };
+    if !s.dynamics {
+        notes.push("thermal_lag, temp_rate, warmup_drift, hysteresis: need a time series through temperature changes with a measurable floor".into());
+    } else if !s.reversals {
+        notes.push("hysteresis: needs a temperature visited after heating and after cooling".into());
+    }
+    if !s.temperature {
+        notes.push("temp_curvature and every temperature model: need more than one temperature".into());
+    }
+    s
+}
+
+/// Findings of the final model (an effect that matters on no axis is dropped and the
+/// model refitted).
+fn findings_of(data: &Data, mut f: Fit, ambiguous: &[Vec<&'static str>]) -> (Fit, Vec<Finding>) {
+    'again: loop {
+        let mut out = Vec::new();
+        for e in 0..f.spec.extras.len() {
+            let Some(reduced) = search::without(data, &f, e) else {
+                continue;
+            };
+            let id = f.spec.extras[e].id();
+            match findings::finding(data, &f, &reduced, e) {
+                None => {
+                    f = reduced;
+                    continue 'again;
+                }
+                Some(x) if !ambiguous.iter().any(|g| g.contains(&id)) => out.push(x),
+                Some(_) => {}
+            }
+        }
+        return (f, out);
+    }
 }
 
 /// Run the diagnosis.
 pub fn diagnose(rec: &Recording) -> Result<Diagnosis> {
-    let obs = observations(rec, 0.25, 300.0);
+    let floor = floor::floor(rec);
+    let obs = observations(rec, &floor.spikes, 0.25, 300.0);
     if obs.len() < 6 {
         return Err(HostError::in_file(
             &rec.path,
-            "too few static observations to diagnose",
+            format!(
+                "{} static windows of known positions: too few to diagnose (need 6, e.g. 6 positions)",
+                obs.len()
+            ),
         ));
     }
-    let data = Data {
-        rec,
-        obs,
-        noise: noise(rec),
-        t0: rec.t0_c,
-    };
-    let (baseline, not_identifiable) = search::baseline(&data).ok_or_else(|| {
+    let mut data = make_data(rec, obs, floor.spikes.clone(), Vec::new(), regressors::events(rec));
+    let measured = weights(&mut data, &floor);
+    let temps: Vec<f64> = data.obs.iter().map(|o| o.temp_c).collect();
+    let n_temps = temperature_clusters(&temps).len();
+    let (baseline, mut not_identifiable) = search::baseline(&data).ok_or_else(|| {
         HostError::in_file(
             &rec.path,
-            "the positions present do not determine even the per-axis offset and scale",
+            "the positions present do not determine even the per-axis offset and scale (need each axis both along and across gravity)",
         )
     })?;
-    let hotspots = locate(&data, &baseline);
-    let (tmin, tmax) = data
-        .obs
+    let scope = scope(&data, measured, n_temps, &mut not_identifiable);
+    let z = metrics::z(&data, &baseline);
+    let hotspots = locate(&data, &z, &baseline.resid, 2.0);
+    let found = search::forward(&data, &baseline, &scope);
+    let joint = search::keep_adequate(&data, search::backward(&data, found.current));
+    let ambiguous_groups: Vec<Vec<&'static str>> = found
+        .ambiguous
+        .into_iter()
+        .filter(|g| joint.spec.extras.iter().any(|e| g.contains(&e.id())))
+        .collect();
+    let (final_fit, findings) = findings_of(&data, joint, &ambiguous_groups);
+    let ambiguous = ambiguous_groups
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), o| {
-            (a.min(o.temp_c), b.max(o.temp_c))
-        });
-    let found = search::forward(&data, &baseline, &search::fine_breakpoints(tmin, tmax));
+        .map(|g| Ambiguity {
+            candidates: g.iter().map(|s| s.to_string()).collect(),
+            needed: findings::needed(g[0], g.get(1).copied().unwrap_or("")),
+        })
+        .collect();
+    let unexplained = if metrics::normalized_rms(&data, &final_fit) > search::AT_FLOOR_RMS {
+        locate(&data, &metrics::z(&data, &final_fit), &final_fit.resid, 2.0)
+    } else {
+        Vec::new()
+    };
+    let quality = quality::notes(rec, &floor, &data.obs, &data.events, n_temps);
     Ok(Diagnosis {
-        noise: data.noise,
-        noise_rms: metrics::noise_rms(&data),
-        table: final_table(&data, &found.current, tmin, tmax),
-        sample_period_s: sample_period(rec),
-        initial_direction: series(rec).dir.first().copied().unwrap_or(0.0),
+        noise_rms: metrics::floor_rms(&data),
+        table: final_table(&data, &final_fit),
+        sample_period_s: regressors::median_step(rec),
+        floor,
+        floor_measured: measured,
         baseline,
-        final_fit: found.current,
-        findings: found.findings,
-        ambiguous: found.ambiguous,
+        final_fit,
+        findings,
+        ambiguous,
         hotspots,
+        unexplained,
         not_identifiable,
+        quality,
         obs: data.obs,
+        w: data.w,
+        spikes: data.spikes,
+        events: data.events,
     })
 }

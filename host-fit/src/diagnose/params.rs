@@ -1,5 +1,6 @@
 //! Typed parameter ids of the diagnosis's designs: which coefficient's temperature term,
-//! which effect on which axis, which fixture angle. Their text form is the JSON contract's.
+//! which effect term on which axis, which fixture angle. Their text form is the JSON
+//! contract's.
 use firmware_core::model::AXES;
 use std::fmt;
 
@@ -10,12 +11,18 @@ pub enum Term {
     Rate,
     /// `hysteresis`: offset split by direction.
     Hysteresis,
+    /// `hysteresis` on the scale factor: output per g, split by direction.
+    HysteresisScale,
     /// `nonlinearity_k2`: output per g^2.
     K2,
     /// `scale_asymmetry`: output per |g| (`c_i = K_ii delta_i`).
     Asymmetry,
-    /// `warmup_drift`: offset at power-on.
+    /// `warmup_drift`: offset at the restart.
     Warmup,
+    /// `temp_curvature` (bend): offset per C beyond the knot.
+    BendOffset,
+    /// `temp_curvature` (bend): scale factor per C beyond the knot.
+    BendScale,
 }
 
 impl Term {
@@ -24,9 +31,12 @@ impl Term {
         match self {
             Term::Rate => "r",
             Term::Hysteresis => "h",
+            Term::HysteresisScale => "hk",
             Term::K2 => "k2",
             Term::Asymmetry => "c",
             Term::Warmup => "d",
+            Term::BendOffset => "bend_u0",
+            Term::BendScale => "bend_k",
         }
     }
 }
@@ -50,22 +60,37 @@ pub enum Param {
         /// Basis function.
         k: usize,
     },
-    /// A per-axis effect term.
+    /// A per-axis effect term; `extra` is the index of its effect in the spec.
     Effect {
         /// Which term.
         term: Term,
         /// Axis.
         axis: usize,
+        /// The effect's index among the spec's extras.
+        extra: usize,
     },
-    /// `fixture_error`: rotation angle 1 or 2 of one position, rad.
-    FixtureAngle(u8),
+    /// `fixture_error`: rotation angle 1 or 2, rad; `extra` as above.
+    FixtureAngle {
+        /// 1 or 2.
+        n: u8,
+        /// The effect's index among the spec's extras.
+        extra: usize,
+    },
 }
 
 impl Param {
-    /// The axis a per-axis effect term is on.
+    /// The axis of a per-axis effect term.
     pub fn effect_axis(self) -> Option<usize> {
         match self {
             Param::Effect { axis, .. } => Some(axis),
+            _ => None,
+        }
+    }
+
+    /// The index of the effect this parameter belongs to (None: the baseline).
+    pub fn extra(self) -> Option<usize> {
+        match self {
+            Param::Effect { extra, .. } | Param::FixtureAngle { extra, .. } => Some(extra),
             _ => None,
         }
     }
@@ -77,8 +102,8 @@ impl fmt::Display for Param {
         match *self {
             Param::K { i, j, k } => write!(f, "k{}{}#{k}", ax(i), ax(j)),
             Param::U0 { i, k } => write!(f, "u0{}#{k}", ax(i)),
-            Param::Effect { term, axis } => write!(f, "{}_{}", term.symbol(), ax(axis)),
-            Param::FixtureAngle(n) => write!(f, "angle{n}_rad"),
+            Param::Effect { term, axis, .. } => write!(f, "{}_{}", term.symbol(), ax(axis)),
+            Param::FixtureAngle { n, .. } => write!(f, "angle{n}_rad"),
         }
     }
 }

@@ -1,217 +1,350 @@
 //! The search: the baseline (cross-sensitivities where identifiable, the polynomial
-//! order by BIC), then catalogue effects added greedily while one lowers BIC clearly and
-//! improves the held-out folds; time constants profiled; equally good rivals reported as
-//! ambiguous.
-use crate::diagnose::design::EFFECT_IDS;
-use crate::diagnose::design::{Data, Extra, Fit, Spec};
-use crate::diagnose::findings::{evidence_for, finding, needed, Ambiguity, Finding};
-use crate::diagnose::metrics::bic;
+//! order by the information criterion), then catalogue effects added one at a time while
+//! one passes every acceptance rule, then a backward check of the joint model and a check
+//! that each effect explains the data where it acts.
+//!
+//! Acceptance rules (all scaled by the dispersion phi of the larger model, so a model
+//! still far from the data cannot buy findings with small improvements):
+//! - the quasi-BIC drops by more than [`Q_MARGIN`];
+//! - the effect explains at least [`MATERIAL_SHARE`] of the chi-square above the floor;
+//! - one of its parameters is at least [`Z_SIGNIFICANT`] scaled sigmas from zero;
+//! - the held-out time chunks improve by more than 2 per parameter (in floor units).
+use crate::diagnose::design::{Data, Fit, Spec};
+use crate::diagnose::effects::{Extra, EFFECT_IDS};
+use crate::diagnose::metrics::{dispersion, qbic};
+use crate::diagnose::profile;
 use crate::fit::temperature::{temperature_clusters, Basis};
 
-/// A candidate must lower BIC by more than this to be accepted ("clearly").
-pub const BIC_MARGIN: f64 = 10.0;
-/// Two candidates within this much BIC of each other explain the data equally well.
+/// A candidate must lower the quasi-BIC by more than this to be accepted.
+pub const Q_MARGIN: f64 = 10.0;
+/// Two candidates within this much quasi-BIC of each other explain the data equally well.
 pub const AMBIGUITY_MARGIN: f64 = 6.0;
+/// A candidate must explain at least this share of the chi-square above the floor.
+pub const MATERIAL_SHARE: f64 = 0.1;
+/// A parameter is significant at this many sigmas (scaled by the dispersion).
+pub const Z_SIGNIFICANT: f64 = 4.0;
+/// Where an effect acts, the final residual must be at most this fraction of what it is
+/// without the effect (RMS), or at the floor (below [`AT_FLOOR_RMS`]).
+pub const ADEQUATE_RATIO: f64 = 0.5;
+/// A residual RMS (floor units) at or below this is at the floor.
+pub const AT_FLOOR_RMS: f64 = 1.5;
+
+/// What the data can identify.
+pub struct Scope {
+    /// Temperature-dependent effects (more than one temperature).
+    pub temperature: bool,
+    /// Time-series effects (the floor is measurable and the temperature moves).
+    pub dynamics: bool,
+    /// The direction of temperature changes reverses (hysteresis).
+    pub reversals: bool,
+    /// Highest polynomial order of the baseline the temperatures support.
+    pub max_order: usize,
+}
+
+/// The highest polynomial order the data's temperatures support (5 at most).
+pub fn max_order(data: &Data) -> usize {
+    let temps: Vec<f64> = data.obs.iter().map(|o| o.temp_c).collect();
+    5usize.min(temperature_clusters(&temps).len().saturating_sub(1))
+}
+
+/// The polynomial order chosen again with `f`'s effects in the model (an effect can
+/// free the baseline from bending to it, or show that it needs to bend more).
+pub fn reorder(data: &Data, f: &Fit, max_order: usize) -> Fit {
+    let fits: Vec<Fit> = (0..=max_order)
+        .filter_map(|order| {
+            let mut spec = f.spec.clone();
+            spec.basis = Basis::Poly { order };
+            data.fit(&spec, None, false)
+        })
+        .collect();
+    let Some(phi) = fits.last().map(|x| dispersion(data, x)) else {
+        return f.clone();
+    };
+    fits.iter()
+        .min_by(|a, b| qbic(data, a, phi).total_cmp(&qbic(data, b, phi)))
+        .filter(|b| b.spec.basis != f.spec.basis)
+        .and_then(|b| data.fit(&b.spec, None, true))
+        .unwrap_or_else(|| f.clone())
+}
+
 /// The baseline fit and what it could not identify; `None` when the positions present
 /// do not determine even the per-axis offset and scale.
 pub fn baseline(data: &Data) -> Option<(Fit, Vec<String>)> {
-    let n_rows = 3 * data.obs.len();
-    let temps: Vec<f64> = data.obs.iter().map(|o| o.temp_c).collect();
-    let n_temps = temperature_clusters(&temps).len();
+    let max_order = max_order(data);
     for cross in [true, false] {
-        let mut best: Option<Fit> = None;
-        for order in 1..=5usize.min(n_temps.saturating_sub(1)).max(1) {
-            let spec = Spec {
-                basis: Basis::Poly { order },
-                cross,
-                extras: Vec::new(),
-            };
-            if let Some(f) = data.fit(&spec, None) {
-                if best
-                    .as_ref()
-                    .is_none_or(|b| bic(&f, n_rows) < bic(b, n_rows))
-                {
-                    best = Some(f);
-                }
-            }
+        let fits: Vec<Fit> = (0..=max_order)
+            .filter_map(|order| {
+                let spec = Spec {
+                    basis: Basis::Poly { order },
+                    cross,
+                    extras: Vec::new(),
+                };
+                data.fit(&spec, None, false)
+            })
+            .collect();
+        // one dispersion for all orders: the richest's
+        let Some(phi) = fits.last().map(|f| dispersion(data, f)) else {
+            continue;
+        };
+        let best = fits
+            .iter()
+            .min_by(|a, b| qbic(data, a, phi).total_cmp(&qbic(data, b, phi)))?;
+        let fit = data.fit(&best.spec, None, true)?;
+        let mut not_identifiable = Vec::new();
+        if !cross {
+            not_identifiable.push(
+                "cross-sensitivities (need >= 4 positions not in one plane): fixed at 0".to_string(),
+            );
         }
-        if let Some(b) = best {
-            let mut not_identifiable = Vec::new();
-            if !cross {
-                not_identifiable.push(
-                    "cross-sensitivities (need >= 4 positions not in one plane): fixed at 0"
-                        .to_string(),
-                );
-            }
-            return Some((b, not_identifiable));
-        }
+        return Some((fit, not_identifiable));
     }
     None
 }
 
-/// Where the forward search ended.
-pub struct Outcome {
-    /// The final model.
-    pub current: Fit,
-    /// Accepted findings.
-    pub findings: Vec<Finding>,
-    /// Candidates that could not be told apart.
-    pub ambiguous: Vec<Ambiguity>,
-}
-
-/// `current` with `extra` added, fitted.
-fn try_spec(data: &Data, extra: Extra, current: &Fit) -> Option<Fit> {
-    let mut s = current.spec.clone();
-    s.extras.push(extra);
-    data.fit(&s, Some(current))
-}
-
-/// The best fit over a time constant: a log grid from 20 s, then golden-section search
-/// in log tau around the best grid point.
-fn profile(data: &Data, make: &dyn Fn(f64) -> Extra, current: &Fit) -> Option<Fit> {
-    let mut best: Option<Fit> = None;
-    for tau in (0..14).map(|k| 20.0 * 1.7f64.powi(k)) {
-        if let Some(f) = try_spec(data, make(tau), current) {
-            if best.as_ref().is_none_or(|b| f.chi2 < b.chi2) {
-                best = Some(f);
-            }
+/// Every candidate's best form on top of `current`, for profiling (no held-out chunks).
+fn candidates(data: &Data, current: &Fit, scope: &Scope, used: &[&str]) -> Vec<Fit> {
+    let spec = &current.spec;
+    let count = |id: &str| spec.extras.iter().filter(|e| e.id() == id).count();
+    let open = |id: &str| !used.contains(&id) && count(id) < Extra::max_count(id);
+    let mut out = Vec::new();
+    let single = |e: Extra| data.fit(&spec.with(e), Some(current), false);
+    if scope.temperature && open("temp_curvature") {
+        let broad = !spec.extras.iter().any(|e| matches!(e, Extra::Curvature(_)));
+        out.extend(profile::curvature(data, spec, current, broad));
+    }
+    if scope.dynamics && open("thermal_lag") {
+        out.extend(profile::lag(data, spec, current));
+    }
+    if scope.dynamics && open("temp_rate") {
+        out.extend(profile::rate(data, spec, current));
+    }
+    if scope.dynamics && scope.reversals && open("hysteresis") {
+        out.extend(profile::hysteresis(data, spec, current));
+    }
+    if scope.dynamics && open("warmup_drift") {
+        out.extend(profile::warmup(data, spec, current));
+    }
+    for e in [Extra::K2, Extra::Asymmetry] {
+        if open(e.id()) {
+            out.extend(single(e));
         }
     }
-    let mut best = best?;
-    let tau0 = best.spec.extras.iter().rev().find_map(|e| match e {
-        Extra::Lag(t) | Extra::Warmup(t) => Some(*t),
-        _ => None,
-    })?;
-    let (mut lo, mut hi) = ((tau0 / 1.7).ln(), (tau0 * 1.7).ln());
-    let g = 0.618_033_988_75;
-    for _ in 0..12 {
-        let m1 = hi - g * (hi - lo);
-        let m2 = lo + g * (hi - lo);
-        let f1 = try_spec(data, make(m1.exp()), current);
-        let f2 = try_spec(data, make(m2.exp()), current);
-        let c1 = f1.as_ref().map(|f| f.chi2).unwrap_or(f64::INFINITY);
-        let c2 = f2.as_ref().map(|f| f.chi2).unwrap_or(f64::INFINITY);
-        let keep = if c1 < c2 {
-            hi = m2;
-            f1
-        } else {
-            lo = m1;
-            f2
-        };
-        if let Some(f) = keep.filter(|f| f.chi2 < best.chi2) {
-            best = f;
-        }
-    }
-    Some(best)
-}
-
-/// Every candidate not yet used, fitted on top of `current`, with its BIC change; the
-/// best per effect id.
-fn trials(data: &Data, current: &Fit, used: &[&str], fine: &[f64]) -> Vec<(Fit, f64)> {
-    let n_rows = 3 * data.obs.len();
-    let mut cands: Vec<Option<Fit>> = Vec::new();
-    if !used.contains(&"temp_curvature") {
-        cands.push(try_spec(data, Extra::Curvature(fine.to_vec()), current));
-    }
-    if !used.contains(&"thermal_lag") {
-        cands.push(profile(data, &Extra::Lag, current));
-    }
-    if !used.contains(&"warmup_drift") {
-        cands.push(profile(data, &Extra::Warmup, current));
-    }
-    for e in [Extra::Rate, Extra::Hysteresis, Extra::K2, Extra::Asymmetry] {
-        if !used.contains(&e.id()) {
-            cands.push(try_spec(data, e, current));
-        }
-    }
-    if !used.contains(&"fixture_error") {
+    if open("fixture_error") {
         let mut positions: Vec<usize> = data.obs.iter().map(|o| o.position).collect();
         positions.sort_unstable();
         positions.dedup();
-        for p in positions {
-            cands.push(try_spec(data, Extra::Fixture(p), current));
+        let taken: Vec<usize> = spec
+            .extras
+            .iter()
+            .filter_map(|e| match e {
+                Extra::Fixture(p) => Some(*p),
+                _ => None,
+            })
+            .collect();
+        for p in positions.into_iter().filter(|p| !taken.contains(p)) {
+            out.extend(single(Extra::Fixture(p)));
         }
     }
-    let mut per_id: Vec<(Fit, f64)> = Vec::new();
-    for f in cands.into_iter().flatten() {
-        let d = bic(&f, n_rows) - bic(current, n_rows);
-        let id = last_id(&f);
-        match per_id.iter_mut().find(|(g, _)| last_id(g) == id) {
-            Some(slot) if d < slot.1 => *slot = (f, d),
-            Some(_) => {}
-            None => per_id.push((f, d)),
+    out
+}
+
+/// How a candidate compares with the model it extends.
+#[derive(Debug, Clone)]
+pub struct Judgement {
+    /// Quasi-BIC drop (positive: better), in the larger model's dispersion.
+    pub gain: f64,
+    /// Share of the chi-square above the floor that it explains.
+    pub share: f64,
+    /// Held-out chi-square drop per added parameter, in floor units x dispersion.
+    pub heldout_gain: f64,
+    /// Largest |parameter| / scaled sigma among the effect's own parameters (None when the
+    /// effect has none: lag and broad curvature act through the temperature).
+    pub max_z: Option<f64>,
+}
+
+impl Judgement {
+    /// Every acceptance rule passed.
+    pub fn accepted(&self) -> bool {
+        self.gain > Q_MARGIN
+            && self.share >= MATERIAL_SHARE
+            && self.heldout_gain > 2.0
+            && self.max_z.is_none_or(|z| z >= Z_SIGNIFICANT)
+    }
+}
+
+/// Judge `larger` (a full fit) against `smaller`, the extra number `e` of `larger` being
+/// the difference.
+pub fn judge(data: &Data, smaller: &Fit, larger: &Fit, e: usize) -> Judgement {
+    let phi = dispersion(data, larger);
+    let dk = larger.params().saturating_sub(smaller.params()).max(1) as f64;
+    let excess = (smaller.chi2 - data.n_rows().saturating_sub(smaller.params()) as f64).max(f64::MIN_POSITIVE);
+    let max_z = (0..larger.k)
+        .filter(|&j| larger.labels[j].extra() == Some(e))
+        .map(|j| larger.x[j].abs() / sigma(larger, j, phi))
+        .reduce(f64::max);
+    Judgement {
+        gain: qbic(data, smaller, phi) - qbic(data, larger, phi),
+        share: (smaller.chi2 - larger.chi2) / excess,
+        heldout_gain: (smaller.heldout - larger.heldout) / phi / dk,
+        max_z,
+    }
+}
+
+/// The standard error of parameter `j`: the covariance's scaled by the dispersion, or the
+/// chunk jackknife's where that is larger (residuals correlated in time).
+pub fn sigma(f: &Fit, j: usize, phi: f64) -> f64 {
+    let formal = f.cov.as_ref().map(|c| (c[(j, j)].max(0.0) * phi).sqrt()).unwrap_or(f64::INFINITY);
+    let jk = f.jackknife.as_ref().map(|v| v[j]).unwrap_or(0.0);
+    formal.max(jk)
+}
+
+/// Where the forward search ended.
+pub struct Outcome {
+    /// The model with the effects accepted.
+    pub current: Fit,
+    /// Groups of candidates that explained the data equally well (the best of each group
+    /// is in the model, none is named).
+    pub ambiguous: Vec<Vec<&'static str>>,
+}
+
+/// Add effects to `baseline` while one is accepted.
+pub fn forward(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
+    let mut current = baseline.clone();
+    let mut ambiguous = Vec::new();
+    let mut used: Vec<&'static str> = Vec::new();
+    let dbg = std::env::var_os("HOSTFIT_DEBUG").is_some();
+    loop {
+        let cands = candidates(data, &current, scope, &used);
+        // rank by quasi-BIC gain, each in its own dispersion
+        let mut ranked: Vec<(f64, Fit)> = cands
+            .into_iter()
+            .map(|f| {
+                let phi = dispersion(data, &f);
+                (qbic(data, &current, phi) - qbic(data, &f, phi), f)
+            })
+            .filter(|(g, _)| *g > Q_MARGIN)
+            .collect();
+        ranked.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut accepted: Option<(f64, Fit)> = None;
+        let mut rivals: Vec<&'static str> = Vec::new();
+        for (gain, f) in ranked.into_iter().take(6) {
+            let id = last_id(&f);
+            if let Some((best_gain, best)) = &accepted {
+                if id != last_id(best) && best_gain - gain < AMBIGUITY_MARGIN && !rivals.contains(&id) {
+                    rivals.push(id);
+                }
+                continue;
+            }
+            let Some(full) = data.fit(&f.spec, Some(&current), true) else {
+                continue;
+            };
+            let j = judge(data, &current, &full, full.spec.extras.len() - 1);
+            if dbg {
+                eprintln!("  {:?}: {j:?} accepted {}", full.spec.extras.last(), j.accepted());
+            }
+            if j.accepted() {
+                accepted = Some((gain, full));
+            }
+        }
+        let Some((_, best)) = accepted else {
+            break;
+        };
+        let id = last_id(&best);
+        if !rivals.is_empty() {
+            let mut group = vec![id];
+            group.extend(rivals.iter().copied());
+            used.extend(rivals);
+            ambiguous.push(group);
+        }
+        if best.spec.extras.iter().filter(|e| e.id() == id).count() >= Extra::max_count(id) {
+            used.push(id);
+        }
+        current = reorder(data, &best, scope.max_order);
+        if used.len() >= EFFECT_IDS.len() {
+            break;
         }
     }
-    per_id
+    Outcome { current, ambiguous }
 }
 
 fn last_id(f: &Fit) -> &'static str {
     f.spec.extras.last().map(|e| e.id()).unwrap_or("")
 }
 
-/// The fine piecewise-linear basis of the temp_curvature candidate: about one
-/// breakpoint per 4 C over the data's range, at most 16.
-pub fn fine_breakpoints(tmin: f64, tmax: f64) -> Vec<f64> {
-    let nb = 16usize
-        .min(((tmax - tmin) / 4.0).floor() as usize + 1)
-        .max(2);
-    (0..nb)
-        .map(|k| tmin + (tmax - tmin) * k as f64 / (nb - 1) as f64)
+/// The joint model without extra `e`, refitted.
+pub fn without(data: &Data, f: &Fit, e: usize) -> Option<Fit> {
+    data.fit(&f.spec.without(e), None, true)
+}
+
+/// Drop, one at a time, the effect the joint model needs least while one of them no
+/// longer passes the acceptance rules against the model without it.
+pub fn backward(data: &Data, mut current: Fit) -> Fit {
+    loop {
+        let mut weakest: Option<(f64, Fit)> = None;
+        for e in 0..current.spec.extras.len() {
+            let Some(reduced) = without(data, &current, e) else {
+                continue;
+            };
+            let j = judge(data, &reduced, &current, e);
+            if !j.accepted() && weakest.as_ref().is_none_or(|(g, _)| j.gain < *g) {
+                weakest = Some((j.gain, reduced));
+            }
+        }
+        match weakest {
+            Some((_, reduced)) => current = reduced,
+            None => return current,
+        }
+    }
+}
+
+/// RMS (floor units) of `f`'s residual over the rows where `contribution` (floor units)
+/// exceeds 2.
+fn region_rms(data: &Data, f: &Fit, contribution: &[f64]) -> Option<f64> {
+    let rows: Vec<usize> = (0..contribution.len()).filter(|&r| contribution[r].abs() > 2.0).collect();
+    if rows.is_empty() {
+        return None;
+    }
+    let ss: f64 = rows
+        .iter()
+        .map(|&r| data.w[r] * f.resid[r / 3][r % 3] * f.resid[r / 3][r % 3])
+        .sum();
+    Some((ss / rows.len() as f64).sqrt())
+}
+
+/// An effect's contribution to the model, per residual row in floor units: the joint
+/// model's prediction minus the prediction without it.
+pub fn contribution(data: &Data, full: &Fit, reduced: &Fit) -> Vec<f64> {
+    (0..data.n_rows())
+        .map(|r| (reduced.resid[r / 3][r % 3] - full.resid[r / 3][r % 3]) * data.w[r].sqrt())
         .collect()
 }
 
-/// Add effects to `baseline` while one is accepted.
-pub fn forward(data: &Data, baseline: &Fit, fine: &[f64]) -> Outcome {
-    let mut current = baseline.clone();
-    let mut findings = Vec::new();
-    let mut ambiguous = Vec::new();
-    let mut used: Vec<&'static str> = Vec::new();
-    loop {
-        let mut per_id = trials(data, &current, &used, fine);
-        if std::env::var_os("HOSTFIT_DEBUG").is_some() {
-            for (f, d) in &per_id {
-                eprintln!(
-                    "  trial {:?}: dBIC {d:.1}, heldout {:.1} vs {:.1}",
-                    f.spec.extras.last(),
-                    f.heldout,
-                    current.heldout
-                );
+/// Whether extra `e` explains the data where it acts: there the joint model's residual is
+/// at the floor, or at most [`ADEQUATE_RATIO`] of the residual without the effect.
+pub fn adequate(data: &Data, full: &Fit, reduced: &Fit) -> bool {
+    let c = contribution(data, full, reduced);
+    match (region_rms(data, full, &c), region_rms(data, reduced, &c)) {
+        (Some(after), Some(before)) => after <= AT_FLOOR_RMS || after <= ADEQUATE_RATIO * before,
+        _ => false,
+    }
+}
+
+/// Drop every effect that does not explain the data where it acts (its region is
+/// reported as unexplained instead); refits after each drop.
+pub fn keep_adequate(data: &Data, mut current: Fit) -> Fit {
+    'again: loop {
+        for e in 0..current.spec.extras.len() {
+            let Some(reduced) = without(data, &current, e) else {
+                continue;
+            };
+            if !adequate(data, &current, &reduced) {
+                if std::env::var_os("HOSTFIT_DEBUG").is_some() {
+                    eprintln!("  not adequate: {:?}", current.spec.extras[e]);
+                }
+                current = reduced;
+                continue 'again;
             }
         }
-        per_id.retain(|(f, d)| {
-            *d < -BIC_MARGIN && f.heldout < current.heldout - 2.0 * (f.k - current.k) as f64
-        });
-        per_id.sort_by(|a, b| a.1.total_cmp(&b.1));
-        let Some((best, d)) = per_id.first().cloned() else {
-            break;
-        };
-        let id = last_id(&best);
-        let rivals: Vec<&'static str> = per_id[1..]
-            .iter()
-            .filter(|(_, d2)| (d2 - d).abs() < AMBIGUITY_MARGIN)
-            .map(|(f, _)| last_id(f))
-            .collect();
-        let evidence = evidence_for(data, &current, &best, id, d);
-        if rivals.is_empty() {
-            findings.push(finding(data, &best, &current, d, evidence));
-        } else {
-            let mut c = vec![id.to_string()];
-            c.extend(rivals.iter().map(|s| s.to_string()));
-            ambiguous.push(Ambiguity {
-                candidates: c,
-                needed: needed(id, rivals[0]),
-            });
-            used.extend(rivals.iter().copied());
-        }
-        used.push(id);
-        current = best;
-        if used.len() >= EFFECT_IDS.len() {
-            break;
-        }
-    }
-    Outcome {
-        current,
-        findings,
-        ambiguous,
+        return current;
     }
 }

@@ -1,14 +1,15 @@
 //! Weighted linear least squares: the one solver of the crate. Normal equations are
 //! accumulated row by row (zeros skipped, so the sparse designs of the diagnosis stay
-//! cheap, and folds of held-out data are simply added), then solved on the
-//! column-equilibrated matrix by a symmetric eigen-decomposition with one rank test.
+//! cheap, and folds of held-out data are simply added or subtracted), then solved on the
+//! column-equilibrated matrix by a Cholesky factorisation with one rank test.
 use nalgebra::{DMatrix, DVector};
 
-/// Rank test: the equilibrated normal matrix counts as singular when its smallest
-/// eigenvalue is at most this fraction of its largest, i.e. when the design's condition
-/// number exceeds about 3e5. A direction of parameter space constrained that much less
-/// than the best one is not determined by the data (and the normal equations could not
-/// resolve it reliably in f64 anyway: their rounding is eps times the condition squared).
+/// Rank test: the equilibrated normal matrix (unit diagonal) counts as singular when a
+/// pivot of its Cholesky factorisation (the square of a diagonal element of L: the part
+/// of a column not explained by the columns before it) is at most this. A column
+/// explained by the others to within 1 part in 3e5 is not determined by the data (and
+/// the normal equations could not resolve it reliably in f64 anyway: their rounding is
+/// eps times the condition number squared).
 pub const RANK_TOL: f64 = 1e-11;
 
 /// The weighted normal equations `(A^T W A, A^T W b)` of a set of rows.
@@ -74,30 +75,62 @@ impl Normal {
         }
     }
 
+    /// Add one row given by its nonzero entries `(column, value)`.
+    pub fn add_sparse(&mut self, row: &[(usize, f64)], b: f64, w: f64) {
+        for &(i, vi) in row {
+            self.atb[i] += w * vi * b;
+            for &(j, vj) in row {
+                self.ata[(i, j)] += w * vi * vj;
+            }
+        }
+    }
+
+    /// The equations of these rows without `other`'s (a fold held out).
+    pub fn minus(&self, other: &Normal) -> Normal {
+        Normal {
+            ata: &self.ata - &other.ata,
+            atb: &self.atb - &other.atb,
+        }
+    }
+
     /// Solve; `None` when the rows do not determine every parameter ([`RANK_TOL`]).
     pub fn solve(&self) -> Option<Solution> {
+        let (l, d) = self.factor()?;
+        let p = d.len();
+        let sb = DVector::from_fn(p, |i, _| self.atb[i] / d[i]);
+        let y = l.solve(&sb);
+        let x = DVector::from_fn(p, |i, _| y[i] / d[i]);
+        let inv = l.inverse();
+        let cov = DMatrix::from_fn(p, p, |i, j| inv[(i, j)] / (d[i] * d[j]));
+        Some(Solution { x, cov })
+    }
+
+    /// The parameters only (no covariance: cheaper, for profiling).
+    pub fn solve_x(&self) -> Option<DVector<f64>> {
+        let (l, d) = self.factor()?;
+        let p = d.len();
+        let y = l.solve(&DVector::from_fn(p, |i, _| self.atb[i] / d[i]));
+        Some(DVector::from_fn(p, |i, _| y[i] / d[i]))
+    }
+
+    /// The Cholesky factor of the equilibrated matrix and the equilibration, after the
+    /// rank test.
+    fn factor(&self) -> Option<(nalgebra::Cholesky<f64, nalgebra::Dyn>, Vec<f64>)> {
         let p = self.ata.ncols();
         let d: Vec<f64> = (0..p).map(|j| self.ata[(j, j)].sqrt()).collect();
         if p == 0 || d.iter().any(|v| *v <= 0.0 || !v.is_finite()) {
             return None;
         }
         let s = DMatrix::from_fn(p, p, |i, j| self.ata[(i, j)] / (d[i] * d[j]));
-        let eig = s.symmetric_eigen();
-        let (mn, mx) = eig
-            .eigenvalues
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
-        if mn.is_nan() || mn <= RANK_TOL * mx {
+        let l = s.cholesky()?;
+        let lm = l.l_dirty();
+        if (0..p).any(|k| {
+            let v = lm[(k, k)] * lm[(k, k)];
+            v.is_nan() || v <= RANK_TOL
+        }) {
             return None;
         }
-        let inv = &eig.eigenvectors
-            * DMatrix::from_diagonal(&eig.eigenvalues.map(|v| 1.0 / v))
-            * eig.eigenvectors.transpose();
-        let sb = DVector::from_fn(p, |i, _| self.atb[i] / d[i]);
-        let y = &inv * sb;
-        let x = DVector::from_fn(p, |i, _| y[i] / d[i]);
-        let cov = DMatrix::from_fn(p, p, |i, j| inv[(i, j)] / (d[i] * d[j]));
-        Some(Solution { x, cov })
+        Some((l, d))
     }
 }
 

@@ -1,0 +1,150 @@
+//! The catalogue's effects as candidate extensions of the baseline model, each with the
+//! structural unknowns of its form (time constants, thresholds, initial states, restart
+//! events, where a bend sits), which the search profiles instead of assuming.
+
+/// When a warm-up clock restarts (besides the start of the recording).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Restart {
+    /// Only at power-on (the start of the recording).
+    Start,
+    /// Also after every gap in the recording (the unit was off).
+    Gaps,
+    /// Also after every handling run (re-mounting disturbs the settled state); in
+    /// flight only the power-on part applies.
+    Handling,
+}
+
+/// An effect added to the baseline model.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Extra {
+    /// `temp_curvature`, broad: the offsets' temperature basis replaced by a fine
+    /// piecewise-linear one (breakpoints, C).
+    Curvature(Vec<f64>),
+    /// `temp_curvature`, local: offsets and scales bend at `knot_c` (a hinge,
+    /// `max(0, T - knot)`).
+    Bend {
+        /// Where the bend sits, C.
+        knot_c: f64,
+    },
+    /// `thermal_lag`: each axis evaluated at its element temperature, up to two cascaded
+    /// poles per axis (`[tau1, tau2]`, s; tau2 = 0 is one pole).
+    Lag {
+        /// Time constants per axis.
+        taus: [[f64; 2]; 3],
+    },
+    /// `temp_rate`: U0_i += r_i dT/dt, the rate estimated through a low-pass of `tau_s`.
+    Rate {
+        /// The rate estimator's time constant, s.
+        tau_s: f64,
+    },
+    /// `hysteresis`: a coefficient depends on the direction of the last temperature
+    /// change: offsets (and, with `scale`, scale factors) shift by +-1/2 of a term.
+    Hysteresis {
+        /// A change larger than this sets the direction, C.
+        threshold_c: f64,
+        /// The direction before the first such change.
+        initial: f64,
+        /// Scale factors depend on the direction too.
+        scale: bool,
+    },
+    /// `nonlinearity_k2`: U_i += K2_i a_i^2.
+    K2,
+    /// `scale_asymmetry`: U_i += c_i |a_i| (c_i = K_ii delta_i).
+    Asymmetry,
+    /// `fixture_error`: position p rotated by two small angles.
+    Fixture(usize),
+    /// `warmup_drift`: U0_i += d_i exp(-t_since_restart / tau).
+    Warmup {
+        /// Time constant, s.
+        tau_s: f64,
+        /// Restart events.
+        restart: Restart,
+    },
+}
+
+/// The catalogue's effect ids, in the order candidates are tried.
+pub const EFFECT_IDS: [&str; 8] = [
+    "temp_curvature",
+    "thermal_lag",
+    "temp_rate",
+    "hysteresis",
+    "nonlinearity_k2",
+    "scale_asymmetry",
+    "fixture_error",
+    "warmup_drift",
+];
+
+impl Extra {
+    /// The catalogue id.
+    pub fn id(&self) -> &'static str {
+        match self {
+            Extra::Curvature(_) | Extra::Bend { .. } => "temp_curvature",
+            Extra::Lag { .. } => "thermal_lag",
+            Extra::Rate { .. } => "temp_rate",
+            Extra::Hysteresis { .. } => "hysteresis",
+            Extra::K2 => "nonlinearity_k2",
+            Extra::Asymmetry => "scale_asymmetry",
+            Extra::Warmup { .. } => "warmup_drift",
+            Extra::Fixture(_) => "fixture_error",
+        }
+    }
+
+    /// How many structural unknowns were profiled to choose this form (they count as
+    /// parameters in the information criterion).
+    pub fn structural(&self) -> usize {
+        match self {
+            Extra::Curvature(_) | Extra::K2 | Extra::Asymmetry => 0,
+            Extra::Bend { .. } | Extra::Rate { .. } | Extra::Fixture(_) => 1,
+            Extra::Lag { taus } => {
+                let distinct = |k: usize| {
+                    let mut v: Vec<f64> = taus.iter().map(|t| t[k]).collect();
+                    v.sort_by(f64::total_cmp);
+                    v.dedup();
+                    v.iter().filter(|t| **t > 0.0).count()
+                };
+                distinct(0) + distinct(1)
+            }
+            Extra::Hysteresis { .. } => 2,
+            Extra::Warmup { restart, .. } => 1 + usize::from(*restart != Restart::Start),
+        }
+    }
+
+    /// How many times the effect may be added (a second warm-up time constant, a second
+    /// bend, more than one position off).
+    pub fn max_count(id: &str) -> usize {
+        match id {
+            "temp_curvature" | "warmup_drift" => 2,
+            "fixture_error" => 3,
+            _ => 1,
+        }
+    }
+
+    /// The form found, in words (for the report).
+    pub fn form(&self) -> String {
+        match self {
+            Extra::Curvature(b) => format!("offsets bend through {} breakpoints", b.len()),
+            Extra::Bend { knot_c } => format!("a bend at {knot_c:.1} C"),
+            Extra::Lag { taus } => {
+                let poles = if taus.iter().any(|t| t[1] > 0.0) { "two poles" } else { "one pole" };
+                let same = taus.iter().all(|t| *t == taus[0]);
+                format!("{poles}, {}", if same { "one time constant for all axes" } else { "a time constant per axis" })
+            }
+            Extra::Rate { tau_s } => format!("rate through a {tau_s:.0} s low-pass"),
+            Extra::Hysteresis { threshold_c, initial, scale } => format!(
+                "{} switch after {threshold_c} C; {} before the first change",
+                if *scale { "offsets and scale factors" } else { "offsets" },
+                if *initial > 0.0 { "heated" } else { "cooled" }
+            ),
+            Extra::K2 | Extra::Asymmetry => "per axis".into(),
+            Extra::Fixture(_) => "two small rotations of one position".into(),
+            Extra::Warmup { tau_s, restart } => format!(
+                "settles with {tau_s:.0} s after {}",
+                match restart {
+                    Restart::Start => "power-on",
+                    Restart::Gaps => "power-on and each gap",
+                    Restart::Handling => "power-on, each gap and each handling",
+                }
+            ),
+        }
+    }
+}

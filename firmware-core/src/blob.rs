@@ -18,7 +18,7 @@
 //! | 13 | serial length s (0..=32) |
 //! | 14 | physics section words (0, or [`PHYSICS_WORDS`]) |
 //! | 15 | 0 (reserved) |
-//! | 16.. | serial (UTF-8), zero-padded to a multiple of 4 bytes |
+//! | 16.. | serial (printable ASCII), zero-padded to a multiple of 4 bytes |
 //! | | T0, t_min, t_max, update step (4 f32, C) |
 //! | | breakpoints (f32 each; piecewise-linear only) |
 //! | | rows x 12 coefficients (f32, [`crate::model::COEFF_NAMES`] order) |
@@ -242,7 +242,7 @@ impl<'a> BlobView<'a> {
         let serial_end = HEADER_LEN.saturating_add(usize::from(serial));
         let text = bytes.get(HEADER_LEN..serial_end).ok_or(Error::Malformed)?;
         let padding = bytes.get(serial_end..l.scalars).ok_or(Error::Malformed)?;
-        if core::str::from_utf8(text).is_err() || padding.iter().any(|&b| b != 0) {
+        if !text.iter().all(|&b| serial_byte(b)) || padding.iter().any(|&b| b != 0) {
             return Err(Error::Malformed);
         }
         let physics = if has_physics {
@@ -274,14 +274,12 @@ impl<'a> BlobView<'a> {
         self.bytes
     }
 
-    /// The unit's serial number.
-    pub fn serial(&self) -> &'a str {
+    /// The unit's serial number: printable ASCII, so no UTF-8 decoder is linked.
+    pub fn serial(&self) -> &'a [u8] {
         let len = self.bytes.get(13).copied().map_or(0, usize::from);
-        let text = self
-            .bytes
+        self.bytes
             .get(HEADER_LEN..HEADER_LEN.saturating_add(len))
-            .unwrap_or(&[]);
-        core::str::from_utf8(text).unwrap_or("")
+            .unwrap_or(&[])
     }
 
     fn scalar(&self, k: usize) -> f32 {
@@ -294,8 +292,8 @@ impl<'a> BlobView<'a> {
     /// The owned form (the host's: heapless tables, about 1 KiB).
     pub fn to_blob(&self) -> Blob {
         let mut serial = heapless::String::new();
-        // the serial was checked to be at most MAX_SERIAL_LEN bytes of UTF-8
-        let _ = serial.push_str(self.serial());
+        // the serial was checked: at most MAX_SERIAL_LEN bytes of printable ASCII
+        let _ = serial.push_str(core::str::from_utf8(self.serial()).unwrap_or(""));
         let rows = 0..self.rows();
         let model = match self.kind {
             ModelKind::Poly => TempModel::Poly {
@@ -319,6 +317,11 @@ impl<'a> BlobView<'a> {
             },
         }
     }
+}
+
+/// A serial is printable ASCII (a unit name), in format 3.
+fn serial_byte(b: u8) -> bool {
+    (0x20..0x7F).contains(&b)
 }
 
 /// The total length the header declares, when it agrees with its complement.
@@ -398,9 +401,26 @@ impl Source for BlobView<'_> {
     #[inline]
     fn physics(&self) -> Option<Physics<f32>> {
         let p = self.physics?;
-        Some(Physics::from_words(&core::array::from_fn(|i| {
+        Some(Physics::from_word_fn(|i| {
             f32_at(p, 4usize.saturating_mul(i))
-        })))
+        }))
+    }
+    /// Every f32 word of the blob, scalars to physics section, in one pass over the
+    /// bytes (an exponent of all ones is an infinity or a NaN).
+    fn all_finite(&self) -> bool {
+        let words = self
+            .bytes
+            .get(usize::from(self.scalars)..self.bytes.len().saturating_sub(CRC_LEN))
+            .unwrap_or(&[]);
+        words.chunks_exact(4).all(|w| {
+            let bits = u32::from_le_bytes([
+                w.first().copied().unwrap_or(0xFF),
+                w.get(1).copied().unwrap_or(0xFF),
+                w.get(2).copied().unwrap_or(0xFF),
+                w.get(3).copied().unwrap_or(0xFF),
+            ]);
+            bits & 0x7F80_0000 != 0x7F80_0000
+        })
     }
 }
 
@@ -418,6 +438,9 @@ pub struct Blob {
 impl Blob {
     /// All checks a decoded blob passes, also applied before encoding.
     pub fn validate(&self) -> Result<(), Error> {
+        if !self.serial.bytes().all(serial_byte) {
+            return Err(Error::Malformed);
+        }
         self.calibration.validate()?;
         let c0 = Coeffs::from_array(&self.calibration.at_t0());
         invert(&c0.k).map(|_| ()).ok_or(Error::Singular)
@@ -577,7 +600,7 @@ mod tests {
         assert_eq!(n, 204);
         assert_eq!(Blob::decode(&buf[..n]).unwrap(), b);
         let v = BlobView::new(&buf[..n]).unwrap();
-        assert_eq!(v.serial(), "PAPER-UNIT");
+        assert_eq!(v.serial(), b"PAPER-UNIT");
         assert_eq!(BlobView::from_region(&buf).unwrap().bytes().len(), n);
     }
 

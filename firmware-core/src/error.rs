@@ -17,8 +17,9 @@ pub enum Error {
     /// The blob has a valid checksum but a format version this firmware does not read
     /// (an older blob: re-export it with the current host-fit).
     UnsupportedVersion(u16),
-    /// The header and the layout disagree, or reserved bytes are not zero (a valid
-    /// checksum over content no encoder of this version writes).
+    /// The header and the layout disagree, reserved bytes are not zero, or the serial
+    /// is not printable ASCII (a valid checksum over content no encoder of this version
+    /// writes; on encoding: a serial that is not printable ASCII).
     Malformed,
     /// Bytes follow the length the header declares.
     TrailingBytes,

@@ -127,50 +127,58 @@ impl<R: Real> Physics<R> {
         ]
     }
 
-    /// The inverse of [`Physics::to_words`].
-    #[inline]
-    pub fn from_words(w: &[R; PHYSICS_WORDS]) -> Self {
-        let [sample_period_s, lag_alpha, r0, r1, r2, rate_alpha, h0, h1, h2, hysteresis_threshold_c, hysteresis_initial, k0, k1, k2, a0, a1, a2, w0, w1, w2, warmup_decay] =
-            *w;
+    /// No physics: no lag (alpha 1), no offsets, no K2 or asymmetry.
+    pub fn neutral() -> Self {
+        let z = [R::ZERO; 3];
         Physics {
-            sample_period_s,
-            lag_alpha,
-            rate: [r0, r1, r2],
-            rate_alpha,
-            hysteresis: [h0, h1, h2],
-            hysteresis_threshold_c,
-            hysteresis_initial,
-            k2: [k0, k1, k2],
-            asymmetry: [a0, a1, a2],
-            warmup: [w0, w1, w2],
-            warmup_decay,
+            sample_period_s: R::ONE,
+            lag_alpha: R::ONE,
+            rate: z,
+            rate_alpha: R::ONE,
+            hysteresis: z,
+            hysteresis_threshold_c: R::ZERO,
+            hysteresis_initial: R::ZERO,
+            k2: z,
+            asymmetry: z,
+            warmup: z,
+            warmup_decay: R::ZERO,
+        }
+    }
+
+    /// The inverse of [`Physics::to_words`].
+    pub fn from_words(w: &[R; PHYSICS_WORDS]) -> Self {
+        Self::from_word_fn(|i| w.get(i).copied().unwrap_or(R::NAN))
+    }
+
+    /// [`Physics::from_words`] with word `i` given by `w(i)`: a blob's section is read
+    /// field by field where it lies, without a copy of the section.
+    #[inline(always)]
+    pub fn from_word_fn(w: impl Fn(usize) -> R) -> Self {
+        Physics {
+            sample_period_s: w(0),
+            lag_alpha: w(1),
+            rate: [w(2), w(3), w(4)],
+            rate_alpha: w(5),
+            hysteresis: [w(6), w(7), w(8)],
+            hysteresis_threshold_c: w(9),
+            hysteresis_initial: w(10),
+            k2: [w(11), w(12), w(13)],
+            asymmetry: [w(14), w(15), w(16)],
+            warmup: [w(17), w(18), w(19)],
+            warmup_decay: w(20),
         }
     }
 
     /// Check finiteness and ranges.
     pub fn validate(&self) -> Result<(), Error> {
-        let scalars = [
-            self.sample_period_s,
-            self.lag_alpha,
-            self.rate_alpha,
-            self.hysteresis_threshold_c,
-            self.hysteresis_initial,
-            self.warmup_decay,
-        ];
-        let arrays = [
-            self.rate,
-            self.hysteresis,
-            self.k2,
-            self.asymmetry,
-            self.warmup,
-        ];
-        if !scalars
-            .iter()
-            .chain(arrays.iter().flatten())
-            .all(|v| v.is_finite())
-        {
+        if !self.to_words().iter().all(|v| v.is_finite()) {
             return Err(Error::NonFinite);
         }
+        self.validate_ranges()
+    }
+
+    /// The range checks of [`Physics::validate`] (values known to be finite).
+    pub fn validate_ranges(&self) -> Result<(), Error> {
         let unit = |v: R| v > R::ZERO && v <= R::ONE;
         if self.sample_period_s <= R::ZERO
             || !unit(self.lag_alpha)
@@ -300,11 +308,11 @@ pub fn eval_table<T: Table>(tab: &T, t0: T::Real, t: T::Real) -> CoeffRow<T::Rea
             }
             let next = seg.saturating_add(1);
             let (b0, b1) = (tab.breakpoint(seg), tab.breakpoint(next));
-            let (v0, v1) = (tab.row(seg), tab.row(next));
             let f = (t - b0) / (b1 - b0);
-            let mut out = [zero; N_COEFFS];
-            for ((o, lo), hi) in out.iter_mut().zip(v0.iter()).zip(v1.iter()) {
-                *o = *lo + (*hi - *lo) * f;
+            // the lower row is interpolated in place: one row less on the stack
+            let mut out = tab.row(seg);
+            for (o, hi) in out.iter_mut().zip(tab.row(next).iter()) {
+                *o = *o + (*hi - *o) * f;
             }
             out
         }
@@ -313,6 +321,14 @@ pub fn eval_table<T: Table>(tab: &T, t0: T::Real, t: T::Real) -> CoeffRow<T::Rea
 
 /// Sizes, finiteness and breakpoint order of any table.
 pub fn validate_table<T: Table>(tab: &T) -> Result<(), Error> {
+    table_size(tab)?;
+    if !table_finite(tab) {
+        return Err(Error::NonFinite);
+    }
+    breakpoints_increasing(tab)
+}
+
+fn table_size<T: Table>(tab: &T) -> Result<(), Error> {
     let n = tab.rows();
     let max = match tab.kind() {
         ModelKind::Poly => MAX_POLY_ORDER.saturating_add(1),
@@ -321,18 +337,19 @@ pub fn validate_table<T: Table>(tab: &T) -> Result<(), Error> {
     if n < 2 || n > max {
         return Err(Error::TableSize);
     }
-    for j in 0..n {
-        if !tab.row(j).iter().all(|v| v.is_finite()) {
-            return Err(Error::NonFinite);
-        }
-    }
+    Ok(())
+}
+
+fn table_finite<T: Table>(tab: &T) -> bool {
+    let pwl = tab.kind() == ModelKind::Pwl;
+    (0..tab.rows()).all(|j| {
+        tab.row(j).iter().all(|v| v.is_finite()) && (!pwl || tab.breakpoint(j).is_finite())
+    })
+}
+
+fn breakpoints_increasing<T: Table>(tab: &T) -> Result<(), Error> {
     if tab.kind() == ModelKind::Pwl {
-        for j in 0..n {
-            if !tab.breakpoint(j).is_finite() {
-                return Err(Error::NonFinite);
-            }
-        }
-        for j in 1..n {
+        for j in 1..tab.rows() {
             if tab.breakpoint(j.saturating_sub(1)) >= tab.breakpoint(j) {
                 return Err(Error::BreakpointsNotIncreasing);
             }
@@ -406,6 +423,8 @@ pub trait Source: Copy {
     fn has_physics(&self) -> bool;
     /// The physics terms, read where they live (once per sample on the physics path).
     fn physics(&self) -> Option<Physics<Self::Real>>;
+    /// Every value (scalars, table, physics terms) is finite.
+    fn all_finite(&self) -> bool;
 }
 
 impl<R: Real> Source for &Calibration<R> {
@@ -443,23 +462,32 @@ impl<R: Real> Source for &Calibration<R> {
     fn physics(&self) -> Option<Physics<R>> {
         self.physics.clone()
     }
+    fn all_finite(&self) -> bool {
+        let scalars = [self.t0_c, self.t_min_c, self.t_max_c, self.update_step_c];
+        scalars.iter().all(|v| v.is_finite())
+            && table_finite(&self.model)
+            && self
+                .physics
+                .as_ref()
+                .is_none_or(|p| p.to_words().iter().all(|v| v.is_finite()))
+    }
 }
 
-/// The checks every calibration passes, in the order of their errors: finite scalars,
-/// range and step, physics terms, the table. (Whether K(T0) is invertible is checked
+/// The checks every calibration passes, in the order of their errors: table size,
+/// every value finite, range and step, physics ranges, breakpoint order. (Whether K(T0) is invertible is checked
 /// by the blob and the compensator.)
 pub fn validate_source<S: Source>(s: &S) -> Result<(), Error> {
-    let scalars = [s.t0_c(), s.t_min_c(), s.t_max_c(), s.update_step_c()];
-    if !scalars.iter().all(|v| v.is_finite()) {
+    table_size(s.table())?;
+    if !s.all_finite() {
         return Err(Error::NonFinite);
     }
     if s.t_min_c() >= s.t_max_c() || s.update_step_c() < <S::Real as Real>::ZERO {
         return Err(Error::BadRange);
     }
     if let Some(p) = s.physics() {
-        p.validate()?;
+        p.validate_ranges()?;
     }
-    validate_table(s.table())
+    breakpoints_increasing(s.table())
 }
 
 impl<R: Real> Calibration<R> {

@@ -260,7 +260,7 @@ fn content_checks_behind_a_valid_crc() {
     assert_eq!(edit(&|b| b[14] = 5), Some(Error::Malformed)); // physics words
     assert_eq!(edit(&|b| b[13] = 33), Some(Error::Malformed)); // serial too long
     assert_eq!(edit(&|b| b[27] = 1), Some(Error::Malformed)); // padding
-    assert_eq!(edit(&|b| b[16] = 0xFF), Some(Error::Malformed)); // serial not UTF-8
+    assert_eq!(edit(&|b| b[16] = 0xFF), Some(Error::Malformed)); // serial not printable ASCII
                                                                  // K(T0) singular: the +20 C row's K made all zero
     assert_eq!(
         edit(&|b| (0..9).for_each(|i| put(b, 56 + 48 + 4 * i, 0.0))),

@@ -8,7 +8,9 @@ use crate::model::{
     add3, all_finite, apply, diagonal, invert, mat_mul, mat_sub, mat_vec, sub3, Coeffs, Mat3, Vec3,
 };
 use crate::real::Real;
-use crate::temperature::{eval_table, Calibration, Physics, Source};
+#[cfg(feature = "physics")]
+use crate::temperature::Physics;
+use crate::temperature::{eval_table, Calibration, Source};
 
 /// Which temperature-error model method 2 subtracts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -179,8 +179,9 @@ const BUDGET_FLASH: u64 = 6 * 1024;
 const M1_FLOOR: u64 = 18;
 const BUDGET_M1: u64 = M1_FLOOR * 5 / 2;
 
-/// The firmware test under QEMU, built with and without the `physics` feature.
-fn run_embedded() -> Result<(Measured, Measured), String> {
+/// The firmware test under QEMU, built with and without the `physics` feature, and
+/// the C harness (its summary line, or why it failed).
+fn run_embedded() -> Result<(Measured, Measured, Result<String, String>), String> {
     crate::setup::qemu()?;
     crate::setup::tools()?;
     let sysroot = toolchain()?;
@@ -265,7 +266,171 @@ fn run_embedded() -> Result<(Measured, Measured), String> {
     }
     let core = variants.pop().ok_or("no core variant")?;
     let full = variants.pop().ok_or("no physics variant")?;
-    Ok((full, core))
+    let want = format!("{expected}{expected_phys}");
+    let c = c_harness(&sysroot, &dir, [&blob, &pblob, &inputs], &want);
+    Ok((full, core, c))
+}
+
+/// A C array of `bytes` named `name`, with its length.
+fn c_array(name: &str, bytes: &[u8]) -> String {
+    let mut s = format!("const uint8_t {name}[] __attribute__((aligned(4))) = {{");
+    for (i, b) in bytes.iter().enumerate() {
+        if i % 16 == 0 {
+            s.push_str("\n ");
+        }
+        s.push_str(&format!(" {b},"));
+    }
+    s.push_str(&format!(
+        "\n}};\nconst uint32_t {name}_len = {};\n",
+        bytes.len()
+    ));
+    s
+}
+
+/// firmware-core-ffi as a staticlib for the MCU, the C test program built with
+/// arm-none-eabi-gcc and linked with it, run under QEMU on the same blobs and inputs as
+/// the Rust harness, every output compared bit for bit with the host's.
+fn c_harness(
+    sysroot: &Path,
+    dir: &Path,
+    [blob, pblob, inputs]: [&Path; 3],
+    expected: &str,
+) -> Result<String, String> {
+    crate::setup::arm_gcc()?;
+    let root = crate::root();
+    let target_dir = root.join("target/ffi-thumb");
+    let mut c = cross_cmd(sysroot, "cargo");
+    c.current_dir(&root)
+        .args([
+            "rustc",
+            "-p",
+            "firmware-core-ffi",
+            "--release",
+            "--target",
+            TARGET,
+            "-Zbuild-std=core",
+            "--crate-type",
+            "staticlib",
+            "--target-dir",
+        ])
+        .arg(&target_dir)
+        // the Rust harness's profile: size-optimised, LTO, abort
+        .env("CARGO_PROFILE_RELEASE_OPT_LEVEL", "s")
+        .env("CARGO_PROFILE_RELEASE_LTO", "true")
+        .env("CARGO_PROFILE_RELEASE_CODEGEN_UNITS", "1")
+        .env("CARGO_PROFILE_RELEASE_PANIC", "abort");
+    sh(&mut c)?;
+    let lib = target_dir
+        .join(TARGET)
+        .join("release/libfirmware_core_ffi.a");
+    let mut data = String::from("#include <stdint.h>\n");
+    for (name, path) in [
+        ("fc_test_blob", blob),
+        ("fc_test_blob_phys", pblob),
+        ("fc_test_inputs", inputs),
+    ] {
+        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        data.push_str(&c_array(name, &bytes));
+    }
+    let data_c = dir.join("c-data.c");
+    std::fs::write(&data_c, data).map_err(|e| e.to_string())?;
+    let src = root.join("firmware-core-ffi/c-test");
+    let elf = dir.join("fc-c-test.elf");
+    sh(Command::new("arm-none-eabi-gcc")
+        .args([
+            "-mcpu=cortex-m4",
+            "-mthumb",
+            "-mfloat-abi=hard",
+            "-mfpu=fpv4-sp-d16",
+            "-Os",
+            "-std=c11",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-ffreestanding",
+            "-nostdlib",
+            "-ffunction-sections",
+            "-fdata-sections",
+            "-Wl,--gc-sections",
+        ])
+        .arg("-I")
+        .arg(root.join("firmware-core-ffi/include"))
+        .arg("-T")
+        .arg(src.join("link.ld"))
+        .arg(src.join("main.c"))
+        .arg(src.join("startup.c"))
+        .arg(&data_c)
+        .arg(&lib)
+        .arg("-lgcc")
+        .arg("-o")
+        .arg(&elf))?;
+    let out = Command::new("timeout")
+        .args([
+            "60",
+            "qemu-system-arm",
+            "-machine",
+            "mps2-an386",
+            "-cpu",
+            "cortex-m4",
+            "-nographic",
+            "-semihosting-config",
+            "enable=on,target=native",
+        ])
+        .arg("-kernel")
+        .arg(&elf)
+        .output()
+        .map_err(|e| format!("qemu-system-arm: {e}"))?;
+    // SYS_WRITE0 output is QEMU's stderr (the Rust harness's SYS_WRITE goes to stdout)
+    let stdout = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    if !out.status.success() {
+        return Err(format!(
+            "the C harness failed under QEMU ({}):\n{}",
+            out.status,
+            stdout.lines().rev().take(5).collect::<Vec<_>>().join("\n")
+        ));
+    }
+    let got: Vec<&str> = stdout.lines().filter(|l| l.starts_with("vec ")).collect();
+    let want: Vec<&str> = expected.lines().filter(|l| l.starts_with("vec ")).collect();
+    let diffs = got.iter().zip(&want).filter(|(g, w)| g != w).count();
+    if got.len() != want.len() || want.is_empty() || diffs > 0 {
+        return Err(format!(
+            "C harness: {} results, {} expected, {diffs} differ",
+            got.len(),
+            want.len()
+        ));
+    }
+    // the program itself checks the codes and exits non-zero on a wrong one
+    if !stdout.lines().any(|l| l.starts_with("refusals ")) {
+        return Err("C harness: no refusal check printed".into());
+    }
+    let version = Command::new("arm-none-eabi-gcc")
+        .arg("-dumpversion")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_default();
+    let size = Command::new("llvm-size")
+        .arg("-A")
+        .arg(&elf)
+        .output()
+        .map_err(|e| e.to_string())?;
+    let flash: u64 = String::from_utf8_lossy(&size.stdout)
+        .lines()
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            match f.as_slice() {
+                [name, sz, _] if [".text", ".rodata"].contains(name) => sz.parse::<u64>().ok(),
+                _ => None,
+            }
+        })
+        .sum();
+    Ok(format!(
+        "C harness: {} compensated samples (3 methods; the PWL blob from `host-fit fit` and the physics blob from `host-fit diagnose --out`) through firmware_core.h (arm-none-eabi-gcc {version}, the firmware-core-ffi staticlib with `physics`) bit-identical to the host's f32 evaluation, as the Rust harness's; a truncated blob and one with a flipped version bit refused with FC_ERR_TRUNCATED and FC_ERR_CRC; the linked C program: {flash} bytes of .text + .rodata, test data included",
+        want.len()
+    ))
 }
 
 /// Run one ELF under QEMU with the counting plugin, compare, and measure.
@@ -551,7 +716,20 @@ fn component(sym: &str) -> String {
 pub fn embedded(steps: &mut crate::Steps) {
     eprintln!("\n==> embedded: firmware-core under QEMU mps2-an386 (Cortex-M4F)");
     match run_embedded() {
-        Ok((full, core)) => {
+        Ok((mut full, core, c)) => {
+            let c_ok = c.is_ok();
+            full.lines.push(match c {
+                Ok(line) => line,
+                Err(e) => {
+                    eprintln!("xtask: embedded: {e}");
+                    format!("C harness: FAILED ({})", e.lines().next().unwrap_or(""))
+                }
+            });
+            if c_ok {
+                steps.passed.push("embedded: C harness bit-exact".into());
+            } else {
+                steps.failed.push("embedded: C harness".into());
+            }
             let md = format!(
                 "## firmware-core on Cortex-M4F (QEMU mps2-an386), `cargo xtask embedded`\n\n\
                  The harness is built and run twice: with the `physics` feature (the default; \

@@ -1,39 +1,432 @@
-//! The coefficient blob flashed beside the firmware: header, postcard content, CRC-32.
+//! The coefficient blob flashed beside the firmware, validated and read in place.
 //!
-//! Layout (all little-endian):
+//! Format version 3: a fixed little-endian layout of f32 words behind a 16-byte header,
+//! CRC-32 last. [`BlobView::new`] checks a blob where it lies (flash) and the
+//! compensator reads the tables from those bytes: no copy of the tables on the stack or
+//! in RAM. [`Blob`] is the owned form the host builds, encodes and decodes with the same
+//! layout code.
 //!
 //! | bytes | content |
 //! |---|---|
 //! | 0..4 | magic `ATCB` |
-//! | 4..6 | format version (u16), currently [`FORMAT_VERSION`] (2: optional physics terms) |
-//! | 6..n-4 | [`Blob`] encoded with postcard (serial, calibration) |
+//! | 4..6 | format version (u16), [`FORMAT_VERSION`] |
+//! | 6..8 | total length n, CRC included (u16) |
+//! | 8..10 | `!n` (u16): a length that disagrees with its complement is corruption, not truncation |
+//! | 10 | model: 1 polynomial, 2 piecewise-linear |
+//! | 11 | rows: polynomial terms (order + 1, 2..=6) or breakpoints (2..=16) |
+//! | 12 | flags: bit 0 clamp (other bits 0) |
+//! | 13 | serial length s (0..=32) |
+//! | 14 | physics section words (0, or [`PHYSICS_WORDS`]) |
+//! | 15 | 0 (reserved) |
+//! | 16.. | serial (printable ASCII), zero-padded to a multiple of 4 bytes |
+//! | | T0, t_min, t_max, update step (4 f32, C) |
+//! | | breakpoints (f32 each; piecewise-linear only) |
+//! | | rows x 12 coefficients (f32, [`crate::model::COEFF_NAMES`] order) |
+//! | | physics section (f32 words, [`Physics::to_words`] order) |
 //! | n-4..n | CRC-32 (IEEE) of bytes 0..n-4 |
 //!
-//! Decoding checks, in order: length, magic, version, CRC, content, no trailing bytes,
-//! table sizes, finite values, strictly increasing breakpoints, a valid range, and an
-//! invertible K at T0. Encoding needs no allocator (it writes into a caller's buffer).
+//! [`BlobView::new`] checks, in order: (1) the slice holds a header and a checksum and
+//! the declared length (when it agrees with its complement) is the slice's length
+//! ([`Error::Truncated`], [`Error::TrailingBytes`]); (2) the CRC over everything
+//! ([`Error::CrcMismatch`]): any flipped bit, the version's included, reads as
+//! corruption; (3) magic and version ([`Error::BadMagic`],
+//! [`Error::UnsupportedVersion`]); (4) the header against the layout
+//! ([`Error::TableSize`], [`Error::Malformed`]); (5) the content: finite values, range,
+//! increasing breakpoints, physics ranges, K(T0) invertible.
+//!
+//! Older blobs: versions 1 and 2 also end with the CRC-32 of everything before it, but
+//! have no length field (bytes 6..10 are content, which matches its own complement with
+//! probability 2^-16). So when the length pair disagrees, the CRC is taken over the
+//! whole slice: a version-2 blob passes it and is refused as
+//! `UnsupportedVersion(2)`, while a version-3 blob with a flipped length bit fails it
+//! (`CrcMismatch`).
 #![deny(clippy::arithmetic_side_effects)]
 use crate::crc::crc32;
 use crate::error::Error;
-use crate::model::{invert, Coeffs};
-use crate::temperature::{Calibration, TempModel};
-use serde::{Deserialize, Serialize};
+use crate::model::{invert, Coeffs, N_COEFFS};
+use crate::temperature::{
+    eval_table, validate_source, Calibration, CoeffRow, ModelKind, Physics, Source, Table,
+    TempModel, MAX_BREAKPOINTS, MAX_POLY_ORDER, PHYSICS_WORDS,
+};
 
 /// The four magic bytes a blob starts with.
 pub const MAGIC: [u8; 4] = *b"ATCB";
-/// The format version this firmware reads and writes.
-pub const FORMAT_VERSION: u16 = 2;
-/// Bytes before the content.
-pub const HEADER_LEN: usize = 6;
+/// The format version this firmware reads and writes (3: fixed f32 layout, read in place).
+pub const FORMAT_VERSION: u16 = 3;
+/// Bytes of the header.
+pub const HEADER_LEN: usize = 16;
 /// Bytes of the trailing checksum.
 pub const CRC_LEN: usize = 4;
-/// The largest blob this version can produce (16 breakpoints, 32-byte serial).
+/// The largest blob this version can produce (16 breakpoints, 32-byte serial, physics).
 pub const MAX_BLOB_LEN: usize = 1024;
 /// Longest unit serial, bytes of UTF-8.
 pub const MAX_SERIAL_LEN: usize = 32;
 
-/// The decoded blob: which unit, and its calibration in f32.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+const MODEL_POLY: u8 = 1;
+const MODEL_PWL: u8 = 2;
+const FLAG_CLAMP: u8 = 1;
+const ROW_BYTES: usize = 4 * N_COEFFS;
+const SCALAR_BYTES: usize = 16;
+const PHYSICS_BYTES: usize = 4 * PHYSICS_WORDS;
+
+/// Where everything lies in a blob of a given shape: the one definition of the layout,
+/// used by the encoder and by [`BlobView`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Layout {
+    scalars: usize,
+    breakpoints: usize,
+    table: usize,
+    physics: usize,
+    crc: usize,
+}
+
+impl Layout {
+    /// `serial`: bytes of serial; `rows`: table rows; `physics`: whether the section is
+    /// there. The sizes are bounded by the header's u8 fields, so nothing overflows.
+    const fn new(kind: ModelKind, rows: usize, serial: usize, physics: bool) -> Layout {
+        let padded = serial.saturating_add(3) & !3;
+        let scalars = HEADER_LEN.saturating_add(padded);
+        let breakpoints = scalars.saturating_add(SCALAR_BYTES);
+        let bp_bytes = match kind {
+            ModelKind::Poly => 0,
+            ModelKind::Pwl => rows.saturating_mul(4),
+        };
+        let table = breakpoints.saturating_add(bp_bytes);
+        let physics_at = table.saturating_add(rows.saturating_mul(ROW_BYTES));
+        let crc = physics_at.saturating_add(if physics { PHYSICS_BYTES } else { 0 });
+        Layout {
+            scalars,
+            breakpoints,
+            table,
+            physics: physics_at,
+            crc,
+        }
+    }
+
+    const fn total(&self) -> usize {
+        self.crc.saturating_add(CRC_LEN)
+    }
+}
+
+// Size contracts, checked when the crate compiles.
+const _: () = {
+    // the header is the 16 bytes the table above documents, and keeps the f32 words
+    // that follow 4-byte aligned relative to the blob's start
+    assert!(HEADER_LEN == 16 && HEADER_LEN % 4 == 0);
+    // the length fields are u16
+    assert!(MAX_BLOB_LEN <= u16::MAX as usize);
+    // the largest blob of either kind fits MAX_BLOB_LEN, so every valid blob re-encodes
+    let pwl = Layout::new(ModelKind::Pwl, MAX_BREAKPOINTS, MAX_SERIAL_LEN, true);
+    let poly = Layout::new(
+        ModelKind::Poly,
+        MAX_POLY_ORDER.saturating_add(1),
+        MAX_SERIAL_LEN,
+        true,
+    );
+    assert!(pwl.total() <= MAX_BLOB_LEN && poly.total() <= MAX_BLOB_LEN);
+    // the row and word counts fit the header's u8 fields
+    assert!(MAX_BREAKPOINTS <= 255);
+    assert!(PHYSICS_WORDS <= 255);
+};
+
+fn u16_at(bytes: &[u8], off: usize) -> Option<u16> {
+    bytes
+        .get(off..)
+        .and_then(|s| s.first_chunk::<2>())
+        .map(|b| u16::from_le_bytes(*b))
+}
+
+/// The little-endian f32 at `off` (alignment-free); NaN past the end (never after
+/// validation), so a bug would show, not read as a plausible zero.
+#[inline]
+fn f32_at(bytes: &[u8], off: usize) -> f32 {
+    match bytes.get(off..).and_then(|s| s.first_chunk::<4>()) {
+        Some(b) => f32::from_le_bytes(*b),
+        None => f32::NAN,
+    }
+}
+
+/// A blob validated in place: it borrows the bytes (in flash) and reads every value
+/// from them on demand. Obtained only from [`BlobView::new`] or
+/// [`BlobView::from_region`], so holding one means the blob passed every check.
+#[derive(Clone, Copy, Debug)]
+pub struct BlobView<'a> {
+    bytes: &'a [u8],
+    /// The physics section, as a fixed-size array: the per-sample path reads it at
+    /// constant offsets, without bounds checks.
+    physics: Option<&'a [u8; PHYSICS_BYTES]>,
+    kind: ModelKind,
+    rows: u8,
+    clamp: bool,
+    scalars: u16,
+    breakpoints: u16,
+    table: u16,
+}
+
+impl<'a> BlobView<'a> {
+    /// Validate the blob `bytes` (exactly one blob) where it lies.
+    pub fn new(bytes: &'a [u8]) -> Result<Self, Error> {
+        let n = bytes.len();
+        if n < HEADER_LEN.saturating_add(CRC_LEN) {
+            return Err(Error::Truncated);
+        }
+        if let Some(declared) = declared_len(bytes) {
+            if declared > n {
+                return Err(Error::Truncated);
+            }
+            if declared < n {
+                return Err(Error::TrailingBytes);
+            }
+        }
+        // n >= HEADER_LEN + CRC_LEN, so the split is in range
+        let (body, stored) = bytes.split_at(n.saturating_sub(CRC_LEN));
+        let stored = stored.first_chunk::<4>().map(|b| u32::from_le_bytes(*b));
+        if stored != Some(crc32(body)) {
+            return Err(Error::CrcMismatch);
+        }
+        if bytes.get(..4) != Some(&MAGIC[..]) {
+            return Err(Error::BadMagic);
+        }
+        let version = u16_at(bytes, 4).unwrap_or(0);
+        if version != FORMAT_VERSION {
+            return Err(Error::UnsupportedVersion(version));
+        }
+        // A current-version blob with a valid CRC must declare its own length.
+        if declared_len(bytes) != Some(n) {
+            return Err(Error::Malformed);
+        }
+        let view = Self::parse_header(bytes)?;
+        validate_source(&view)?;
+        let c0 = Coeffs::from_array(&eval_table(&view, view.t0_c(), view.t0_c()));
+        invert(&c0.k).ok_or(Error::Singular)?;
+        Ok(view)
+    }
+
+    /// Validate the blob at the start of a larger region (a flash sector, say): its
+    /// header's length decides where it ends; the rest of the region is ignored.
+    pub fn from_region(region: &'a [u8]) -> Result<Self, Error> {
+        match declared_len(region) {
+            Some(n) if n <= region.len() => Self::new(region.get(..n).unwrap_or(region)),
+            _ => Self::new(region),
+        }
+    }
+
+    /// The header's fields against the layout (CRC, magic and version already checked).
+    fn parse_header(bytes: &'a [u8]) -> Result<Self, Error> {
+        let h = bytes.first_chunk::<HEADER_LEN>().ok_or(Error::Truncated)?;
+        let [_, _, _, _, _, _, _, _, _, _, model, rows, flags, serial, physics, reserved] = *h;
+        let kind = match model {
+            MODEL_POLY => ModelKind::Poly,
+            MODEL_PWL => ModelKind::Pwl,
+            _ => return Err(Error::Malformed),
+        };
+        let max_rows = match kind {
+            ModelKind::Poly => MAX_POLY_ORDER.saturating_add(1),
+            ModelKind::Pwl => MAX_BREAKPOINTS,
+        };
+        if usize::from(rows) < 2 || usize::from(rows) > max_rows {
+            return Err(Error::TableSize);
+        }
+        let has_physics = match usize::from(physics) {
+            0 => false,
+            PHYSICS_WORDS => true,
+            _ => return Err(Error::Malformed),
+        };
+        if flags & !FLAG_CLAMP != 0 || reserved != 0 || usize::from(serial) > MAX_SERIAL_LEN {
+            return Err(Error::Malformed);
+        }
+        let l = Layout::new(kind, usize::from(rows), usize::from(serial), has_physics);
+        if l.total() != bytes.len() {
+            return Err(Error::Malformed);
+        }
+        let serial_end = HEADER_LEN.saturating_add(usize::from(serial));
+        let text = bytes.get(HEADER_LEN..serial_end).ok_or(Error::Malformed)?;
+        let padding = bytes.get(serial_end..l.scalars).ok_or(Error::Malformed)?;
+        if !text.iter().all(|&b| serial_byte(b)) || padding.iter().any(|&b| b != 0) {
+            return Err(Error::Malformed);
+        }
+        let physics = if has_physics {
+            let section = bytes.get(l.physics..).ok_or(Error::Malformed)?;
+            Some(
+                section
+                    .first_chunk::<PHYSICS_BYTES>()
+                    .ok_or(Error::Malformed)?,
+            )
+        } else {
+            None
+        };
+        // every offset is below the total length, itself below MAX_BLOB_LEN (u16)
+        let off = |v: usize| u16::try_from(v).map_err(|_| Error::Malformed);
+        Ok(BlobView {
+            bytes,
+            physics,
+            kind,
+            rows,
+            clamp: flags & FLAG_CLAMP != 0,
+            scalars: off(l.scalars)?,
+            breakpoints: off(l.breakpoints)?,
+            table: off(l.table)?,
+        })
+    }
+
+    /// The blob's bytes.
+    pub fn bytes(&self) -> &'a [u8] {
+        self.bytes
+    }
+
+    /// The unit's serial number: printable ASCII, so no UTF-8 decoder is linked.
+    pub fn serial(&self) -> &'a [u8] {
+        let len = self.bytes.get(13).copied().map_or(0, usize::from);
+        self.bytes
+            .get(HEADER_LEN..HEADER_LEN.saturating_add(len))
+            .unwrap_or(&[])
+    }
+
+    fn scalar(&self, k: usize) -> f32 {
+        f32_at(
+            self.bytes,
+            usize::from(self.scalars).saturating_add(k.saturating_mul(4)),
+        )
+    }
+
+    /// The owned form (the host's: heapless tables, about 1 KiB).
+    pub fn to_blob(&self) -> Blob {
+        let mut serial = heapless::String::new();
+        // the serial was checked: at most MAX_SERIAL_LEN bytes of printable ASCII
+        let _ = serial.push_str(core::str::from_utf8(self.serial()).unwrap_or(""));
+        let rows = 0..self.rows();
+        let model = match self.kind {
+            ModelKind::Poly => TempModel::Poly {
+                terms: rows.map(|j| self.row(j)).collect(),
+            },
+            ModelKind::Pwl => TempModel::Pwl {
+                breakpoints: rows.clone().map(|j| self.breakpoint(j)).collect(),
+                values: rows.map(|j| self.row(j)).collect(),
+            },
+        };
+        Blob {
+            serial,
+            calibration: Calibration {
+                t0_c: self.t0_c(),
+                t_min_c: self.t_min_c(),
+                t_max_c: self.t_max_c(),
+                clamp: self.clamp,
+                update_step_c: self.update_step_c(),
+                model,
+                physics: self.physics(),
+            },
+        }
+    }
+}
+
+/// A serial is printable ASCII (a unit name), in format 3.
+fn serial_byte(b: u8) -> bool {
+    (0x20..0x7F).contains(&b)
+}
+
+/// The total length the header declares, when it agrees with its complement.
+fn declared_len(bytes: &[u8]) -> Option<usize> {
+    let (n, inv) = (u16_at(bytes, 6)?, u16_at(bytes, 8)?);
+    (n == !inv).then_some(usize::from(n))
+}
+
+impl Table for BlobView<'_> {
+    type Real = f32;
+    #[inline]
+    fn kind(&self) -> ModelKind {
+        self.kind
+    }
+    #[inline]
+    fn rows(&self) -> usize {
+        usize::from(self.rows)
+    }
+    #[inline]
+    fn breakpoint(&self, j: usize) -> f32 {
+        if j >= self.rows() {
+            return f32::NAN;
+        }
+        f32_at(
+            self.bytes,
+            usize::from(self.breakpoints).saturating_add(j.saturating_mul(4)),
+        )
+    }
+    #[inline]
+    fn row(&self, j: usize) -> CoeffRow<f32> {
+        let off = usize::from(self.table).saturating_add(j.saturating_mul(ROW_BYTES));
+        // one bounds check per row; the 12 reads at constant offsets need none
+        match self
+            .bytes
+            .get(off..)
+            .and_then(|s| s.first_chunk::<ROW_BYTES>())
+        {
+            Some(r) if j < self.rows() => {
+                core::array::from_fn(|i| f32_at(r, 4usize.saturating_mul(i)))
+            }
+            _ => [f32::NAN; N_COEFFS],
+        }
+    }
+}
+
+impl Source for BlobView<'_> {
+    type Real = f32;
+    type Table = Self;
+    #[inline]
+    fn table(&self) -> &Self {
+        self
+    }
+    #[inline]
+    fn t0_c(&self) -> f32 {
+        self.scalar(0)
+    }
+    #[inline]
+    fn t_min_c(&self) -> f32 {
+        self.scalar(1)
+    }
+    #[inline]
+    fn t_max_c(&self) -> f32 {
+        self.scalar(2)
+    }
+    #[inline]
+    fn clamp(&self) -> bool {
+        self.clamp
+    }
+    #[inline]
+    fn update_step_c(&self) -> f32 {
+        self.scalar(3)
+    }
+    #[inline]
+    fn has_physics(&self) -> bool {
+        self.physics.is_some()
+    }
+    #[inline]
+    fn physics(&self) -> Option<Physics<f32>> {
+        let p = self.physics?;
+        Some(Physics::from_word_fn(|i| {
+            f32_at(p, 4usize.saturating_mul(i))
+        }))
+    }
+    /// Every f32 word of the blob, scalars to physics section, in one pass over the
+    /// bytes (an exponent of all ones is an infinity or a NaN).
+    fn all_finite(&self) -> bool {
+        let words = self
+            .bytes
+            .get(usize::from(self.scalars)..self.bytes.len().saturating_sub(CRC_LEN))
+            .unwrap_or(&[]);
+        words.chunks_exact(4).all(|w| {
+            let bits = u32::from_le_bytes([
+                w.first().copied().unwrap_or(0xFF),
+                w.get(1).copied().unwrap_or(0xFF),
+                w.get(2).copied().unwrap_or(0xFF),
+                w.get(3).copied().unwrap_or(0xFF),
+            ]);
+            bits & 0x7F80_0000 != 0x7F80_0000
+        })
+    }
+}
+
+/// The owned blob: which unit, and its calibration in f32 (the host's form; the
+/// firmware reads a [`BlobView`] instead).
+#[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Blob {
     /// The unit's serial number.
@@ -45,72 +438,114 @@ pub struct Blob {
 impl Blob {
     /// All checks a decoded blob passes, also applied before encoding.
     pub fn validate(&self) -> Result<(), Error> {
+        if !self.serial.bytes().all(serial_byte) {
+            return Err(Error::Malformed);
+        }
         self.calibration.validate()?;
         let c0 = Coeffs::from_array(&self.calibration.at_t0());
         invert(&c0.k).map(|_| ()).ok_or(Error::Singular)
     }
 
-    /// Write the blob into `buf`, returning the number of bytes written.
+    /// Write the blob into `buf` (format [`FORMAT_VERSION`]), returning the number of
+    /// bytes written. No allocator: the caller's buffer, [`MAX_BLOB_LEN`] always suffices.
     pub fn encode(&self, buf: &mut [u8]) -> Result<usize, Error> {
         self.validate()?;
-        let (header, rest) = buf
-            .split_at_mut_checked(HEADER_LEN)
-            .ok_or(Error::BufferTooSmall)?;
-        header.copy_from_slice(&header_bytes());
-        let content_len = postcard::to_slice(self, rest)
-            .map_err(|_| Error::BufferTooSmall)?
-            .len();
-        let body_len = HEADER_LEN
-            .checked_add(content_len)
-            .ok_or(Error::BufferTooSmall)?;
-        let total = body_len.checked_add(CRC_LEN).ok_or(Error::BufferTooSmall)?;
-        let crc = crc32(buf.get(..body_len).ok_or(Error::BufferTooSmall)?);
-        buf.get_mut(body_len..total)
-            .ok_or(Error::BufferTooSmall)?
-            .copy_from_slice(&crc.to_le_bytes());
-        Ok(total)
+        let cal = &self.calibration;
+        let (kind, rows) = (cal.model.kind(), cal.model.rows());
+        let serial = self.serial.as_bytes();
+        let l = Layout::new(kind, rows, serial.len(), cal.physics.is_some());
+        let n = l.total();
+        let out = buf.get_mut(..n).ok_or(Error::BufferTooSmall)?;
+        out.fill(0);
+        let n16 = u16::try_from(n).map_err(|_| Error::BufferTooSmall)?;
+        let [m0, m1, m2, m3] = MAGIC;
+        let [v0, v1] = FORMAT_VERSION.to_le_bytes();
+        let [n0, n1] = n16.to_le_bytes();
+        let [i0, i1] = (!n16).to_le_bytes();
+        let model = match kind {
+            ModelKind::Poly => MODEL_POLY,
+            ModelKind::Pwl => MODEL_PWL,
+        };
+        // validated: rows <= 16, serial <= 32 bytes, physics words = PHYSICS_WORDS
+        let small = |v: usize| u8::try_from(v).map_err(|_| Error::TableSize);
+        let physics_words = if cal.physics.is_some() {
+            PHYSICS_WORDS
+        } else {
+            0
+        };
+        let header = [
+            m0,
+            m1,
+            m2,
+            m3,
+            v0,
+            v1,
+            n0,
+            n1,
+            i0,
+            i1,
+            model,
+            small(rows)?,
+            if cal.clamp { FLAG_CLAMP } else { 0 },
+            small(serial.len())?,
+            small(physics_words)?,
+            0,
+        ];
+        let mut w = Writer { out, at: 0 };
+        w.bytes(&header)?;
+        w.bytes(serial)?;
+        w.at = l.scalars;
+        for v in [cal.t0_c, cal.t_min_c, cal.t_max_c, cal.update_step_c] {
+            w.f32(v)?;
+        }
+        for j in 0..rows {
+            if kind == ModelKind::Pwl {
+                w.at = l.breakpoints.saturating_add(j.saturating_mul(4));
+                w.f32(cal.model.breakpoint(j))?;
+            }
+            w.at = l.table.saturating_add(j.saturating_mul(ROW_BYTES));
+            for v in cal.model.row(j) {
+                w.f32(v)?;
+            }
+        }
+        w.at = l.physics;
+        if let Some(p) = &cal.physics {
+            for v in p.to_words() {
+                w.f32(v)?;
+            }
+        }
+        let body = w.out.get(..l.crc).ok_or(Error::BufferTooSmall)?;
+        let crc = crc32(body);
+        w.at = l.crc;
+        w.bytes(&crc.to_le_bytes())?;
+        Ok(n)
     }
 
-    /// Decode and check a blob.
+    /// Validate and read a blob into the owned form ([`BlobView::new`], then
+    /// [`BlobView::to_blob`]).
     pub fn decode(bytes: &[u8]) -> Result<Blob, Error> {
-        let min = HEADER_LEN + CRC_LEN;
-        if bytes.len() <= min {
-            return Err(Error::TooShort);
-        }
-        let (magic, rest) = bytes.split_at_checked(4).ok_or(Error::TooShort)?;
-        if magic != MAGIC {
-            return Err(Error::BadMagic);
-        }
-        let (ver, _) = rest.split_at_checked(2).ok_or(Error::TooShort)?;
-        let version = u16::from_le_bytes([
-            ver.first().copied().unwrap_or(0),
-            ver.get(1).copied().unwrap_or(0),
-        ]);
-        if version != FORMAT_VERSION {
-            return Err(Error::UnsupportedVersion(version));
-        }
-        let body_len = bytes.len().checked_sub(CRC_LEN).ok_or(Error::TooShort)?;
-        let (body, stored) = bytes.split_at_checked(body_len).ok_or(Error::TooShort)?;
-        let mut crc = [0u8; CRC_LEN];
-        crc.copy_from_slice(stored);
-        if crc32(body) != u32::from_le_bytes(crc) {
-            return Err(Error::CrcMismatch);
-        }
-        let content = body.get(HEADER_LEN..).ok_or(Error::TooShort)?;
-        let (blob, trailing): (Blob, &[u8]) =
-            postcard::take_from_bytes(content).map_err(|_| Error::Malformed)?;
-        if !trailing.is_empty() {
-            return Err(Error::TrailingBytes);
-        }
-        blob.validate()?;
-        Ok(blob)
+        BlobView::new(bytes).map(|v| v.to_blob())
     }
 }
 
-fn header_bytes() -> [u8; HEADER_LEN] {
-    let [m0, m1, m2, m3] = MAGIC;
-    let [v0, v1] = FORMAT_VERSION.to_le_bytes();
-    [m0, m1, m2, m3, v0, v1]
+struct Writer<'b> {
+    out: &'b mut [u8],
+    at: usize,
+}
+
+impl Writer<'_> {
+    fn bytes(&mut self, b: &[u8]) -> Result<(), Error> {
+        let end = self.at.checked_add(b.len()).ok_or(Error::BufferTooSmall)?;
+        self.out
+            .get_mut(self.at..end)
+            .ok_or(Error::BufferTooSmall)?
+            .copy_from_slice(b);
+        self.at = end;
+        Ok(())
+    }
+    fn f32(&mut self, v: f32) -> Result<(), Error> {
+        self.bytes(&v.to_le_bytes())
+    }
 }
 
 /// The paper's Tables 1-2 (-40, +20, +70 C) as the paper's two-interval
@@ -162,7 +597,11 @@ mod tests {
         let b = example_blob();
         let mut buf = [0u8; MAX_BLOB_LEN];
         let n = b.encode(&mut buf).unwrap();
+        assert_eq!(n, 204);
         assert_eq!(Blob::decode(&buf[..n]).unwrap(), b);
+        let v = BlobView::new(&buf[..n]).unwrap();
+        assert_eq!(v.serial(), b"PAPER-UNIT");
+        assert_eq!(BlobView::from_region(&buf).unwrap().bytes().len(), n);
     }
 
     #[test]

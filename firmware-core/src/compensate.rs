@@ -8,7 +8,9 @@ use crate::model::{
     add3, all_finite, apply, diagonal, invert, mat_mul, mat_sub, mat_vec, sub3, Coeffs, Mat3, Vec3,
 };
 use crate::real::Real;
-use crate::temperature::Calibration;
+#[cfg(feature = "physics")]
+use crate::temperature::Physics;
+use crate::temperature::{eval_table, Calibration, Source};
 
 /// Which temperature-error model method 2 subtracts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -79,34 +81,43 @@ pub struct Output<R> {
     pub status: Status,
 }
 
-/// The compensator: borrows the calibration (in flash or a static), holds only the
-/// cached matrices (state of about 150 bytes in f32).
+/// Which code path a sample takes: the method and the physics terms folded into one
+/// dispatch, so the per-sample path tests one byte, not a flag and then a method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Path {
+    Constants,
+    Result,
+    #[cfg(feature = "physics")]
+    Physics,
+}
+
+/// The compensator: borrows the calibration (a [`crate::blob::BlobView`] of the blob in
+/// flash, or an owned [`Calibration`] on the host) and holds only the cached matrices
+/// (about 200 bytes in f32; at most 256, checked when the crate compiles).
 #[derive(Clone, Debug)]
-pub struct Compensator<'a, R: Real = f32> {
-    cal: &'a Calibration<R>,
+pub struct Compensator<S: Source> {
+    src: S,
+    path: Path,
     method: Method,
-    /// N(T0), U0(T0): the passport constants (K(T0) at the end: read only by updates).
-    n0: Mat3<R>,
-    u00: Vec3<R>,
-    /// Temperature of the cached matrices (the raw input, before any clamping).
-    t_cached: R,
-    /// Method 1: N(T), U0(T). Method 2: `delta = m a_hat + e`.
-    n: Mat3<R>,
-    u0: Vec3<R>,
-    /// Copies of the calibration's range and step: the per-sample path reads only self.
-    t_min: R,
-    t_max: R,
-    step: R,
     /// Flags of the cached temperature (range, clamping, SINGULAR), set at each update.
     sticky: Status,
-    /// Physics terms on (the calibration has them).
+    /// N(T0), U0(T0): the passport constants (K(T0) at the end: read only by updates).
+    n0: Mat3<S::Real>,
+    u00: Vec3<S::Real>,
+    /// Temperature of the cached matrices (the raw input, before any clamping).
+    t_cached: S::Real,
+    /// Method 1: N(T), U0(T). Method 2: `delta = m a_hat + e`.
+    n: Mat3<S::Real>,
+    u0: Vec3<S::Real>,
+    /// Copies of the calibration's range and step: the per-sample path reads only self.
+    t_min: S::Real,
+    t_max: S::Real,
+    step: S::Real,
+    /// The state of the physics terms.
     #[cfg(feature = "physics")]
-    physics_on: bool,
-    /// Their state.
-    #[cfg(feature = "physics")]
-    ph: PhysicsState<R>,
+    ph: PhysicsState<S::Real>,
     /// K(T0), for method 2's dK at each update.
-    k0: Mat3<R>,
+    k0: Mat3<S::Real>,
 }
 
 /// The state of the in-flight physics terms.
@@ -125,46 +136,74 @@ struct PhysicsState<R> {
     warm: R,
 }
 
-impl<'a, R: Real> Compensator<'a, R> {
-    /// Build a compensator; the cache starts at T0.
+/// The compensator over a blob in flash, in f32: what the firmware holds.
+pub type FlashCompensator<'a> = Compensator<crate::blob::BlobView<'a>>;
+
+// Size contract: the firmware's compensator state fits 256 bytes (the C interface
+// reserves exactly that), on the MCU and on a 64-bit host alike.
+const _: () = assert!(core::mem::size_of::<FlashCompensator<'static>>() <= 256);
+
+impl<'a, R: Real> Compensator<&'a Calibration<R>> {
+    /// Build a compensator over an owned calibration (the host, tests); the cache starts
+    /// at T0.
     ///
     /// Without the `physics` feature a calibration with physics terms is refused
     /// ([`Error::PhysicsNotBuiltIn`]).
     pub fn new(cal: &'a Calibration<R>, method: Method) -> Result<Self, Error> {
         cal.validate()?;
+        Self::with_source(cal, method)
+    }
+}
+
+impl<'a> Compensator<crate::blob::BlobView<'a>> {
+    /// Build a compensator that reads the tables from a validated blob in place (flash);
+    /// the cache starts at T0.
+    ///
+    /// Without the `physics` feature a blob with physics terms is refused
+    /// ([`Error::PhysicsNotBuiltIn`]).
+    // Not inlined into the caller: its code is the library's, and counts as such in
+    // the flash figures of `cargo xtask embedded`.
+    #[inline(never)]
+    pub fn from_blob(blob: crate::blob::BlobView<'a>, method: Method) -> Result<Self, Error> {
+        Self::with_source(blob, method)
+    }
+}
+
+impl<S: Source<Real = R>, R: Real> Compensator<S> {
+    /// `src` has been validated (an owned calibration by `new`, a view by construction).
+    fn with_source(src: S, method: Method) -> Result<Self, Error> {
         #[cfg(not(feature = "physics"))]
-        if cal.physics.is_some() {
+        if src.has_physics() {
             return Err(Error::PhysicsNotBuiltIn);
         }
-        let c0 = Coeffs::from_array(&cal.at_t0());
+        let t0 = src.t0_c();
+        let c0 = Coeffs::from_array(&eval_table(src.table(), t0, t0));
         let n0 = invert(&c0.k).ok_or(Error::Singular)?;
         let mut s = Compensator {
-            cal,
+            src,
+            path: Path::Constants,
             method,
             n0,
             k0: c0.k,
             u00: c0.u0,
-            t_cached: cal.t0_c,
+            t_cached: t0,
             n: n0,
             u0: c0.u0,
-            t_min: cal.t_min_c,
-            t_max: cal.t_max_c,
-            step: cal.update_step_c,
+            t_min: src.t_min_c(),
+            t_max: src.t_max_c(),
+            step: src.update_step_c(),
             sticky: Status::default(),
             #[cfg(feature = "physics")]
-            physics_on: cal.physics.is_some(),
-            #[cfg(feature = "physics")]
             ph: PhysicsState {
-                dir: cal
-                    .physics
-                    .as_ref()
+                dir: src
+                    .physics()
                     .map(|p| p.hysteresis_initial)
                     .unwrap_or(R::ZERO),
                 warm: R::ONE,
                 ..PhysicsState::default()
             },
         };
-        s.update(cal.t0_c);
+        s.set_method(method);
         Ok(s)
     }
 
@@ -176,6 +215,14 @@ impl<'a, R: Real> Compensator<'a, R> {
     /// Switch method at run time (recomputes the cache at the cached temperature).
     pub fn set_method(&mut self, method: Method) {
         self.method = method;
+        self.path = match method {
+            Method::CorrectConstants => Path::Constants,
+            Method::CorrectResult(_) => Path::Result,
+        };
+        #[cfg(feature = "physics")]
+        if self.src.has_physics() {
+            self.path = Path::Physics;
+        }
         self.update(self.t_cached);
     }
 
@@ -184,13 +231,18 @@ impl<'a, R: Real> Compensator<'a, R> {
         self.t_cached
     }
 
+    /// The calibration the compensator reads.
+    pub fn source(&self) -> &S {
+        &self.src
+    }
+
     fn effective_temperature(&self, t: R) -> R {
-        if !self.cal.clamp {
+        if !self.src.clamp() {
             t
-        } else if t < self.cal.t_min_c {
-            self.cal.t_min_c
-        } else if t > self.cal.t_max_c {
-            self.cal.t_max_c
+        } else if t < self.t_min {
+            self.t_min
+        } else if t > self.t_max {
+            self.t_max
         } else {
             t
         }
@@ -213,7 +265,7 @@ impl<'a, R: Real> Compensator<'a, R> {
     /// Recompute the cached matrices and range flags for a finite temperature `t`.
     fn update(&mut self, t: R) {
         let te = self.effective_temperature(t);
-        let c = Coeffs::from_array(&self.cal.model.eval(self.cal.t0_c, te));
+        let c = Coeffs::from_array(&eval_table(self.src.table(), self.src.t0_c(), te));
         self.t_cached = t;
         match self.method {
             Method::CorrectConstants => match invert(&c.k) {
@@ -243,7 +295,7 @@ impl<'a, R: Real> Compensator<'a, R> {
             }
         }
         if t < self.t_min || t > self.t_max {
-            self.sticky.insert(if self.cal.clamp {
+            self.sticky.insert(if self.src.clamp() {
                 Status(Status::TEMP_OUT_OF_RANGE.0 | Status::TEMP_CLAMPED.0)
             } else {
                 Status::TEMP_OUT_OF_RANGE
@@ -257,33 +309,36 @@ impl<'a, R: Real> Compensator<'a, R> {
     /// [`Status::INPUT_NON_FINITE`]; a non-finite temperature keeps the last good one
     /// and sets [`Status::TEMP_NON_FINITE`].
     ///
-    /// The fast path has two data-independent tests: the cache step (NaN fails every
-    /// comparison, so `!(|T - Tc| <= step)` also catches a non-finite temperature) and
-    /// one finiteness test of the output sum (any non-finite input makes the output
-    /// non-finite); the rare cases are classified off the fast path. The range flags
-    /// are those of the cached temperature, evaluated at each update: within one
-    /// update step of a range limit they may lag by up to that step.
-    ///
-    /// With the `physics` feature and physics terms in the calibration, one flag branch
-    /// leads to the physics path; the cost stays fixed per sample.
+    /// The fast path has one dispatch (method and physics terms folded into one byte)
+    /// and two data-independent tests: the cache step (NaN fails every comparison, so
+    /// `!(|T - Tc| <= step)` also catches a non-finite temperature) and one finiteness
+    /// test of the output sum (any non-finite input makes the output non-finite); the
+    /// rare cases are classified off the fast path. The range flags are those of the
+    /// cached temperature, evaluated at each update: within one update step of a range
+    /// limit they may lag by up to that step.
     pub fn compensate(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
-        #[cfg(feature = "physics")]
-        if self.physics_on {
-            return self.compensate_physics(u, temp_c);
+        match self.path {
+            Path::Constants => self.core(u, temp_c, false),
+            Path::Result => self.core(u, temp_c, true),
+            #[cfg(feature = "physics")]
+            Path::Physics => self.compensate_physics(u, temp_c),
         }
-        self.core(u, temp_c)
     }
 
     /// The physics terms around the core path: the temperature (when within 40 C of the
-    /// valid range) through the thermal-lag filter, the offsets of temperature rate, hysteresis and warm-up removed from the
-    /// voltages, then the K2 and scale-asymmetry terms corrected to first order
+    /// valid range) through the thermal-lag filter, the offsets of temperature rate,
+    /// hysteresis and warm-up removed from the voltages, then the K2 and
+    /// scale-asymmetry terms corrected to first order
     /// (`a = a_hat - N (k2 a_hat^2 + c |a_hat|)`, error second order in those terms).
+    /// The terms are read from the source (flash) on every sample.
     #[cfg(feature = "physics")]
     #[inline(never)]
     fn compensate_physics(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
-        let Some(p) = self.cal.physics.as_ref() else {
-            return self.core(u, temp_c);
-        };
+        let m2 = matches!(self.method, Method::CorrectResult(_));
+        // Path::Physics is set only for a source with physics terms; the neutral set
+        // (no lag, no offsets) stands in for the impossible case, so the path holds one
+        // copy of the core, not a second one for it (flash).
+        let p = self.src.physics().unwrap_or_else(Physics::neutral);
         let s = &mut self.ph;
         let mut rate = R::ZERO;
         let mut t_model = temp_c;
@@ -323,7 +378,7 @@ impl<'a, R: Real> Compensator<'a, R> {
             r1 * rate + h1 * dir + d1 * w,
             r2 * rate + h2 * dir + d2 * w,
         ];
-        let mut out = self.core(sub3(u, offset), t_model);
+        let mut out = self.core(sub3(u, offset), t_model, m2);
         if out.status.contains(Status::INPUT_NON_FINITE)
             || out.status.contains(Status::OUTPUT_NON_FINITE)
         {
@@ -337,10 +392,7 @@ impl<'a, R: Real> Compensator<'a, R> {
             k1 * a1 * a1 + c1 * a1.abs(),
             k2 * a2 * a2 + c2 * a2.abs(),
         ];
-        let n = match self.method {
-            Method::CorrectConstants => &self.n,
-            Method::CorrectResult(_) => &self.n0,
-        };
+        let n = if m2 { &self.n0 } else { &self.n };
         out.accel = sub3(out.accel, mat_vec(n, e));
         let [b0, b1, b2] = out.accel;
         if !(b0 + b1 + b2).is_finite() {
@@ -354,17 +406,16 @@ impl<'a, R: Real> Compensator<'a, R> {
     // The negated comparisons are the point: they are true for NaN.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     #[inline(always)]
-    fn core(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
+    fn core(&mut self, u: Vec3<R>, temp_c: R, m2: bool) -> Output<R> {
         let mut status = self.sticky;
         if !((temp_c - self.t_cached).abs() <= self.step) {
             status = self.refresh(temp_c);
         }
-        let accel = match self.method {
-            Method::CorrectConstants => apply(&self.n, u, self.u0),
-            Method::CorrectResult(_) => {
-                let a_hat = apply(&self.n0, u, self.u00);
-                sub3(a_hat, add3(mat_vec(&self.n, a_hat), self.u0))
-            }
+        let accel = if m2 {
+            let a_hat = apply(&self.n0, u, self.u00);
+            sub3(a_hat, add3(mat_vec(&self.n, a_hat), self.u0))
+        } else {
+            apply(&self.n, u, self.u0)
         };
         let [a0, a1, a2] = accel;
         if !(a0 + a1 + a2).is_finite() {

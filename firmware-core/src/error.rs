@@ -6,17 +6,22 @@ use core::fmt;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Error {
-    /// The blob is shorter than its header plus checksum.
-    TooShort,
+    /// The blob ends before the length its header declares (or before a header and
+    /// checksum fit): cut short in transfer or flashing, not corrupted.
+    Truncated,
+    /// The CRC-32 over the blob does not match the stored one: corrupted (any flipped
+    /// bit, the version's included, reads as this).
+    CrcMismatch,
     /// The blob does not start with the magic bytes `ATCB`.
     BadMagic,
-    /// The blob's format version is not one this firmware reads.
+    /// The blob has a valid checksum but a format version this firmware does not read
+    /// (an older blob: re-export it with the current host-fit).
     UnsupportedVersion(u16),
-    /// The CRC-32 over the blob does not match the stored one.
-    CrcMismatch,
-    /// The content does not decode as a blob of this format version.
+    /// The header and the layout disagree, reserved bytes are not zero, or the serial
+    /// is not printable ASCII (a valid checksum over content no encoder of this version
+    /// writes; on encoding: a serial that is not printable ASCII).
     Malformed,
-    /// Bytes are left over after the content and before the checksum.
+    /// Bytes follow the length the header declares.
     TrailingBytes,
     /// A table size is outside its allowed range, or two tables disagree in size.
     TableSize,
@@ -38,12 +43,16 @@ pub enum Error {
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Error::TooShort => f.write_str("blob too short for header and checksum"),
-            Error::BadMagic => f.write_str("not a coefficient blob (bad magic)"),
-            Error::UnsupportedVersion(v) => write!(f, "unsupported blob format version {v}"),
+            Error::Truncated => f.write_str("blob truncated: shorter than its declared length"),
             Error::CrcMismatch => f.write_str("CRC-32 mismatch: blob corrupted"),
-            Error::Malformed => f.write_str("blob content does not decode"),
-            Error::TrailingBytes => f.write_str("unexpected bytes after the blob content"),
+            Error::BadMagic => f.write_str("not a coefficient blob (bad magic)"),
+            Error::UnsupportedVersion(v) => write!(
+                f,
+                "unsupported blob format version {v} (this firmware reads version {})",
+                crate::blob::FORMAT_VERSION
+            ),
+            Error::Malformed => f.write_str("blob header and layout disagree"),
+            Error::TrailingBytes => f.write_str("unexpected bytes after the blob's declared end"),
             Error::TableSize => f.write_str("temperature table size out of range or inconsistent"),
             Error::BreakpointsNotIncreasing => {
                 f.write_str("breakpoints are not strictly increasing")

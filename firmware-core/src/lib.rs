@@ -7,11 +7,12 @@
 //! it in `f32`.
 //!
 //! ```
-//! use firmware_core::{blob::Blob, compensate::{Compensator, Method}};
+//! use firmware_core::{blob::BlobView, compensate::{Compensator, Method}};
 //! # let bytes = firmware_core::blob::example_blob_bytes();
-//! // `bytes` is the coefficient blob flashed beside the firmware.
-//! let blob = Blob::decode(&bytes).expect("a valid blob");
-//! let mut comp = Compensator::new(&blob.calibration, Method::CorrectConstants)
+//! // `bytes` is the coefficient blob flashed beside the firmware: validated where it
+//! // lies, and read there by the compensator (no copy of the tables).
+//! let blob = BlobView::new(&bytes).expect("a valid blob");
+//! let mut comp = Compensator::from_blob(blob, Method::CorrectConstants)
 //!     .expect("K(T0) invertible");
 //! let out = comp.compensate([0.0045, -0.0044, -0.5521], 21.3);
 //! assert!(out.status.is_ok());

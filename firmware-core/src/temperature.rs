@@ -8,7 +8,6 @@
 use crate::error::Error;
 use crate::model::N_COEFFS;
 use crate::real::Real;
-use serde::{Deserialize, Serialize};
 
 /// Highest polynomial order a table holds.
 pub const MAX_POLY_ORDER: usize = 5;
@@ -19,7 +18,7 @@ pub const MAX_BREAKPOINTS: usize = 16;
 pub type CoeffRow<R> = [R; N_COEFFS];
 
 /// The temperature model of all 12 coefficients.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum TempModel<R> {
     /// Polynomial in `dT = T - T0`: `terms[k]` holds the dT^k coefficient of every
@@ -38,7 +37,7 @@ pub enum TempModel<R> {
 }
 
 /// Everything the compensator needs: the temperature model and how to use it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Calibration<R> {
     /// Reference temperature T0, C: the "passport" constants are `model` at T0.
@@ -62,7 +61,7 @@ pub struct Calibration<R> {
 /// Terms beyond the paper's model (physics-catalogue.md), applied in flight. Per-sample
 /// constants are computed on the host for the sample period, so the firmware needs no
 /// `exp` (libm's `expf` works in f64 and would pull soft-double code in).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Physics<R> {
     /// The sample period the constants below are for, s.
@@ -90,31 +89,96 @@ pub struct Physics<R> {
     pub warmup_decay: R,
 }
 
+/// Words (f32 in a blob) of the physics terms: the length of [`Physics::to_words`].
+pub const PHYSICS_WORDS: usize = 21;
+
 impl<R: Real> Physics<R> {
-    /// Check finiteness and ranges.
-    pub fn validate(&self) -> Result<(), Error> {
-        let scalars = [
+    /// The terms in the order a blob stores them. This and [`Physics::from_words`] are
+    /// the one definition of the blob's physics section: a new term goes at the end,
+    /// with [`PHYSICS_WORDS`] and the blob's format version bumped.
+    pub fn to_words(&self) -> [R; PHYSICS_WORDS] {
+        let [r0, r1, r2] = self.rate;
+        let [h0, h1, h2] = self.hysteresis;
+        let [k0, k1, k2] = self.k2;
+        let [a0, a1, a2] = self.asymmetry;
+        let [w0, w1, w2] = self.warmup;
+        [
             self.sample_period_s,
             self.lag_alpha,
+            r0,
+            r1,
+            r2,
             self.rate_alpha,
+            h0,
+            h1,
+            h2,
             self.hysteresis_threshold_c,
             self.hysteresis_initial,
+            k0,
+            k1,
+            k2,
+            a0,
+            a1,
+            a2,
+            w0,
+            w1,
+            w2,
             self.warmup_decay,
-        ];
-        let arrays = [
-            self.rate,
-            self.hysteresis,
-            self.k2,
-            self.asymmetry,
-            self.warmup,
-        ];
-        if !scalars
-            .iter()
-            .chain(arrays.iter().flatten())
-            .all(|v| v.is_finite())
-        {
+        ]
+    }
+
+    /// No physics: no lag (alpha 1), no offsets, no K2 or asymmetry.
+    pub fn neutral() -> Self {
+        let z = [R::ZERO; 3];
+        Physics {
+            sample_period_s: R::ONE,
+            lag_alpha: R::ONE,
+            rate: z,
+            rate_alpha: R::ONE,
+            hysteresis: z,
+            hysteresis_threshold_c: R::ZERO,
+            hysteresis_initial: R::ZERO,
+            k2: z,
+            asymmetry: z,
+            warmup: z,
+            warmup_decay: R::ZERO,
+        }
+    }
+
+    /// The inverse of [`Physics::to_words`].
+    pub fn from_words(w: &[R; PHYSICS_WORDS]) -> Self {
+        Self::from_word_fn(|i| w.get(i).copied().unwrap_or(R::NAN))
+    }
+
+    /// [`Physics::from_words`] with word `i` given by `w(i)`: a blob's section is read
+    /// field by field where it lies, without a copy of the section.
+    #[inline(always)]
+    pub fn from_word_fn(w: impl Fn(usize) -> R) -> Self {
+        Physics {
+            sample_period_s: w(0),
+            lag_alpha: w(1),
+            rate: [w(2), w(3), w(4)],
+            rate_alpha: w(5),
+            hysteresis: [w(6), w(7), w(8)],
+            hysteresis_threshold_c: w(9),
+            hysteresis_initial: w(10),
+            k2: [w(11), w(12), w(13)],
+            asymmetry: [w(14), w(15), w(16)],
+            warmup: [w(17), w(18), w(19)],
+            warmup_decay: w(20),
+        }
+    }
+
+    /// Check finiteness and ranges.
+    pub fn validate(&self) -> Result<(), Error> {
+        if !self.to_words().iter().all(|v| v.is_finite()) {
             return Err(Error::NonFinite);
         }
+        self.validate_ranges()
+    }
+
+    /// The range checks of [`Physics::validate`] (values known to be finite).
+    pub fn validate_ranges(&self) -> Result<(), Error> {
         let unit = |v: R| v > R::ZERO && v <= R::ONE;
         if self.sample_period_s <= R::ZERO
             || !unit(self.lag_alpha)
@@ -149,97 +213,178 @@ impl<R: Real> Physics<R> {
 }
 
 /// The piecewise-linear segment rule, written once for the firmware's tables and the
-/// host's fits: the segment is the last one whose lower breakpoint is <= `t` (the first
-/// one when `t` is below the table, or NaN), so the end segments extrapolate. Returns the
-/// index of the segment's lower breakpoint and the fraction `(t - b_lo) / (b_hi - b_lo)`
-/// (exact to 1.5 ulp: two roundings). Every segment is visited, so the time does not
-/// depend on `t`. `None` with fewer than two breakpoints.
-pub fn pwl_segment<R: Real>(breakpoints: &[R], t: R) -> Option<(usize, R)> {
-    let mut seg = None;
-    for (idx, w) in breakpoints.windows(2).enumerate() {
-        if let [b0, b1] = w {
-            if idx == 0 || t >= *b0 {
-                seg = Some((idx, *b0, *b1));
+/// host's fits: of `n` breakpoints (read through `breakpoint`), the segment is the last
+/// one whose lower breakpoint is <= `t` (the first one when `t` is below the table, or
+/// NaN), so the end segments extrapolate. Returns the index of the segment's lower
+/// breakpoint and the fraction `(t - b_lo) / (b_hi - b_lo)` (two roundings: within 1.5
+/// ulp). Every interior breakpoint is visited, so the time does not depend on `t`. With
+/// fewer than two breakpoints the fraction is NaN.
+#[inline]
+pub fn pwl_segment<R: Real>(n: usize, breakpoint: impl Fn(usize) -> R, t: R) -> (usize, R) {
+    let mut seg = 0;
+    for j in 1..n.saturating_sub(1) {
+        if t >= breakpoint(j) {
+            seg = j;
+        }
+    }
+    let (b0, b1) = (breakpoint(seg), breakpoint(seg.saturating_add(1)));
+    (seg, (t - b0) / (b1 - b0))
+}
+
+/// Which kind of temperature model a table holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ModelKind {
+    /// Polynomial in `dT = T - T0`; rows are the terms dT^0 .. dT^order.
+    Poly,
+    /// Piecewise-linear; rows are the values at the breakpoints.
+    Pwl,
+}
+
+/// Read access to a temperature table, wherever it lives: an owned [`TempModel`] (the
+/// host, tests) or a validated blob in flash ([`crate::blob::BlobView`]). The evaluation
+/// and the checks are written once against this trait, so a table read from flash and
+/// the same table owned give the same bits.
+pub trait Table {
+    /// The scalar the table is read in.
+    type Real: Real;
+    /// Polynomial or piecewise-linear.
+    fn kind(&self) -> ModelKind;
+    /// Number of rows: polynomial terms (order + 1) or breakpoints.
+    fn rows(&self) -> usize;
+    /// Breakpoint `j`, C (piecewise-linear tables; NaN when out of range).
+    fn breakpoint(&self, j: usize) -> Self::Real;
+    /// Row `j`: the 12 coefficients' dT^j terms (polynomial) or values at breakpoint `j`.
+    /// NaN when out of range (never after validation).
+    fn row(&self, j: usize) -> CoeffRow<Self::Real>;
+}
+
+impl<R: Real> Table for TempModel<R> {
+    type Real = R;
+    #[inline]
+    fn kind(&self) -> ModelKind {
+        match self {
+            TempModel::Poly { .. } => ModelKind::Poly,
+            TempModel::Pwl { .. } => ModelKind::Pwl,
+        }
+    }
+    #[inline]
+    fn rows(&self) -> usize {
+        match self {
+            TempModel::Poly { terms } => terms.len(),
+            TempModel::Pwl { breakpoints, .. } => breakpoints.len(),
+        }
+    }
+    #[inline]
+    fn breakpoint(&self, j: usize) -> R {
+        match self {
+            TempModel::Poly { .. } => R::NAN,
+            TempModel::Pwl { breakpoints, .. } => breakpoints.get(j).copied().unwrap_or(R::NAN),
+        }
+    }
+    #[inline]
+    fn row(&self, j: usize) -> CoeffRow<R> {
+        let r = match self {
+            TempModel::Poly { terms } => terms.get(j),
+            TempModel::Pwl { values, .. } => values.get(j),
+        };
+        r.copied().unwrap_or([R::NAN; N_COEFFS])
+    }
+}
+
+/// The 12 coefficients of table `tab` at temperature `t` (C), reference `t0` (C).
+///
+/// Cost is fixed for a given table size (no early exit), so the temperature update
+/// takes the same time wherever `t` is. Outside the breakpoints the end segment is
+/// extrapolated; the caller flags or clamps.
+///
+/// Error bound (f32, held by tests): Horner's rule gives
+/// `|err| <= 2 n eps sum_k |p_k| |dT|^k` (n = order); the interpolation
+/// `v0 + (v1 - v0) f` gives `|err| <= 4 eps max(|v0|, |v1|)`.
+pub fn eval_table<T: Table>(tab: &T, t0: T::Real, t: T::Real) -> CoeffRow<T::Real> {
+    let zero = <T::Real as Real>::ZERO;
+    match tab.kind() {
+        ModelKind::Poly => {
+            let dt = t - t0;
+            let mut acc = [zero; N_COEFFS];
+            for k in (0..tab.rows()).rev() {
+                let row = tab.row(k);
+                for (a, p) in acc.iter_mut().zip(row.iter()) {
+                    *a = *a * dt + *p;
+                }
+            }
+            acc
+        }
+        ModelKind::Pwl => {
+            let (seg, f) = pwl_segment(tab.rows(), |j| tab.breakpoint(j), t);
+            let next = seg.saturating_add(1);
+            // the lower row is interpolated in place: one row less on the stack
+            let mut out = tab.row(seg);
+            for (o, hi) in out.iter_mut().zip(tab.row(next).iter()) {
+                *o = *o + (*hi - *o) * f;
+            }
+            out
+        }
+    }
+}
+
+/// Sizes, finiteness and breakpoint order of any table.
+pub fn validate_table<T: Table>(tab: &T) -> Result<(), Error> {
+    table_size(tab)?;
+    if !table_finite(tab) {
+        return Err(Error::NonFinite);
+    }
+    breakpoints_increasing(tab)
+}
+
+fn table_size<T: Table>(tab: &T) -> Result<(), Error> {
+    let n = tab.rows();
+    let max = match tab.kind() {
+        ModelKind::Poly => MAX_POLY_ORDER.saturating_add(1),
+        ModelKind::Pwl => MAX_BREAKPOINTS,
+    };
+    if n < 2 || n > max {
+        return Err(Error::TableSize);
+    }
+    Ok(())
+}
+
+fn table_finite<T: Table>(tab: &T) -> bool {
+    let pwl = tab.kind() == ModelKind::Pwl;
+    (0..tab.rows()).all(|j| {
+        tab.row(j).iter().all(|v| v.is_finite()) && (!pwl || tab.breakpoint(j).is_finite())
+    })
+}
+
+fn breakpoints_increasing<T: Table>(tab: &T) -> Result<(), Error> {
+    if tab.kind() == ModelKind::Pwl {
+        for j in 1..tab.rows() {
+            if tab.breakpoint(j.saturating_sub(1)) >= tab.breakpoint(j) {
+                return Err(Error::BreakpointsNotIncreasing);
             }
         }
     }
-    let (idx, b0, b1) = seg?;
-    Some((idx, (t - b0) / (b1 - b0)))
-}
-
-fn row_finite<R: Real>(r: &CoeffRow<R>) -> bool {
-    r.iter().all(|v| v.is_finite())
+    Ok(())
 }
 
 impl<R: Real> TempModel<R> {
     /// Check sizes, finiteness and breakpoint order.
     pub fn validate(&self) -> Result<(), Error> {
-        match self {
-            TempModel::Poly { terms } => {
-                if terms.len() < 2 {
-                    return Err(Error::TableSize);
-                }
-                if !terms.iter().all(row_finite) {
-                    return Err(Error::NonFinite);
-                }
-            }
-            TempModel::Pwl {
-                breakpoints,
-                values,
-            } => {
-                if breakpoints.len() < 2 || values.len() != breakpoints.len() {
-                    return Err(Error::TableSize);
-                }
-                if !breakpoints.iter().all(|b| b.is_finite()) || !values.iter().all(row_finite) {
-                    return Err(Error::NonFinite);
-                }
-                if breakpoints.windows(2).any(|w| match w {
-                    [a, b] => a >= b,
-                    _ => false,
-                }) {
-                    return Err(Error::BreakpointsNotIncreasing);
-                }
+        if let TempModel::Pwl {
+            breakpoints,
+            values,
+        } = self
+        {
+            if values.len() != breakpoints.len() {
+                return Err(Error::TableSize);
             }
         }
-        Ok(())
+        validate_table(self)
     }
 
-    /// The 12 coefficients at temperature `t` (C), reference `t0` (C).
-    ///
-    /// Cost is fixed for a given table size (no early exit), so the temperature update
-    /// takes the same time wherever `t` is. Outside the breakpoints the end segment is
-    /// extrapolated; the caller flags or clamps.
-    ///
-    /// Error bound (f32, held by tests): Horner's rule gives
-    /// `|err| <= 2 n eps sum_k |p_k| |dT|^k` (n = order); the interpolation
-    /// `v0 + (v1 - v0) f` gives `|err| <= 4 eps max(|v0|, |v1|)`.
+    /// The 12 coefficients at temperature `t` (C), reference `t0` (C): [`eval_table`].
     pub fn eval(&self, t0: R, t: R) -> CoeffRow<R> {
-        match self {
-            TempModel::Poly { terms } => {
-                let dt = t - t0;
-                let mut acc = [R::ZERO; N_COEFFS];
-                for row in terms.iter().rev() {
-                    for (a, p) in acc.iter_mut().zip(row.iter()) {
-                        *a = *a * dt + *p;
-                    }
-                }
-                acc
-            }
-            TempModel::Pwl {
-                breakpoints,
-                values,
-            } => {
-                let zero_row = [R::ZERO; N_COEFFS];
-                let (seg, f) = pwl_segment(breakpoints, t).unwrap_or((0, R::ZERO));
-                let v0 = values.get(seg).unwrap_or(&zero_row);
-                let v1 = values.get(seg.wrapping_add(1)).unwrap_or(&zero_row);
-                let mut out = [R::ZERO; N_COEFFS];
-                for ((o, lo), hi) in out.iter_mut().zip(v0.iter()).zip(v1.iter()) {
-                    *o = *lo + (*hi - *lo) * f;
-                }
-                out
-            }
-        }
+        eval_table(self, t0, t)
     }
 
     /// Convert the table to another float type (f64 -> f32 rounds to nearest).
@@ -263,20 +408,110 @@ impl<R: Real> TempModel<R> {
     }
 }
 
+/// A whole calibration, wherever it lives: an owned [`Calibration`] (by reference) or a
+/// validated blob in flash ([`crate::blob::BlobView`]). The compensator is generic over
+/// it, so the host evaluates the firmware's code on either.
+pub trait Source: Copy {
+    /// The scalar the calibration is read in.
+    type Real: Real;
+    /// The temperature table.
+    type Table: Table<Real = Self::Real>;
+    /// The table.
+    fn table(&self) -> &Self::Table;
+    /// Reference temperature T0, C.
+    fn t0_c(&self) -> Self::Real;
+    /// Lowest valid temperature, C.
+    fn t_min_c(&self) -> Self::Real;
+    /// Highest valid temperature, C.
+    fn t_max_c(&self) -> Self::Real;
+    /// Clamp (true) or extrapolate (false) outside the valid range.
+    fn clamp(&self) -> bool;
+    /// Cache update step, C.
+    fn update_step_c(&self) -> Self::Real;
+    /// Whether the calibration carries in-flight physics terms.
+    fn has_physics(&self) -> bool;
+    /// The physics terms, read where they live (once per sample on the physics path).
+    fn physics(&self) -> Option<Physics<Self::Real>>;
+    /// Every value (scalars, table, physics terms) is finite.
+    fn all_finite(&self) -> bool;
+}
+
+impl<R: Real> Source for &Calibration<R> {
+    type Real = R;
+    type Table = TempModel<R>;
+    #[inline]
+    fn table(&self) -> &TempModel<R> {
+        &self.model
+    }
+    #[inline]
+    fn t0_c(&self) -> R {
+        self.t0_c
+    }
+    #[inline]
+    fn t_min_c(&self) -> R {
+        self.t_min_c
+    }
+    #[inline]
+    fn t_max_c(&self) -> R {
+        self.t_max_c
+    }
+    #[inline]
+    fn clamp(&self) -> bool {
+        self.clamp
+    }
+    #[inline]
+    fn update_step_c(&self) -> R {
+        self.update_step_c
+    }
+    #[inline]
+    fn has_physics(&self) -> bool {
+        self.physics.is_some()
+    }
+    #[inline]
+    fn physics(&self) -> Option<Physics<R>> {
+        self.physics.clone()
+    }
+    fn all_finite(&self) -> bool {
+        let scalars = [self.t0_c, self.t_min_c, self.t_max_c, self.update_step_c];
+        scalars.iter().all(|v| v.is_finite())
+            && table_finite(&self.model)
+            && self
+                .physics
+                .as_ref()
+                .is_none_or(|p| p.to_words().iter().all(|v| v.is_finite()))
+    }
+}
+
+/// The checks every calibration passes, in the order of their errors: table size,
+/// every value finite, range and step, physics ranges, breakpoint order. (Whether K(T0) is invertible is checked
+/// by the blob and the compensator.)
+pub fn validate_source<S: Source>(s: &S) -> Result<(), Error> {
+    table_size(s.table())?;
+    if !s.all_finite() {
+        return Err(Error::NonFinite);
+    }
+    if s.t_min_c() >= s.t_max_c() || s.update_step_c() < <S::Real as Real>::ZERO {
+        return Err(Error::BadRange);
+    }
+    if let Some(p) = s.physics() {
+        p.validate_ranges()?;
+    }
+    breakpoints_increasing(s.table())
+}
+
 impl<R: Real> Calibration<R> {
     /// Check the range, step and tables.
     pub fn validate(&self) -> Result<(), Error> {
-        let scalars = [self.t0_c, self.t_min_c, self.t_max_c, self.update_step_c];
-        if !scalars.iter().all(|v| v.is_finite()) {
-            return Err(Error::NonFinite);
+        if let TempModel::Pwl {
+            breakpoints,
+            values,
+        } = &self.model
+        {
+            if values.len() != breakpoints.len() {
+                return Err(Error::TableSize);
+            }
         }
-        if self.t_min_c >= self.t_max_c || self.update_step_c < R::ZERO {
-            return Err(Error::BadRange);
-        }
-        if let Some(p) = &self.physics {
-            p.validate()?;
-        }
-        self.model.validate()
+        validate_source(&self)
     }
 
     /// The coefficients at the reference temperature (the passport constants).
@@ -335,12 +570,34 @@ mod tests {
     #[test]
     fn segment_rule_picks_the_last_lower_breakpoint() {
         let b = [-40.0f64, 20.0, 70.0];
-        assert_eq!(pwl_segment(&b, -100.0), Some((0, -1.0)));
-        assert_eq!(pwl_segment(&b, 20.0), Some((1, 0.0)));
-        assert_eq!(pwl_segment(&b, 19.999).map(|s| s.0), Some(0));
-        assert_eq!(pwl_segment(&b, 120.0), Some((1, 2.0)));
-        assert_eq!(pwl_segment(&b, f64::NAN).map(|s| s.0), Some(0));
-        assert_eq!(pwl_segment(&b[..1], 0.0), None);
+        let seg = |t: f64| pwl_segment(b.len(), |j| b[j], t);
+        assert_eq!(seg(-100.0), (0, -1.0));
+        assert_eq!(seg(20.0), (1, 0.0));
+        assert_eq!(seg(19.999).0, 0);
+        assert_eq!(seg(120.0), (1, 2.0));
+        assert_eq!(seg(f64::NAN).0, 0);
+        let one = [5.0f64];
+        assert!(pwl_segment(1, |j| one.get(j).copied().unwrap_or(f64::NAN), 0.0).1.is_nan());
+    }
+
+    #[test]
+    fn physics_words_round_trip_in_the_documented_order() {
+        let p = Physics {
+            sample_period_s: 1.0,
+            lag_alpha: 2.0,
+            rate: [3.0, 4.0, 5.0],
+            rate_alpha: 6.0,
+            hysteresis: [7.0, 8.0, 9.0],
+            hysteresis_threshold_c: 10.0,
+            hysteresis_initial: 11.0,
+            k2: [12.0, 13.0, 14.0],
+            asymmetry: [15.0, 16.0, 17.0],
+            warmup: [18.0, 19.0, 20.0],
+            warmup_decay: 21.0,
+        };
+        let w = p.to_words();
+        assert_eq!(w, core::array::from_fn(|i| (i + 1) as f64));
+        assert_eq!(Physics::from_words(&w), p);
     }
 
     #[test]

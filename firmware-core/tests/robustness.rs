@@ -3,7 +3,7 @@
 //! non-finite acceleration without a flag; blobs round-trip and every bit flip is caught.
 mod common;
 
-use firmware_core::blob::{Blob, MAX_BLOB_LEN};
+use firmware_core::blob::{Blob, BlobView, MAX_BLOB_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, Method, Status};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
 use proptest::prelude::*;
@@ -102,6 +102,35 @@ proptest! {
         let bit = flip.index(n * 8);
         let mut bad = buf[..n].to_vec();
         bad[bit / 8] ^= 1 << (bit % 8);
-        prop_assert!(Blob::decode(&bad).is_err());
+        prop_assert_eq!(Blob::decode(&bad).err(), Some(firmware_core::Error::CrcMismatch));
+    }
+
+    /// The compensator reading the blob's bytes in place and the one over the owned f32
+    /// calibration give the same bits for any input sequence, physics terms included:
+    /// the host's f32 evaluation is the firmware's.
+    #[test]
+    fn flash_and_owned_calibrations_agree_bit_for_bit(cal in common::unit(), poly in any::<bool>(),
+            with_phys in any::<bool>(), m in 0usize..3,
+            seq in prop::collection::vec((prop::array::uniform3(any_f32()), any_f32()), 1..40)) {
+        let mut cal: Calibration<f32> = cal;
+        if poly {
+            let t0 = cal.at_t0();
+            cal.model = TempModel::Poly { terms: [t0, [1e-5; 12], [-2e-7; 12]].into_iter().collect() };
+        }
+        cal.update_step_c = 0.25;
+        if with_phys && cfg!(feature = "physics") {
+            cal.physics = Some(physics());
+        }
+        let blob = Blob { serial: heapless::String::new(), calibration: cal };
+        let mut buf = [0u8; MAX_BLOB_LEN];
+        let n = blob.encode(&mut buf).unwrap();
+        let view = BlobView::new(&buf[..n]).unwrap();
+        let mut flash = Compensator::from_blob(view, METHODS[m]).unwrap();
+        let mut owned = Compensator::new(&blob.calibration, METHODS[m]).unwrap();
+        for (u, t) in seq {
+            let (a, b) = (flash.compensate(u, t), owned.compensate(u, t));
+            prop_assert_eq!(a.accel.map(f32::to_bits), b.accel.map(f32::to_bits));
+            prop_assert_eq!(a.status, b.status);
+        }
     }
 }

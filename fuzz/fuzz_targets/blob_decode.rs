@@ -1,9 +1,10 @@
-//! Any bytes: decode never panics, and whatever decodes encodes and decodes back to the
-//! same blob. Input that does not start with the magic is taken as blob content and
-//! wrapped in a header and a valid CRC, so the content checks (table sizes, breakpoints,
-//! finiteness, ranges, physics terms) are fuzzed and not only the CRC.
+//! Any bytes: validation never panics, and whatever validates re-encodes to the very
+//! same bytes (format 3 is canonical) and reads the same through the view and the owned
+//! form. Input that does not start with the magic is taken as header fields and content
+//! and wrapped in a valid magic, version, length and CRC, so the checks behind the CRC
+//! (layout, table sizes, breakpoints, finiteness, ranges, physics terms) are fuzzed.
 #![no_main]
-use firmware_core::blob::{Blob, MAGIC, MAX_BLOB_LEN};
+use firmware_core::blob::{Blob, BlobView, MAGIC, MAX_BLOB_LEN};
 use libfuzzer_sys::fuzz_target;
 
 #[path = "common.rs"]
@@ -17,10 +18,13 @@ fuzz_target!(|data: &[u8]| {
         wrapped = common::wrap(data);
         &wrapped[..]
     };
-    if let Ok(b) = Blob::decode(bytes) {
+    let _ = BlobView::from_region(bytes);
+    if let Ok(v) = BlobView::new(bytes) {
+        let b = v.to_blob();
+        assert_eq!(b.validate(), Ok(()), "a validated blob's owned form is valid");
         let mut buf = [0u8; MAX_BLOB_LEN];
-        let n = b.encode(&mut buf).expect("a decoded blob encodes");
-        // equal as blobs; the bytes may differ (postcard accepts over-long varints)
-        assert_eq!(Blob::decode(&buf[..n]).as_ref(), Ok(&b), "decode(encode(b)) != b");
+        let n = b.encode(&mut buf).expect("a validated blob encodes");
+        assert_eq!(&buf[..n], bytes, "encode(decode(b)) != b");
+        assert_eq!(Blob::decode(bytes).as_ref(), Ok(&b));
     }
 });

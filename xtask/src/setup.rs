@@ -1,5 +1,6 @@
 //! What the full test needs beyond the Rust toolchain, installed when missing: QEMU 10
-//! from bookworm-backports, LLVM's nm/size, gcc, cargo-fuzz. Installing with apt needs
+//! from bookworm-backports, LLVM's nm/size, gcc, the Arm GNU toolchain (Debian's
+//! gcc-arm-none-eabi, for the C harness), cargo-fuzz. Installing with apt needs
 //! root (CI runs as root); otherwise the message says what to install.
 use std::process::Command;
 
@@ -86,6 +87,33 @@ pub fn tools() -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// arm-none-eabi-gcc (Debian's gcc-arm-none-eabi): the C harness of firmware-core-ffi.
+/// No newlib: the harness brings its own start-up and semihosting output.
+pub fn arm_gcc() -> Result<(), String> {
+    if ok(Command::new("arm-none-eabi-gcc").arg("--version")) {
+        return Ok(());
+    }
+    if !is_root() {
+        return Err(
+            "arm-none-eabi-gcc is missing: apt-get install gcc-arm-none-eabi (as root)".into(),
+        );
+    }
+    let install = || {
+        apt(&[
+            "install",
+            "-y",
+            "-qq",
+            "--no-install-recommends",
+            "gcc-arm-none-eabi",
+        ])
+    };
+    // the package lists of a fresh machine may be missing or stale
+    install().or_else(|_| {
+        apt_update()?;
+        install()
+    })
 }
 
 /// cargo-fuzz for the nightly toolchain (from crates.io).

@@ -1,23 +1,26 @@
-//! firmware-core on the target: decode the embedded blob, compensate the embedded input
-//! table with every method, print each result's f32 bits (compared bit for bit with
-//! the host by `cargo xtask embedded`), then count instructions and measure the stack.
-//! Built twice: with the `physics` feature (the physics blob compensated too) and
-//! without (that blob must be refused).
+//! firmware-core on the target: validate the embedded blobs in place, compensate the
+//! embedded input table with every method reading the tables from those bytes, print
+//! each result's f32 bits (compared bit for bit with the host by `cargo xtask
+//! embedded`), then count instructions and measure the stack. Built twice: with the
+//! `physics` feature (the physics blob compensated too) and without (that blob must be
+//! refused).
 #![no_std]
 #![no_main]
 
 use core::hint::black_box;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use firmware_core::blob::Blob;
-use firmware_core::compensate::{Compensator, ErrorModel, Method};
-use firmware_core::temperature::{Calibration, TempModel};
+use firmware_core::blob::BlobView;
+use firmware_core::compensate::{Compensator, ErrorModel, FlashCompensator, Method};
 use panic_semihosting as _;
 
 static BLOB: &[u8] = include_bytes!(env!("FW_TEST_BLOB"));
 /// A blob from `host-fit diagnose --out`: tables plus in-flight physics terms.
 static BLOB_PHYS: &[u8] = include_bytes!(env!("FW_TEST_BLOB_PHYS"));
 static INPUTS: &[u8] = include_bytes!(env!("FW_TEST_INPUTS"));
+/// Synthetic tables for the update cost (build.rs): a cubic and 5 breakpoints.
+static BLOB_POLY3: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/update_poly3.blob"));
+static BLOB_PWL5: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/update_pwl5.blob"));
 
 const METHODS: [(&str, Method); 3] = [
     ("m1", Method::CorrectConstants),
@@ -35,8 +38,8 @@ fn input(i: usize) -> ([f32; 3], f32) {
 
 /// A compensator, or a failed run. Not `unwrap`: its `Debug` formatting of the error
 /// would be linked in and counted against the library's flash.
-fn new(cal: &Calibration<f32>, m: Method) -> Compensator<'_, f32> {
-    match Compensator::new(cal, m) {
+fn new(blob: BlobView<'static>, m: Method) -> FlashCompensator<'static> {
+    match Compensator::from_blob(blob, m) {
         Ok(c) => c,
         Err(_) => {
             hprintln!("error: Compensator::new refused a test calibration");
@@ -48,7 +51,7 @@ fn new(cal: &Calibration<f32>, m: Method) -> Compensator<'_, f32> {
 
 /// A call of `compensate`'s shape that does nothing: the harness's share of a window.
 #[inline(never)]
-fn noop(c: &mut Compensator<'_, f32>, u: [f32; 3], t: f32) -> firmware_core::compensate::Output<f32> {
+fn noop(c: &mut FlashCompensator<'_>, u: [f32; 3], t: f32) -> firmware_core::compensate::Output<f32> {
     black_box(c);
     firmware_core::compensate::Output { accel: [u[0], u[1], t], status: Default::default() }
 }
@@ -93,22 +96,19 @@ fn used(sp_at_call: usize) -> usize {
 }
 
 #[inline(never)]
-fn decode_once() -> Option<Blob> {
-    Blob::decode(black_box(BLOB)).ok()
+fn decode_once(bytes: &'static [u8]) -> Option<BlobView<'static>> {
+    BlobView::new(black_box(bytes)).ok()
 }
 
-/// Calibrations for the update-cost measurement: a cubic and a 5-breakpoint table.
-fn synthetic(poly: bool, base: &Calibration<f32>) -> Calibration<f32> {
-    let mut c = base.clone();
-    let t0 = base.at_t0();
-    c.update_step_c = 0.0;
-    c.model = if poly {
-        TempModel::Poly { terms: [t0, [1e-5; 12], [1e-7; 12], [1e-9; 12]].into_iter().collect() }
-    } else {
-        let bp = [-40.0f32, -10.0, 20.0, 45.0, 70.0];
-        TempModel::Pwl { breakpoints: bp.into_iter().collect(), values: bp.iter().map(|t| t0.map(|v| v * (1.0 + 1e-5 * t))).collect() }
-    };
-    c
+fn view(bytes: &'static [u8], what: &str) -> BlobView<'static> {
+    match decode_once(bytes) {
+        Some(b) => b,
+        None => {
+            hprintln!("error: the embedded {} blob does not validate", what);
+            debug::exit(debug::EXIT_FAILURE);
+            loop {}
+        }
+    }
 }
 
 #[entry]
@@ -117,41 +117,27 @@ fn main() -> ! {
 
     let sp = cortex_m::register::msp::read() as usize;
     paint();
-    let blob = match decode_once() {
-        Some(b) => b,
-        None => {
-            hprintln!("error: the embedded blob does not decode");
-            debug::exit(debug::EXIT_FAILURE);
-            loop {}
-        }
-    };
+    let blob = view(BLOB, "PWL");
     let stack_decode = used(sp);
 
-    let phys = match Blob::decode(BLOB_PHYS) {
-        Ok(b) if b.calibration.physics.is_some() => b,
-        _ => {
-            hprintln!("error: the embedded physics blob does not decode or has no physics terms");
-            debug::exit(debug::EXIT_FAILURE);
-            loop {}
-        }
-    };
+    let phys = view(BLOB_PHYS, "physics");
     #[cfg(feature = "physics")]
-    let sets = [("", &blob), ("p", &phys)];
+    let sets = [("", blob), ("p", phys)];
     #[cfg(not(feature = "physics"))]
     let sets = {
         // built without the terms: the physics blob must be refused, not half-applied
-        match Compensator::new(&phys.calibration, Method::CorrectConstants) {
+        match Compensator::from_blob(phys, Method::CorrectConstants) {
             Err(firmware_core::Error::PhysicsNotBuiltIn) => hprintln!("physics refused"),
             _ => {
                 hprintln!("error: a physics blob was accepted without the physics feature");
                 debug::exit(debug::EXIT_FAILURE);
             }
         }
-        [("", &blob)]
+        [("", blob)]
     };
     for (prefix, b) in sets {
         for (tag, m) in METHODS {
-            let mut c = new(&b.calibration, m);
+            let mut c = new(b, m);
             for i in 0..n_inputs {
                 let (u, t) = input(i);
                 let o = c.compensate(u, t);
@@ -161,7 +147,7 @@ fn main() -> ! {
     }
 
     // Stack of compensate, including a temperature update.
-    let mut c = new(&blob.calibration, Method::CorrectResult(ErrorModel::Full));
+    let mut c = new(blob, Method::CorrectResult(ErrorModel::Full));
     let sp = cortex_m::register::msp::read() as usize;
     paint();
     let (u, _) = input(0);
@@ -176,13 +162,13 @@ fn main() -> ! {
     fw_mark_start();
     fw_mark_stop();
     // the same call with the same arguments and result, doing nothing
-    let mut dummy = new(&blob.calibration, Method::CorrectConstants);
+    let mut dummy = new(blob, Method::CorrectConstants);
     hprintln!("measure call_overhead");
     fw_mark_start();
     black_box(noop(&mut dummy, black_box([u[0] + 1e-6, u[1], u[2]]), black_box(t)));
     fw_mark_stop();
     for (tag, m) in METHODS {
-        let mut c = new(&blob.calibration, m);
+        let mut c = new(blob, m);
         c.compensate(u, t);
         let du = [u[0] + 1e-6, u[1], u[2]];
         hprintln!("measure sample_{}", tag);
@@ -192,7 +178,7 @@ fn main() -> ! {
     }
     #[cfg(feature = "physics")]
     for (tag, m) in METHODS {
-        let mut c = new(&phys.calibration, m);
+        let mut c = new(phys, m);
         c.compensate(u, t);
         let du = [u[0] + 1e-6, u[1], u[2]];
         hprintln!("measure sample_p{}", tag);
@@ -200,9 +186,8 @@ fn main() -> ! {
         black_box(c.compensate(black_box(du), black_box(t)));
         fw_mark_stop();
     }
-    for (tag, poly) in [("update_poly3", true), ("update_pwl5", false)] {
-        let cal = synthetic(poly, &blob.calibration);
-        let mut c = new(&cal, Method::CorrectConstants);
+    for (tag, bytes) in [("update_poly3", BLOB_POLY3), ("update_pwl5", BLOB_PWL5)] {
+        let mut c = new(view(bytes, tag), Method::CorrectConstants);
         c.compensate(u, -12.5);
         hprintln!("measure {}", tag);
         fw_mark_start();
@@ -211,12 +196,12 @@ fn main() -> ! {
     }
     hprintln!("measure decode");
     fw_mark_start();
-    black_box(decode_once());
+    black_box(decode_once(BLOB));
     fw_mark_stop();
     hprintln!("stack decode {}", stack_decode);
     hprintln!("stack compensate {}", stack_compensate);
-    hprintln!("size compensator {}", core::mem::size_of::<Compensator<'static, f32>>());
-    hprintln!("size blob {}", core::mem::size_of::<Blob>());
+    hprintln!("size compensator {}", core::mem::size_of::<FlashCompensator<'static>>());
+    hprintln!("size blob {}", core::mem::size_of::<BlobView<'static>>());
     hprintln!("done");
     debug::exit(debug::EXIT_SUCCESS);
     loop {}

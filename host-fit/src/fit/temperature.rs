@@ -81,7 +81,8 @@ impl Basis {
             Basis::Pwl { breakpoints } => {
                 // firmware-core's segment rule, so a fit and its table agree everywhere
                 let mut out = vec![0.0; breakpoints.len()];
-                if let Some((s, f)) = pwl_segment(breakpoints, t) {
+                if breakpoints.len() >= 2 {
+                    let (s, f) = pwl_segment(breakpoints.len(), |j| breakpoints[j], t);
                     out[s] = 1.0 - f;
                     out[s + 1] = f;
                 }

@@ -1,0 +1,376 @@
+//! firmware-core from C: the coefficient blob validated in place, the compensator in
+//! storage the caller provides, status codes, no panics across the boundary.
+//!
+//! The header `include/firmware_core.h` is generated from this file by cbindgen and
+//! committed; the `header_is_current` test fails when it is stale. This is the one
+//! crate of the workspace with `unsafe`: raw pointers from C become references here,
+//! each conversion justified where it is made.
+//!
+//! ```c
+//! #include "firmware_core.h"
+//! static fc_blob blob; static fc_compensator comp;
+//! if (fc_blob_open(&blob, unit_blob, unit_blob_len) != FC_OK) { /* refuse to run */ }
+//! if (fc_compensator_init(&comp, &blob, FC_METHOD_CONSTANTS) != FC_OK) { /* ... */ }
+//! uint32_t status = fc_compensate(&comp, volts, temp_c, accel_g);
+//! ```
+#![no_std]
+#![deny(unsafe_code)]
+
+use core::mem::{align_of, size_of};
+use firmware_core::blob::BlobView;
+use firmware_core::compensate::{Compensator, ErrorModel, FlashCompensator, Method, Status};
+use firmware_core::Error;
+
+/// Bytes of an [`fc_blob`].
+pub const FC_BLOB_SIZE: usize = 48;
+/// Bytes of an [`fc_compensator`]: the compensator state budget.
+pub const FC_COMPENSATOR_SIZE: usize = 256;
+/// Alignment of both storage types, bytes.
+pub const FC_ALIGN: usize = 8;
+
+/// Success.
+pub const FC_OK: i32 = 0;
+/// A pointer argument was NULL.
+pub const FC_ERR_NULL: i32 = 1;
+/// The method is not one of `FC_METHOD_*`.
+pub const FC_ERR_BAD_METHOD: i32 = 2;
+/// The storage was not initialised by `fc_blob_open` / `fc_compensator_init`.
+pub const FC_ERR_NOT_INITIALISED: i32 = 3;
+/// The blob ends before its declared length (cut short), or is shorter than a header.
+pub const FC_ERR_TRUNCATED: i32 = 10;
+/// CRC-32 mismatch: the blob is corrupted.
+pub const FC_ERR_CRC: i32 = 11;
+/// Not a coefficient blob (bad magic).
+pub const FC_ERR_BAD_MAGIC: i32 = 12;
+/// A valid blob of a format version this firmware does not read (an older blob).
+pub const FC_ERR_UNSUPPORTED_VERSION: i32 = 13;
+/// Header and layout disagree, or reserved bytes are set.
+pub const FC_ERR_MALFORMED: i32 = 14;
+/// Bytes after the blob's declared end.
+pub const FC_ERR_TRAILING_BYTES: i32 = 15;
+/// A table size out of range.
+pub const FC_ERR_TABLE_SIZE: i32 = 16;
+/// Breakpoints not strictly increasing.
+pub const FC_ERR_BREAKPOINTS: i32 = 17;
+/// A value is NaN or infinite.
+pub const FC_ERR_NON_FINITE: i32 = 18;
+/// Empty temperature range, negative update step, or a physics term out of range.
+pub const FC_ERR_BAD_RANGE: i32 = 19;
+/// K is singular at the reference temperature.
+pub const FC_ERR_SINGULAR: i32 = 20;
+/// The blob has physics terms; the library was built without them.
+pub const FC_ERR_PHYSICS_NOT_BUILT_IN: i32 = 21;
+/// Any other refusal (a newer firmware-core error).
+pub const FC_ERR_OTHER: i32 = 99;
+
+/// Method 1: coefficients at the current temperature.
+pub const FC_METHOD_CONSTANTS: u32 = 0;
+/// Method 2, the full temperature-error model.
+pub const FC_METHOD_RESULT_FULL: u32 = 1;
+/// Method 2, the simplified (diagonal) temperature-error model.
+pub const FC_METHOD_RESULT_SIMPLIFIED: u32 = 2;
+
+/// Sample status bit: temperature outside the valid range (extrapolated or clamped).
+pub const FC_STATUS_TEMP_OUT_OF_RANGE: u32 = 1;
+/// Sample status bit: the temperature was clamped to the valid range.
+pub const FC_STATUS_TEMP_CLAMPED: u32 = 2;
+/// Sample status bit: the temperature was not finite; the last good one was used.
+pub const FC_STATUS_TEMP_NON_FINITE: u32 = 4;
+/// Sample status bit: a voltage was not finite; the acceleration is NaN.
+pub const FC_STATUS_INPUT_NON_FINITE: u32 = 8;
+/// Sample status bit: K(T) singular at the new temperature; the last matrices were kept.
+pub const FC_STATUS_SINGULAR: u32 = 16;
+/// Sample status bit: the result overflowed; the acceleration is NaN.
+pub const FC_STATUS_OUTPUT_NON_FINITE: u32 = 32;
+/// Sample status bit: a NULL or uninitialised argument; nothing was computed.
+pub const FC_STATUS_BAD_ARGUMENT: u32 = 0x80;
+
+/// Storage for a validated blob (a view of the bytes in flash). Opaque: fill it with
+/// `fc_blob_open`.
+#[allow(non_camel_case_types)]
+#[repr(C)]
+pub struct fc_blob {
+    _opaque: [u64; 6],
+}
+
+/// Storage for a compensator (its cached matrices and filter state). Opaque: fill it
+/// with `fc_compensator_init`.
+#[allow(non_camel_case_types)]
+#[repr(C)]
+pub struct fc_compensator {
+    _opaque: [u64; 32],
+}
+
+/// Marks storage that holds an initialised value (garbage rarely matches).
+const TAG_BLOB: u32 = 0x424C_4F42;
+const TAG_COMP: u32 = 0x434F_4D50;
+
+#[repr(C)]
+struct BlobSlot {
+    tag: u32,
+    view: BlobView<'static>,
+}
+
+#[repr(C)]
+struct CompSlot {
+    tag: u32,
+    comp: FlashCompensator<'static>,
+}
+
+// The status bits are firmware-core's, and the bad-argument bit is none of them.
+const _: () = {
+    assert!(FC_STATUS_TEMP_OUT_OF_RANGE == Status::TEMP_OUT_OF_RANGE.bits() as u32);
+    assert!(FC_STATUS_TEMP_CLAMPED == Status::TEMP_CLAMPED.bits() as u32);
+    assert!(FC_STATUS_TEMP_NON_FINITE == Status::TEMP_NON_FINITE.bits() as u32);
+    assert!(FC_STATUS_INPUT_NON_FINITE == Status::INPUT_NON_FINITE.bits() as u32);
+    assert!(FC_STATUS_SINGULAR == Status::SINGULAR.bits() as u32);
+    assert!(FC_STATUS_OUTPUT_NON_FINITE == Status::OUTPUT_NON_FINITE.bits() as u32);
+    assert!(FC_STATUS_BAD_ARGUMENT > 0x3F);
+};
+
+// Size contracts: what lives in the C storage fits it, on the MCU and on the host.
+const _: () = {
+    assert!(size_of::<fc_blob>() == FC_BLOB_SIZE && align_of::<fc_blob>() == FC_ALIGN);
+    assert!(size_of::<fc_compensator>() == FC_COMPENSATOR_SIZE);
+    assert!(align_of::<fc_compensator>() == FC_ALIGN);
+    assert!(size_of::<BlobSlot>() <= FC_BLOB_SIZE && align_of::<BlobSlot>() <= FC_ALIGN);
+    assert!(size_of::<CompSlot>() <= FC_COMPENSATOR_SIZE);
+    assert!(align_of::<CompSlot>() <= FC_ALIGN);
+    // the state itself stays within its 256-byte budget
+    assert!(size_of::<FlashCompensator<'static>>() <= 256);
+};
+
+fn code(e: Error) -> i32 {
+    match e {
+        Error::Truncated => FC_ERR_TRUNCATED,
+        Error::CrcMismatch => FC_ERR_CRC,
+        Error::BadMagic => FC_ERR_BAD_MAGIC,
+        Error::UnsupportedVersion(_) => FC_ERR_UNSUPPORTED_VERSION,
+        Error::Malformed => FC_ERR_MALFORMED,
+        Error::TrailingBytes => FC_ERR_TRAILING_BYTES,
+        Error::TableSize => FC_ERR_TABLE_SIZE,
+        Error::BreakpointsNotIncreasing => FC_ERR_BREAKPOINTS,
+        Error::NonFinite => FC_ERR_NON_FINITE,
+        Error::BadRange => FC_ERR_BAD_RANGE,
+        Error::Singular => FC_ERR_SINGULAR,
+        Error::PhysicsNotBuiltIn => FC_ERR_PHYSICS_NOT_BUILT_IN,
+        _ => FC_ERR_OTHER,
+    }
+}
+
+fn method(m: u32) -> Option<Method> {
+    match m {
+        FC_METHOD_CONSTANTS => Some(Method::CorrectConstants),
+        FC_METHOD_RESULT_FULL => Some(Method::CorrectResult(ErrorModel::Full)),
+        FC_METHOD_RESULT_SIMPLIFIED => Some(Method::CorrectResult(ErrorModel::Simplified)),
+        _ => None,
+    }
+}
+
+/// Validate the blob `bytes[0..len]` where it lies and keep a view of it in `blob`.
+///
+/// Returns `FC_OK`, or the `FC_ERR_*` code saying why the blob is refused (then `blob`
+/// is left uninitialised).
+///
+/// # Safety
+/// `blob` is NULL or points to writable `fc_blob` storage; `bytes` is NULL or points to
+/// `len` readable bytes that stay valid and unchanged for as long as `blob`, or any
+/// compensator initialised from it, is used (a blob in flash does).
+#[allow(unsafe_code)]
+#[no_mangle]
+pub unsafe extern "C" fn fc_blob_open(blob: *mut fc_blob, bytes: *const u8, len: usize) -> i32 {
+    if blob.is_null() || bytes.is_null() {
+        return FC_ERR_NULL;
+    }
+    // SAFETY: `bytes` is non-NULL and, by this function's contract, points to `len`
+    // readable bytes that outlive every use of the view (so 'static for the view's
+    // purposes) and are not written meanwhile.
+    let bytes: &'static [u8] = unsafe { core::slice::from_raw_parts(bytes, len) };
+    match BlobView::new(bytes) {
+        Ok(view) => {
+            let slot = BlobSlot {
+                tag: TAG_BLOB,
+                view,
+            };
+            // SAFETY: `blob` is non-NULL and points to writable `fc_blob` storage (the
+            // contract); a `BlobSlot` fits its size and alignment (const asserts above).
+            // `write` does not read or drop the old contents.
+            unsafe { blob.cast::<BlobSlot>().write(slot) };
+            FC_OK
+        }
+        Err(e) => code(e),
+    }
+}
+
+/// The view in `blob`, if it was opened.
+///
+/// # Safety
+/// `blob` is NULL or points to readable `fc_blob` storage.
+#[allow(unsafe_code)]
+unsafe fn view_of(blob: *const fc_blob) -> Option<BlobView<'static>> {
+    if blob.is_null() {
+        return None;
+    }
+    // SAFETY: non-NULL and readable `fc_blob` storage (the contract), 8-byte aligned
+    // (the C type's alignment); the tag is the slot's first field (repr(C)), a plain u32
+    // that any bit pattern is valid for.
+    let tag = unsafe { blob.cast::<u32>().read() };
+    if tag != TAG_BLOB {
+        return None;
+    }
+    // SAFETY: the tag says `fc_blob_open` wrote a `BlobSlot` here (size and alignment
+    // fit, const asserts), and the view is `Copy`: reading it leaves the storage as is.
+    Some(unsafe { (*blob.cast::<BlobSlot>()).view })
+}
+
+/// Start a compensator in `comp` over the validated blob `blob`, with `method`
+/// (`FC_METHOD_*`); its cache starts at T0.
+///
+/// Returns `FC_OK`, `FC_ERR_NULL`, `FC_ERR_NOT_INITIALISED` (blob not opened),
+/// `FC_ERR_BAD_METHOD`, `FC_ERR_SINGULAR` or `FC_ERR_PHYSICS_NOT_BUILT_IN`.
+///
+/// # Safety
+/// `comp` is NULL or points to writable `fc_compensator` storage; `blob` is NULL or
+/// points to `fc_blob` storage (opened by `fc_blob_open` for `FC_OK`).
+#[allow(unsafe_code)]
+#[no_mangle]
+pub unsafe extern "C" fn fc_compensator_init(
+    comp: *mut fc_compensator,
+    blob: *const fc_blob,
+    method_id: u32,
+) -> i32 {
+    if comp.is_null() || blob.is_null() {
+        return FC_ERR_NULL;
+    }
+    // SAFETY: `blob` is non-NULL readable `fc_blob` storage (the contract).
+    let Some(view) = (unsafe { view_of(blob) }) else {
+        return FC_ERR_NOT_INITIALISED;
+    };
+    let Some(m) = method(method_id) else {
+        return FC_ERR_BAD_METHOD;
+    };
+    match Compensator::from_blob(view, m) {
+        Ok(c) => {
+            let slot = CompSlot {
+                tag: TAG_COMP,
+                comp: c,
+            };
+            // SAFETY: `comp` is non-NULL writable `fc_compensator` storage (the
+            // contract); a `CompSlot` fits its size and alignment (const asserts).
+            unsafe { comp.cast::<CompSlot>().write(slot) };
+            FC_OK
+        }
+        Err(e) => code(e),
+    }
+}
+
+/// The compensator in `comp`, if it was initialised.
+///
+/// # Safety
+/// `comp` is NULL or points to readable and writable `fc_compensator` storage that no
+/// other reference uses during the returned borrow.
+#[allow(unsafe_code)]
+unsafe fn comp_of<'c>(comp: *mut fc_compensator) -> Option<&'c mut FlashCompensator<'static>> {
+    if comp.is_null() {
+        return None;
+    }
+    // SAFETY: non-NULL, readable, 8-byte aligned storage (the contract); the tag is
+    // the slot's first field, a u32 valid for any bit pattern.
+    let tag = unsafe { comp.cast::<u32>().read() };
+    if tag != TAG_COMP {
+        return None;
+    }
+    // SAFETY: the tag says `fc_compensator_init` wrote a `CompSlot` here (size and
+    // alignment fit); the storage is not aliased during the borrow (the contract).
+    Some(unsafe { &mut (*comp.cast::<CompSlot>()).comp })
+}
+
+/// Switch the method of an initialised compensator at run time (recomputes its cache).
+///
+/// Returns `FC_OK`, `FC_ERR_NULL`, `FC_ERR_NOT_INITIALISED` or `FC_ERR_BAD_METHOD`.
+///
+/// # Safety
+/// `comp` is NULL or points to `fc_compensator` storage, not used concurrently.
+#[allow(unsafe_code)]
+#[no_mangle]
+pub unsafe extern "C" fn fc_set_method(comp: *mut fc_compensator, method_id: u32) -> i32 {
+    if comp.is_null() {
+        return FC_ERR_NULL;
+    }
+    // SAFETY: non-NULL storage, not used concurrently (the contract).
+    let Some(c) = (unsafe { comp_of(comp) }) else {
+        return FC_ERR_NOT_INITIALISED;
+    };
+    match method(method_id) {
+        Some(m) => {
+            c.set_method(m);
+            FC_OK
+        }
+        None => FC_ERR_BAD_METHOD,
+    }
+}
+
+/// Compensate one sample: output voltages `volts[3]` at sensor temperature `temp_c`,
+/// specific force in g written to `accel_g[3]`. Fixed work per sample, as in Rust.
+///
+/// Returns the sample's `FC_STATUS_*` bits (0 = all good); `FC_STATUS_BAD_ARGUMENT`
+/// when a pointer is NULL or `comp` was not initialised (then nothing is written).
+///
+/// # Safety
+/// `comp` is NULL or points to `fc_compensator` storage, not used concurrently;
+/// `volts` is NULL or points to 3 readable floats; `accel_g` is NULL or points to 3
+/// writable floats.
+#[allow(unsafe_code)]
+#[no_mangle]
+pub unsafe extern "C" fn fc_compensate(
+    comp: *mut fc_compensator,
+    volts: *const f32,
+    temp_c: f32,
+    accel_g: *mut f32,
+) -> u32 {
+    if volts.is_null() || accel_g.is_null() {
+        return FC_STATUS_BAD_ARGUMENT;
+    }
+    // SAFETY: storage not used concurrently (the contract); NULL is handled.
+    let Some(c) = (unsafe { comp_of(comp) }) else {
+        return FC_STATUS_BAD_ARGUMENT;
+    };
+    // SAFETY: `volts` is non-NULL and points to 3 readable floats (a C float array,
+    // 4-byte aligned).
+    let u = unsafe { volts.cast::<[f32; 3]>().read() };
+    let out = c.compensate(u, temp_c);
+    // SAFETY: `accel_g` is non-NULL and points to 3 writable floats.
+    unsafe { accel_g.cast::<[f32; 3]>().write(out.accel) };
+    u32::from(out.status.bits())
+}
+
+/// The format version a blob's header names (bytes 4..6), whatever its validity: to
+/// report which version an `FC_ERR_UNSUPPORTED_VERSION` blob has. 0 when `bytes` is
+/// NULL or shorter than 6 bytes.
+///
+/// # Safety
+/// `bytes` is NULL or points to `len` readable bytes.
+#[allow(unsafe_code)]
+#[no_mangle]
+pub unsafe extern "C" fn fc_blob_version(bytes: *const u8, len: usize) -> u16 {
+    if bytes.is_null() {
+        return 0;
+    }
+    // SAFETY: non-NULL, `len` readable bytes (the contract); only read here.
+    let b = unsafe { core::slice::from_raw_parts(bytes, len) };
+    match b.get(4..6) {
+        Some([lo, hi]) => u16::from_le_bytes([*lo, *hi]),
+        _ => 0,
+    }
+}
+
+/// A panic cannot happen in firmware-core (no panicking code paths, clippy-denied);
+/// on the MCU the staticlib still needs a handler, and it stops rather than unwind
+/// into C. On the host the test binary's std provides one.
+#[cfg(target_os = "none")]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    loop {
+        core::hint::spin_loop();
+    }
+}

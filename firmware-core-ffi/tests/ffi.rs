@@ -1,0 +1,183 @@
+//! The C interface called as C calls it: the same bits as the Rust API, every refusal a
+//! status code, NULL and uninitialised storage refused without a crash.
+#![allow(unsafe_code)]
+// Test code: unwraps and indexing fail the test, one block holds several FFI calls.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::multiple_unsafe_ops_per_block
+)]
+use firmware_core::blob::{example_blob, BlobView, MAX_BLOB_LEN};
+use firmware_core::compensate::{Compensator, ErrorModel, Method};
+use firmware_core::temperature::Physics;
+use firmware_core_ffi::*;
+use std::mem::MaybeUninit;
+
+fn blob_bytes(physics: bool) -> &'static [u8] {
+    let mut b = example_blob();
+    if physics {
+        b.calibration.physics = Some(Physics {
+            sample_period_s: 1.0,
+            lag_alpha: 0.01,
+            rate: [0.02, 0.0, -0.01],
+            rate_alpha: 0.03,
+            hysteresis: [1e-4, 0.0, 0.0],
+            hysteresis_threshold_c: 0.5,
+            hysteresis_initial: 1.0,
+            k2: [1e-4, 0.0, 0.0],
+            asymmetry: [0.0, 1e-4, 0.0],
+            warmup: [2e-4, 0.0, 0.0],
+            warmup_decay: 0.999,
+        });
+    }
+    let mut buf = vec![0u8; MAX_BLOB_LEN];
+    let n = b.encode(&mut buf).unwrap();
+    buf.truncate(n);
+    buf.leak()
+}
+
+fn open(bytes: &'static [u8]) -> Result<Box<fc_blob>, i32> {
+    let mut blob = Box::new(MaybeUninit::<fc_blob>::zeroed());
+    // SAFETY: valid storage and `len` readable bytes that live for 'static.
+    let rc = unsafe { fc_blob_open(blob.as_mut_ptr(), bytes.as_ptr(), bytes.len()) };
+    // SAFETY: zeroed storage is a valid fc_blob (plain u64 words).
+    let blob = unsafe { blob.assume_init() };
+    if rc == FC_OK {
+        Ok(blob)
+    } else {
+        Err(rc)
+    }
+}
+
+fn init(blob: &fc_blob, m: u32) -> Result<Box<fc_compensator>, i32> {
+    let mut comp = Box::new(MaybeUninit::<fc_compensator>::zeroed());
+    // SAFETY: valid storage for both.
+    let rc = unsafe { fc_compensator_init(comp.as_mut_ptr(), blob, m) };
+    // SAFETY: zeroed storage is a valid fc_compensator.
+    let comp = unsafe { comp.assume_init() };
+    if rc == FC_OK {
+        Ok(comp)
+    } else {
+        Err(rc)
+    }
+}
+
+#[test]
+fn c_results_are_the_rust_results_bit_for_bit() {
+    for physics in [false, true] {
+        let bytes = blob_bytes(physics);
+        let blob = open(bytes).unwrap();
+        for (id, m) in [
+            (FC_METHOD_CONSTANTS, Method::CorrectConstants),
+            (
+                FC_METHOD_RESULT_FULL,
+                Method::CorrectResult(ErrorModel::Full),
+            ),
+            (
+                FC_METHOD_RESULT_SIMPLIFIED,
+                Method::CorrectResult(ErrorModel::Simplified),
+            ),
+        ] {
+            let mut comp = init(&blob, id).unwrap();
+            let mut rust = Compensator::from_blob(BlobView::new(bytes).unwrap(), m).unwrap();
+            for k in 0..200 {
+                let t = -50.0 + 0.7 * k as f32;
+                let u = [0.0045 + 1e-4 * k as f32, -0.0044, -0.5521];
+                let u = if k == 17 { [f32::NAN, 0.0, 0.0] } else { u };
+                let mut a = [0f32; 3];
+                // SAFETY: initialised storage, 3 floats in and out.
+                let st = unsafe { fc_compensate(&mut *comp, u.as_ptr(), t, a.as_mut_ptr()) };
+                let r = rust.compensate(u, t);
+                assert_eq!(
+                    a.map(f32::to_bits),
+                    r.accel.map(f32::to_bits),
+                    "{physics} {id} {k}"
+                );
+                assert_eq!(st, u32::from(r.status.bits()));
+            }
+        }
+    }
+}
+
+#[test]
+fn refusals_are_status_codes() {
+    let good = blob_bytes(false);
+    assert_eq!(open(&good[..good.len() - 1]).err(), Some(FC_ERR_TRUNCATED));
+    let mut bad = good.to_vec();
+    bad[4] ^= 1; // the version byte: corruption, not an old version
+    assert_eq!(open(bad.leak()).err(), Some(FC_ERR_CRC));
+    let v2 = include_str!("../../firmware-core/tests/data/example_blob_v2.hex");
+    let v2: Vec<u8> = v2
+        .lines()
+        .flat_map(|l| {
+            (0..l.len())
+                .step_by(2)
+                .map(move |i| u8::from_str_radix(&l[i..i + 2], 16).unwrap())
+        })
+        .collect();
+    let v2: &'static [u8] = v2.leak();
+    assert_eq!(open(v2).err(), Some(FC_ERR_UNSUPPORTED_VERSION));
+    // SAFETY: a readable slice.
+    assert_eq!(unsafe { fc_blob_version(v2.as_ptr(), v2.len()) }, 2);
+    let blob = open(good).unwrap();
+    assert_eq!(init(&blob, 7).err(), Some(FC_ERR_BAD_METHOD));
+    // the library is built with physics (firmware-core's default): a physics blob runs
+    assert!(init(&open(blob_bytes(true)).unwrap(), FC_METHOD_CONSTANTS).is_ok());
+}
+
+#[test]
+fn null_and_uninitialised_storage_are_refused() {
+    let good = blob_bytes(false);
+    let mut a = [0f32; 3];
+    let u = [0f32; 3];
+    // SAFETY: NULL pointers and zeroed (never opened) storage, as the contract allows.
+    unsafe {
+        assert_eq!(
+            fc_blob_open(std::ptr::null_mut(), good.as_ptr(), good.len()),
+            FC_ERR_NULL
+        );
+        let mut blob = MaybeUninit::<fc_blob>::zeroed().assume_init();
+        assert_eq!(fc_blob_open(&mut blob, std::ptr::null(), 0), FC_ERR_NULL);
+        let mut comp = MaybeUninit::<fc_compensator>::zeroed().assume_init();
+        assert_eq!(
+            fc_compensator_init(&mut comp, &blob, 0),
+            FC_ERR_NOT_INITIALISED
+        );
+        assert_eq!(
+            fc_compensator_init(&mut comp, std::ptr::null(), 0),
+            FC_ERR_NULL
+        );
+        assert_eq!(
+            fc_compensate(&mut comp, u.as_ptr(), 20.0, a.as_mut_ptr()),
+            FC_STATUS_BAD_ARGUMENT
+        );
+        assert_eq!(
+            fc_compensate(std::ptr::null_mut(), u.as_ptr(), 20.0, a.as_mut_ptr()),
+            FC_STATUS_BAD_ARGUMENT
+        );
+        assert_eq!(fc_set_method(&mut comp, 1), FC_ERR_NOT_INITIALISED);
+        assert_eq!(fc_blob_version(std::ptr::null(), 0), 0);
+    }
+    let blob = open(good).unwrap();
+    let mut comp = init(&blob, FC_METHOD_CONSTANTS).unwrap();
+    // SAFETY: initialised storage.
+    unsafe {
+        assert_eq!(fc_set_method(&mut *comp, FC_METHOD_RESULT_FULL), FC_OK);
+        assert_eq!(fc_set_method(&mut *comp, 9), FC_ERR_BAD_METHOD);
+        assert_eq!(
+            fc_compensate(&mut *comp, std::ptr::null(), 20.0, a.as_mut_ptr()),
+            FC_STATUS_BAD_ARGUMENT
+        );
+        assert_eq!(
+            fc_compensate(
+                &mut *comp,
+                [0.0045, -0.0044, -0.5521].as_ptr(),
+                20.0,
+                a.as_mut_ptr()
+            ),
+            0
+        );
+    }
+    assert!((a[2] - 1.0).abs() < 0.01);
+}

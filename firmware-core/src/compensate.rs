@@ -10,6 +10,8 @@ use crate::model::{
 use crate::real::Real;
 #[cfg(feature = "physics")]
 use crate::temperature::Physics;
+#[cfg(feature = "physics")]
+use crate::inflight::{Direction, LowPass, Rate, Warmup};
 use crate::temperature::{eval_table, Calibration, Source};
 
 /// Which temperature-error model method 2 subtracts.
@@ -123,17 +125,16 @@ pub struct Compensator<S: Source> {
 /// The state of the in-flight physics terms.
 #[cfg(feature = "physics")]
 #[derive(Clone, Copy, Debug, Default)]
-struct PhysicsState<R> {
+struct PhysicsState<R: Real> {
     started: bool,
-    /// Low-passed temperature (thermal lag).
-    t_lag: R,
-    /// Low-passed temperature whose difference is the rate.
-    t_rate: R,
-    /// Direction of the last change (hysteresis) and its reference temperature.
-    dir: R,
-    dir_ref: R,
-    /// Warm-up weight: 1 at power-on.
-    warm: R,
+    /// The element temperature (thermal lag).
+    lag: LowPass<R>,
+    /// The rate estimator.
+    rate: Rate<R>,
+    /// The direction of the last change (hysteresis).
+    dir: Direction<R>,
+    /// The warm-up weight: 1 at power-on.
+    warm: Warmup<R>,
 }
 
 /// The compensator over a blob in flash, in f32: what the firmware holds.
@@ -194,14 +195,9 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
             step: src.update_step_c(),
             sticky: Status::default(),
             #[cfg(feature = "physics")]
-            ph: PhysicsState {
-                dir: src
-                    .physics()
-                    .map(|p| p.hysteresis_initial)
-                    .unwrap_or(R::ZERO),
-                warm: R::ONE,
-                ..PhysicsState::default()
-            },
+            // the filters start at the first sample in range (hysteresis in its initial
+            // state from there), the warm-up weight at 1
+            ph: PhysicsState::default(),
         };
         s.set_method(method);
         Ok(s)
@@ -348,31 +344,19 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
         if temp_c >= self.t_min - margin && temp_c <= self.t_max + margin {
             if !s.started {
                 s.started = true;
-                s.t_lag = temp_c;
-                s.t_rate = temp_c;
-                s.dir_ref = temp_c;
+                s.lag.start(temp_c);
+                s.rate.start(temp_c);
+                s.dir.start(p.hysteresis_initial, temp_c);
             }
-            s.t_lag = s.t_lag + p.lag_alpha * (temp_c - s.t_lag);
-            let prev = s.t_rate;
-            s.t_rate = s.t_rate + p.rate_alpha * (temp_c - s.t_rate);
-            rate = (s.t_rate - prev) / p.sample_period_s;
-            if temp_c - s.dir_ref > p.hysteresis_threshold_c {
-                s.dir = R::ONE;
-                s.dir_ref = temp_c;
-            } else if s.dir_ref - temp_c > p.hysteresis_threshold_c {
-                s.dir = -R::ONE;
-                s.dir_ref = temp_c;
-            } else if (temp_c - s.dir_ref) * s.dir > R::ZERO {
-                s.dir_ref = temp_c;
-            }
-            t_model = s.t_lag;
+            t_model = s.lag.step(p.lag_alpha, temp_c);
+            rate = s.rate.step(p.rate_alpha, temp_c, p.sample_period_s);
+            s.dir.step(p.hysteresis_threshold_c, temp_c);
         }
         let half = R::from_f32(0.5);
         let [r0, r1, r2] = p.rate;
         let [h0, h1, h2] = p.hysteresis;
         let [d0, d1, d2] = p.warmup;
-        let (dir, w) = (s.dir * half, s.warm);
-        s.warm = s.warm * p.warmup_decay;
+        let (dir, w) = (s.dir.value() * half, s.warm.step(p.warmup_decay));
         let offset = [
             r0 * rate + h0 * dir + d0 * w,
             r1 * rate + h1 * dir + d1 * w,

@@ -9,7 +9,7 @@
 //! in). Every step is a fixed number of operations.
 use crate::real::Real;
 
-/// A first-order low-pass, `y += alpha (x - y)`, started at its first input.
+/// A first-order low-pass, `y += alpha (x - y)`.
 ///
 /// Error bound (f32): one step adds at most `2 eps max(|y|, |x|)` (two roundings); the
 /// filter is a contraction, so errors do not grow over steps (at most `2 eps max|x| /
@@ -18,22 +18,23 @@ use crate::real::Real;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct LowPass<R> {
     y: R,
-    started: bool,
 }
 
 impl<R: Real> LowPass<R> {
+    /// Settle at `x` (the first input).
+    #[inline]
+    pub fn start(&mut self, x: R) {
+        self.y = x;
+    }
+
     /// Step with input `x`; returns the new output.
     #[inline]
     pub fn step(&mut self, alpha: R, x: R) -> R {
-        if !self.started {
-            self.started = true;
-            self.y = x;
-        }
         self.y = self.y + alpha * (x - self.y);
         self.y
     }
 
-    /// The output (0 before the first step).
+    /// The output.
     pub fn value(&self) -> R {
         self.y
     }
@@ -49,6 +50,12 @@ pub struct Lag<R> {
 }
 
 impl<R: Real> Lag<R> {
+    /// Settle at temperature `t`.
+    pub fn start(&mut self, t: R) {
+        self.first.start(t);
+        self.second.start(t);
+    }
+
     /// Step with the sensor temperature `t`; returns the element's.
     #[inline]
     pub fn step(&mut self, alpha1: R, alpha2: R, t: R) -> R {
@@ -67,13 +74,16 @@ pub struct Rate<R> {
 }
 
 impl<R: Real> Rate<R> {
-    /// Step with temperature `t` over a step of `dt_s` seconds; returns the rate (0 at the
-    /// first step).
+    /// Settle at temperature `t` (rate 0).
+    pub fn start(&mut self, t: R) {
+        self.lp.start(t);
+    }
+
+    /// Step with temperature `t` over a step of `dt_s` seconds; returns the rate.
     #[inline]
     pub fn step(&mut self, alpha: R, t: R, dt_s: R) -> R {
-        let before = if self.lp.started { self.lp.y } else { t };
-        let after = self.lp.step(alpha, t);
-        (after - before) / dt_s
+        let before = self.lp.y;
+        (self.lp.step(alpha, t) - before) / dt_s
     }
 }
 
@@ -84,17 +94,13 @@ impl<R: Real> Rate<R> {
 pub struct Direction<R> {
     dir: R,
     reference: R,
-    started: bool,
 }
 
 impl<R: Real> Direction<R> {
-    /// A machine in state `initial` (+1, -1, or 0 for unknown).
-    pub fn new(initial: R) -> Self {
-        Direction {
-            dir: initial,
-            reference: R::ZERO,
-            started: false,
-        }
+    /// In state `initial` (+1, -1, or 0 for unknown), at temperature `t`.
+    pub fn start(&mut self, initial: R, t: R) {
+        self.dir = initial;
+        self.reference = t;
     }
 
     /// Step with temperature `t`; returns the direction. A change of more than
@@ -102,10 +108,6 @@ impl<R: Real> Direction<R> {
     /// direction moves the reference with it (so a reversal is measured from the turn).
     #[inline]
     pub fn step(&mut self, threshold: R, t: R) -> R {
-        if !self.started {
-            self.started = true;
-            self.reference = t;
-        }
         if t - self.reference > threshold {
             self.dir = R::ONE;
             self.reference = t;
@@ -160,6 +162,7 @@ mod tests {
     #[test]
     fn low_pass_starts_at_its_input_and_converges() {
         let mut lp = LowPass::<f64>::default();
+        lp.start(10.0);
         assert_eq!(lp.step(0.5, 10.0), 10.0);
         assert_eq!(lp.step(0.5, 20.0), 15.0);
         for _ in 0..60 {
@@ -171,6 +174,7 @@ mod tests {
     #[test]
     fn rate_of_a_ramp_settles_at_its_slope() {
         let mut r = Rate::<f64>::default();
+        r.start(0.0);
         let alpha = 1.0 - (-1.0f64 / 30.0).exp();
         let mut last = 0.0;
         for k in 0..2000 {
@@ -181,7 +185,8 @@ mod tests {
 
     #[test]
     fn direction_follows_changes_beyond_the_threshold() {
-        let mut d = Direction::<f64>::new(-1.0);
+        let mut d = Direction::<f64>::default();
+        d.start(-1.0, 20.0);
         let seq = [20.0, 20.3, 20.6, 21.0, 25.0, 24.8, 24.4, 23.0, 23.2];
         let got: Vec<f64> = seq.iter().map(|t| d.step(0.5, *t)).collect();
         assert_eq!(got, [-1.0, -1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0]);
@@ -199,6 +204,8 @@ mod tests {
     #[test]
     fn two_poles_lag_more_than_one() {
         let (mut one, mut two) = (Lag::<f64>::default(), Lag::<f64>::default());
+        one.start(0.0);
+        two.start(0.0);
         one.step(0.1, 1.0, 0.0);
         two.step(0.1, 0.1, 0.0);
         let (a, b) = (one.step(0.1, 1.0, 10.0), two.step(0.1, 0.1, 10.0));

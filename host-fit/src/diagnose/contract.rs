@@ -108,6 +108,8 @@ pub struct Unexplained {
 /// Figures of the final model.
 #[derive(Debug, Clone, Serialize)]
 pub struct FinalFigures {
+    /// Its temperature model.
+    pub temperature_model: String,
     /// The effects in it, with their forms.
     pub model: Vec<String>,
     /// Residual RMS (output units).
@@ -116,7 +118,8 @@ pub struct FinalFigures {
     pub residual_rms_over_noise: f64,
     /// Worst |dg| in the static windows, mg.
     pub max_abs_dg_mg: f64,
-    /// Held-out chi-square of the baseline (every time chunk predicted without its fold).
+    /// Held-out chi-square of the baseline: every time chunk predicted from the others
+    /// (over the chunks both models predict, not extrapolate).
     pub heldout_chi2_before: f64,
     /// Held-out chi-square of the final model.
     pub heldout_chi2_after: f64,
@@ -167,6 +170,7 @@ impl Diagnosis {
         let data = self.data(rec);
         let (b, f) = (&self.baseline, &self.final_fit);
         let final_rms = normalized_rms(&data, f);
+        let (held_before, held_after) = data.heldout_pair(b, f);
         let sigma: [f64; 3] = std::array::from_fn(|i| match self.floor.axes[i].sample_sigma() {
             Some(s) if self.floor_measured => s,
             _ => (1.0 / self.w[i]).sqrt(),
@@ -201,12 +205,13 @@ impl Diagnosis {
                 located: self.unexplained.iter().take(12).cloned().collect(),
             }),
             final_model: FinalFigures {
+                temperature_model: f.spec.basis.describe(),
                 model: f.spec.extras.iter().map(|e| format!("{}: {}", e.id(), e.form())).collect(),
                 residual_rms: residual_rms(f),
                 residual_rms_over_noise: final_rms,
                 max_abs_dg_mg: max_dg(&data, f),
-                heldout_chi2_before: b.heldout,
-                heldout_chi2_after: f.heldout,
+                heldout_chi2_before: held_before,
+                heldout_chi2_after: held_after,
             },
             verdict: self.verdict(final_rms <= AT_FLOOR_RMS),
             blob: None,

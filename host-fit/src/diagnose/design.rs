@@ -70,6 +70,8 @@ pub struct Fit {
     pub heldout: f64,
     /// Held-out chi-square per observation row (3 per observation).
     pub heldout_rows: Vec<f64>,
+    /// In-sample chi-square per row.
+    pub insample_rows: Vec<f64>,
 }
 
 impl Fit {
@@ -315,6 +317,7 @@ impl Data<'_> {
             u0_at,
             heldout: heldout_rows.iter().sum(),
             heldout_rows,
+            insample_rows: resid_rows.iter().zip(&self.w).map(|(r, w)| w * r * r).collect(),
             x,
         })
     }
@@ -325,6 +328,48 @@ impl Data<'_> {
             .iter()
             .map(|&t| static_at(&f.spec, &f.labels, &f.x, self.t0, [t; 3]))
             .collect()
+    }
+}
+
+/// A chunk is an extrapolation, not a test, when its held-out chi-square is more than
+/// this many times its in-sample one (plus one per row): the rest of the data does not
+/// determine the model there (the only calibration dwells at an end temperature, say).
+pub const EXTRAPOLATION: f64 = 10.0;
+
+impl Data<'_> {
+    /// Per chunk: whether both fits predict it from the other chunks (not an
+    /// extrapolation for either).
+    pub fn predictable(&self, a: &Fit, b: &Fit) -> Vec<bool> {
+        let n = self.obs.iter().map(|o| o.chunk + 1).max().unwrap_or(0);
+        let mut sums = vec![[0.0f64; 5]; n];
+        for (r, o) in self.obs.iter().enumerate() {
+            for row in 3 * r..3 * r + 3 {
+                let s = &mut sums[o.chunk];
+                s[0] += a.heldout_rows.get(row).copied().unwrap_or(0.0);
+                s[1] += a.insample_rows.get(row).copied().unwrap_or(0.0);
+                s[2] += b.heldout_rows.get(row).copied().unwrap_or(0.0);
+                s[3] += b.insample_rows.get(row).copied().unwrap_or(0.0);
+                s[4] += 1.0;
+            }
+        }
+        sums.iter()
+            .map(|s| s[0] <= EXTRAPOLATION * (s[1] + s[4]) && s[2] <= EXTRAPOLATION * (s[3] + s[4]))
+            .collect()
+    }
+
+    /// The held-out chi-squares of `a` and `b` over the chunks both predict.
+    pub fn heldout_pair(&self, a: &Fit, b: &Fit) -> (f64, f64) {
+        let ok = self.predictable(a, b);
+        let mut out = (0.0, 0.0);
+        for (r, o) in self.obs.iter().enumerate() {
+            if ok[o.chunk] {
+                for row in 3 * r..3 * r + 3 {
+                    out.0 += a.heldout_rows.get(row).copied().unwrap_or(0.0);
+                    out.1 += b.heldout_rows.get(row).copied().unwrap_or(0.0);
+                }
+            }
+        }
+        out
     }
 }
 

@@ -54,8 +54,10 @@ pub struct Ambiguity {
 /// The per-axis held-out chi-square increase (floor units / dispersion) when extra `e`
 /// is removed: an axis counts where the effect improves data it was not fitted on.
 fn axis_gains(data: &Data, full: &Fit, reduced: &Fit, phi: f64) -> [f64; 3] {
+    let ok = data.predictable(full, reduced);
     std::array::from_fn(|i| {
         (0..data.obs.len())
+            .filter(|&r| ok[data.obs[r].chunk])
             .map(|r| reduced.heldout_rows[3 * r + i] - full.heldout_rows[3 * r + i])
             .sum::<f64>()
             / phi

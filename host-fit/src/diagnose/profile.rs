@@ -82,7 +82,7 @@ pub fn lag(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
 
 /// temp_rate: the rate estimator's time constant.
 pub fn rate(data: &Data, spec: &Spec, base: &Fit) -> Option<Fit> {
-    best([10.0, 30.0, 100.0, 300.0, 1000.0].map(|t| try_fit(data, spec, Extra::Rate { tau_s: t }, base)))
+    best([5.0, 10.0, 20.0, 40.0, 80.0, 160.0, 320.0, 640.0].map(|t| try_fit(data, spec, Extra::Rate { tau_s: t }, base)))
 }
 
 /// hysteresis: the switching threshold, the state before the first change, and whether

@@ -68,6 +68,11 @@ pub fn events(rec: &Recording) -> Events {
     e
 }
 
+/// The first row's temperature: where the firmware's filters start.
+fn first_temp(rec: &Recording) -> f64 {
+    rec.rows.first().map(|r| r.temp_c).unwrap_or(0.0)
+}
+
 /// The time step before each row (the median step for the first).
 fn steps(rec: &Recording) -> Vec<f64> {
     let first = median_step(rec);
@@ -82,6 +87,7 @@ pub fn lagged(rec: &Recording, taus: &[[f64; 2]; 3]) -> [Vec<f64>; 3] {
     let dts = steps(rec);
     std::array::from_fn(|axis| {
         let mut lag = Lag::<f64>::default();
+        lag.start(first_temp(rec));
         let [t1, t2] = taus[axis];
         rec.rows
             .iter()
@@ -95,6 +101,7 @@ pub fn lagged(rec: &Recording, taus: &[[f64; 2]; 3]) -> [Vec<f64>; 3] {
 pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
     let dts = steps(rec);
     let mut m = Rate::<f64>::default();
+    m.start(first_temp(rec));
     rec.rows
         .iter()
         .zip(&dts)
@@ -104,7 +111,8 @@ pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
 
 /// Per row, the hysteresis direction (threshold in C, initial state +1 or -1).
 pub fn directions(rec: &Recording, threshold_c: f64, initial: f64) -> Vec<f64> {
-    let mut m = Direction::new(initial);
+    let mut m = Direction::default();
+    m.start(initial, first_temp(rec));
     rec.rows.iter().map(|r| m.step(threshold_c, r.temp_c)).collect()
 }
 

@@ -185,7 +185,10 @@ pub fn judge(data: &Data, smaller: &Fit, larger: &Fit, e: usize) -> Judgement {
     Judgement {
         gain: qbic(data, smaller, phi) - qbic(data, larger, phi),
         share: (smaller.chi2 - larger.chi2) / excess,
-        heldout_gain: (smaller.heldout - larger.heldout) / phi / dk,
+        heldout_gain: {
+            let (hs, hl) = data.heldout_pair(smaller, larger);
+            (hs - hl) / phi / dk
+        },
         max_z,
     }
 }

@@ -4,14 +4,14 @@
 //! (method 2), and the range flags. The temperature-dependent matrices are cached and
 //! recomputed only when the temperature has moved by more than the blob's update step.
 use crate::error::Error;
+#[cfg(feature = "physics")]
+use crate::inflight::{Direction, LowPass, Rate, Warmup};
 use crate::model::{
     add3, all_finite, apply, diagonal, invert, mat_mul, mat_sub, mat_vec, sub3, Coeffs, Mat3, Vec3,
 };
 use crate::real::Real;
 #[cfg(feature = "physics")]
 use crate::temperature::Physics;
-#[cfg(feature = "physics")]
-use crate::inflight::{Direction, LowPass, Rate, Warmup};
 use crate::temperature::{eval_table, Calibration, Source};
 
 /// Which temperature-error model method 2 subtracts.

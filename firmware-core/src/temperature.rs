@@ -577,7 +577,11 @@ mod tests {
         assert_eq!(seg(120.0), (1, 2.0));
         assert_eq!(seg(f64::NAN).0, 0);
         let one = [5.0f64];
-        assert!(pwl_segment(1, |j| one.get(j).copied().unwrap_or(f64::NAN), 0.0).1.is_nan());
+        assert!(
+            pwl_segment(1, |j| one.get(j).copied().unwrap_or(f64::NAN), 0.0)
+                .1
+                .is_nan()
+        );
     }
 
     #[test]

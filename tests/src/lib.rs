@@ -160,12 +160,11 @@ pub mod figures {
         use host_fit::data::recording::Recording;
         let dir = std::env::temp_dir().join(format!("hf-phys-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let case = host_fit::blind::Case {
-            effects: vec!["nonlinearity_k2", "temp_rate", "warmup_drift"],
-            scale: 3.0,
-            seed: 5,
-            tp_only: false,
-        };
+        let case = host_fit::blind::Case::catalogue(
+            vec!["nonlinearity_k2", "temp_rate", "warmup_drift"],
+            3.0,
+            5,
+        );
         let sim = host_fit::simulate::simulate(&host_fit::blind::configure(&case), |_| {}).unwrap();
         let p = dir.join("rec.csv");
         std::fs::write(&p, &sim.csv).unwrap();

@@ -295,12 +295,7 @@ fn check_report(html: &str, rows: &[(String, String, f64, f64)]) {
 fn report_command_on_any_recording() {
     let dir = std::env::temp_dir().join(format!("hf-report-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let case = host_fit::blind::Case {
-        effects: vec![],
-        scale: 1.0,
-        seed: 2,
-        tp_only: false,
-    };
+    let case = host_fit::blind::Case::catalogue(vec![], 1.0, 2);
     let sim = host_fit::simulate::simulate(&host_fit::blind::configure(&case), |_| {}).unwrap();
     let rec = dir.join("rec.csv");
     std::fs::write(&rec, sim.csv).unwrap();

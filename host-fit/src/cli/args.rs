@@ -199,6 +199,9 @@ pub struct BlindArgs {
     /// The long suite (more seeds, magnitudes down to the edge of detectability).
     #[arg(long)]
     pub long: bool,
+    /// Run only the cases whose name contains this, and print each one's diagnosis.
+    #[arg(long)]
+    pub only: Option<String>,
 }
 
 /// `simulate`.

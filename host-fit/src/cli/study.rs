@@ -50,9 +50,17 @@ pub(super) fn report(a: ReportArgs, out: &mut dyn Write, err: &mut dyn Write) ->
 pub(super) fn blind(a: BlindArgs, out: &mut dyn Write) -> Result<()> {
     use rayon::prelude::*;
     // every case is independent and deterministic: run them on all cores
-    let outcomes: Vec<_> = crate::blind::suite(a.long)
-        .par_iter()
-        .map(crate::blind::run)
-        .collect();
+    let mut cases = crate::blind::suite(a.long);
+    if let Some(only) = &a.only {
+        cases.retain(|c| c.name().contains(only.as_str()));
+        for c in &cases {
+            w(
+                out,
+                format!("== {} (scale {}, seed {})", c.name(), c.scale, c.seed),
+            )?;
+            w(out, crate::blind::diagnosis_text(c))?;
+        }
+    }
+    let outcomes: Vec<_> = cases.par_iter().map(crate::blind::run).collect();
     w(out, crate::blind::report(&outcomes))
 }

@@ -15,7 +15,13 @@ impl Diagnosis {
         std::array::from_fn(|axis| {
             f.labels
                 .iter()
-                .position(|l| *l == Param::Effect { term, axis, extra: e })
+                .position(|l| {
+                    *l == Param::Effect {
+                        term,
+                        axis,
+                        extra: e,
+                    }
+                })
                 .map(|j| f.x[j])
                 .unwrap_or(0.0)
         })
@@ -44,7 +50,10 @@ impl Diagnosis {
         };
         let mut any = false;
         for (e, x) in self.final_fit.spec.extras.iter().enumerate() {
-            any |= !matches!(x, Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(_));
+            any |= !matches!(
+                x,
+                Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(_)
+            );
             match x {
                 Extra::Lag { taus } => {
                     if taus.iter().any(|t| *t != taus[0] || t[1] > 0.0) {
@@ -56,7 +65,11 @@ impl Diagnosis {
                     ph.rate = self.term(e, Term::Rate);
                     ph.rate_alpha = crate::diagnose::regressors::alpha(dt, *tau_s);
                 }
-                Extra::Hysteresis { threshold_c, initial, scale } => {
+                Extra::Hysteresis {
+                    threshold_c,
+                    initial,
+                    scale,
+                } => {
                     if *scale {
                         return refuse("hysteresis of the scale factors");
                     }

@@ -63,15 +63,19 @@ pub struct FloorFigures {
     pub axes: Vec<AxisFloorFigures>,
 }
 
-/// The floor of one axis: `v(n) = white^2 / n + flat^2` for a mean of n samples.
+/// The floor of one axis.
 #[derive(Debug, Clone, Serialize)]
 pub struct AxisFloorFigures {
     /// Axis.
     pub axis: &'static str,
-    /// White part, per sample (output units).
-    pub white_sigma: f64,
-    /// Part that does not average down (output units).
-    pub flat_sigma: f64,
+    /// Scatter of one sample (output units).
+    pub sample_sigma: f64,
+    /// Scatter of the mean of a typical window (output units).
+    pub window_sigma: f64,
+    /// Samples in a typical (median) window.
+    pub window_samples: f64,
+    /// How much more that mean scatters than white noise predicts (1 = white).
+    pub colour: f64,
 }
 
 /// Dispersions.
@@ -140,15 +144,20 @@ pub struct BlobNote {
 
 impl Diagnosis {
     fn floor_figures(&self) -> FloorFigures {
+        let mut ns: Vec<f64> = self.obs.iter().map(|o| o.n as f64).collect();
+        ns.sort_by(f64::total_cmp);
+        let n = ns.get(ns.len() / 2).copied().unwrap_or(1.0);
         FloorFigures {
             measured: self.floor_measured,
             axes: (0..3)
                 .map(|i| {
-                    let (a, b) = self.floor.axes[i].model().unwrap_or((f64::NAN, f64::NAN));
+                    let f = &self.floor.axes[i];
                     AxisFloorFigures {
                         axis: AXES[i],
-                        white_sigma: a.sqrt(),
-                        flat_sigma: b.sqrt(),
+                        sample_sigma: f.sample_sigma().unwrap_or(f64::NAN),
+                        window_sigma: f.var_of_mean(n).map(f64::sqrt).unwrap_or(f64::NAN),
+                        window_samples: n,
+                        colour: f.colour(n).unwrap_or(f64::NAN),
                     }
                 })
                 .collect(),
@@ -157,7 +166,10 @@ impl Diagnosis {
 
     /// The verdict (see [`Contract::verdict`]).
     pub fn verdict(&self, at_floor: bool) -> &'static str {
-        match (self.findings.is_empty() && self.ambiguous.is_empty(), at_floor) {
+        match (
+            self.findings.is_empty() && self.ambiguous.is_empty(),
+            at_floor,
+        ) {
             (true, true) => "none",
             (true, false) => "unexplained",
             (false, true) => "explained",
@@ -189,7 +201,11 @@ impl Diagnosis {
                 temperature_model: format!(
                     "{}{}",
                     b.spec.basis.describe(),
-                    if b.spec.cross { "" } else { ", cross-sensitivities fixed at 0" }
+                    if b.spec.cross {
+                        ""
+                    } else {
+                        ", cross-sensitivities fixed at 0"
+                    }
                 ),
                 residual_rms: residual_rms(b),
                 residual_rms_over_noise: normalized_rms(&data, b),
@@ -206,7 +222,12 @@ impl Diagnosis {
             }),
             final_model: FinalFigures {
                 temperature_model: f.spec.basis.describe(),
-                model: f.spec.extras.iter().map(|e| format!("{}: {}", e.id(), e.form())).collect(),
+                model: f
+                    .spec
+                    .extras
+                    .iter()
+                    .map(|e| format!("{}: {}", e.id(), e.form()))
+                    .collect(),
                 residual_rms: residual_rms(f),
                 residual_rms_over_noise: final_rms,
                 max_abs_dg_mg: max_dg(&data, f),

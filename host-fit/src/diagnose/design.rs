@@ -55,9 +55,11 @@ pub struct Fit {
     pub x: DVector<f64>,
     /// Covariance of the parameters at unit dispersion (None when only profiling).
     pub cov: Option<DMatrix<f64>>,
-    /// Delete-one-chunk jackknife standard error of every parameter (None when only
-    /// profiling): it holds residuals correlated in time, which the covariance does not.
-    pub jackknife: Option<Vec<f64>>,
+    /// Heteroscedasticity- and autocorrelation-consistent standard error of every
+    /// parameter (Newey-West, Bartlett kernel over neighbouring windows in time; None
+    /// when only profiling): it holds residuals correlated in time, which the covariance
+    /// does not.
+    pub hac: Option<Vec<f64>>,
     /// What each parameter is.
     pub labels: Vec<Param>,
     /// Residual per observation and axis (output units).
@@ -160,12 +162,20 @@ impl Data<'_> {
     fn baseline(&self, spec: &Spec, d: &mut Design) {
         let obasis = offset_basis(spec);
         for i in 0..3 {
-            let phis: Vec<Vec<f64>> = d.temps.iter().map(|t| spec.basis.eval(self.t0, t[i])).collect();
+            let phis: Vec<Vec<f64>> = d
+                .temps
+                .iter()
+                .map(|t| spec.basis.eval(self.t0, t[i]))
+                .collect();
             let ophis: Vec<Vec<f64>> = d.temps.iter().map(|t| obasis.eval(self.t0, t[i])).collect();
             let inputs: Vec<usize> = if spec.cross { vec![0, 1, 2] } else { vec![i] };
             for j in inputs {
                 for k in 0..spec.basis.len() {
-                    let col = self.obs.iter().enumerate().map(|(r, o)| (3 * r + i, o.a[j] * phis[r][k]));
+                    let col = self
+                        .obs
+                        .iter()
+                        .enumerate()
+                        .map(|(r, o)| (3 * r + i, o.a[j] * phis[r][k]));
                     d.push_column(Param::K { i, j, k }, col.collect::<Vec<_>>());
                 }
             }
@@ -177,9 +187,17 @@ impl Data<'_> {
     }
 
     /// A per-axis effect column for every axis: `value(observation, axis)`.
-    fn per_axis(&self, d: &mut Design, term: Term, extra: usize, value: &dyn Fn(usize, usize) -> f64) {
+    fn per_axis(
+        &self,
+        d: &mut Design,
+        term: Term,
+        extra: usize,
+        value: &dyn Fn(usize, usize) -> f64,
+    ) {
         for axis in 0..3 {
-            let col: Vec<(usize, f64)> = (0..self.obs.len()).map(|r| (3 * r + axis, value(r, axis))).collect();
+            let col: Vec<(usize, f64)> = (0..self.obs.len())
+                .map(|r| (3 * r + axis, value(r, axis)))
+                .collect();
             d.push_column(Param::Effect { term, axis, extra }, col);
         }
     }
@@ -202,7 +220,11 @@ impl Data<'_> {
         match extra {
             Extra::Curvature(_) | Extra::Lag { .. } => {}
             Extra::Bend { knot_c } => {
-                let h: Vec<[f64; 3]> = d.temps.iter().map(|t| t.map(|v| (v - knot_c).max(0.0))).collect();
+                let h: Vec<[f64; 3]> = d
+                    .temps
+                    .iter()
+                    .map(|t| t.map(|v| (v - knot_c).max(0.0)))
+                    .collect();
                 self.per_axis(d, Term::BendOffset, e, &|r, i| h[r][i]);
                 self.per_axis(d, Term::BendScale, e, &|r, i| obs[r].a[i] * h[r][i]);
             }
@@ -210,30 +232,52 @@ impl Data<'_> {
                 let m = self.means(&regressors::rates(self.rec, *tau_s));
                 self.per_axis(d, Term::Rate, e, &|r, _| m[r]);
             }
-            Extra::Hysteresis { threshold_c, initial, scale } => {
+            Extra::Hysteresis {
+                threshold_c,
+                initial,
+                scale,
+            } => {
                 let m = self.means(&regressors::directions(self.rec, *threshold_c, *initial));
                 self.per_axis(d, Term::Hysteresis, e, &|r, _| m[r] / 2.0);
                 if *scale {
-                    self.per_axis(d, Term::HysteresisScale, e, &|r, i| obs[r].a[i] * m[r] / 2.0);
+                    self.per_axis(d, Term::HysteresisScale, e, &|r, i| {
+                        obs[r].a[i] * m[r] / 2.0
+                    });
                 }
             }
             Extra::K2 => self.per_axis(d, Term::K2, e, &|r, i| obs[r].a[i] * obs[r].a[i]),
             Extra::Asymmetry => self.per_axis(d, Term::Asymmetry, e, &|r, i| obs[r].a[i].abs()),
             Extra::Warmup { tau_s, restart } => {
-                let m = self.means(&regressors::warmup(self.rec, *tau_s, &self.restarts(*restart)));
+                let m = self.means(&regressors::warmup(
+                    self.rec,
+                    *tau_s,
+                    &self.restarts(*restart),
+                ));
                 self.per_axis(d, Term::Warmup, e, &|r, _| m[r]);
             }
             Extra::Fixture(p) => {
                 let Some(b) = base else { return };
-                for (n, dirv) in fixture_directions(self.rec.positions.vector(*p)).iter().enumerate() {
+                for (n, dirv) in fixture_directions(self.rec.positions.vector(*p))
+                    .iter()
+                    .enumerate()
+                {
                     let mut col = Vec::new();
                     for (r, o) in obs.iter().enumerate().filter(|(_, o)| o.position == *p) {
                         let _ = o;
                         for (i, row) in b.k_at[r].iter().enumerate() {
-                            col.push((3 * r + i, row[0] * dirv[0] + row[1] * dirv[1] + row[2] * dirv[2]));
+                            col.push((
+                                3 * r + i,
+                                row[0] * dirv[0] + row[1] * dirv[1] + row[2] * dirv[2],
+                            ));
                         }
                     }
-                    d.push_column(Param::FixtureAngle { n: n as u8 + 1, extra: e }, col);
+                    d.push_column(
+                        Param::FixtureAngle {
+                            n: n as u8 + 1,
+                            extra: e,
+                        },
+                        col,
+                    );
                 }
             }
         }
@@ -276,7 +320,8 @@ impl Data<'_> {
             chunks[self.obs[r / 3].chunk].add_sparse(row, b[r], self.w[r]);
         }
         let total = chunks.iter().fold(Normal::new(p), |a, f| a.plus(f));
-        let predict = |x: &DVector<f64>, r: usize| d.rows[r].iter().map(|(c, v)| v * x[*c]).sum::<f64>();
+        let predict =
+            |x: &DVector<f64>, r: usize| d.rows[r].iter().map(|(c, v)| v * x[*c]).sum::<f64>();
         let (x, cov) = if full {
             let s = total.solve()?;
             (s.x, Some(s.cov))
@@ -286,9 +331,9 @@ impl Data<'_> {
         let resid_rows: Vec<f64> = (0..b.len()).map(|r| b[r] - predict(&x, r)).collect();
         let chi2 = resid_rows.iter().zip(&self.w).map(|(r, w)| w * r * r).sum();
         // each chunk predicted by the fit without it (a chunk the others cannot predict
-        // keeps its in-sample residual); the same solutions give the jackknife
+        // keeps its in-sample residual)
         let mut heldout_rows = vec![0.0; b.len()];
-        let mut jackknife = None;
+        let mut hac = None;
         if full {
             let sols: Vec<DVector<f64>> = chunks
                 .iter()
@@ -298,7 +343,9 @@ impl Data<'_> {
                 let e = b[r] - predict(&sols[self.obs[r / 3].chunk], r);
                 *h = self.w[r] * e * e;
             }
-            jackknife = Some(jackknife_sigma(&sols, &x));
+            if let Some(c) = &cov {
+                hac = Some(hac_sigma(&d.rows, c, &resid_rows, &self.w, self.obs.len()));
+            }
         }
         let (k_at, u0_at): (Vec<_>, Vec<_>) = d
             .temps
@@ -310,14 +357,18 @@ impl Data<'_> {
             chi2,
             k: p,
             cov,
-            jackknife,
+            hac,
             labels: d.labels,
             resid: resid_rows.chunks(3).map(|c| [c[0], c[1], c[2]]).collect(),
             k_at,
             u0_at,
             heldout: heldout_rows.iter().sum(),
             heldout_rows,
-            insample_rows: resid_rows.iter().zip(&self.w).map(|(r, w)| w * r * r).collect(),
+            insample_rows: resid_rows
+                .iter()
+                .zip(&self.w)
+                .map(|(r, w)| w * r * r)
+                .collect(),
             x,
         })
     }
@@ -373,15 +424,33 @@ impl Data<'_> {
     }
 }
 
-/// Delete-one-chunk jackknife standard errors: `sqrt((g-1)/g sum (x_(-c) - mean)^2)` over
-/// the g chunk-deleted solutions (a chunk whose removal leaves the fit undetermined
-/// contributes the full solution).
-fn jackknife_sigma(sols: &[DVector<f64>], x: &DVector<f64>) -> Vec<f64> {
-    let g = sols.len() as f64;
-    (0..x.len())
+/// Newey-West standard errors: each observation's influence on every parameter
+/// (`C x_r w_r e_r`, summed over its three axes), then the influences' sum of squares and
+/// of cross products with up to `L` neighbours in time, Bartlett-weighted.
+fn hac_sigma(rows: &[Row], cov: &DMatrix<f64>, resid: &[f64], w: &[f64], n_obs: usize) -> Vec<f64> {
+    let p = cov.ncols();
+    let lags = (4.0 * (n_obs as f64 / 100.0).powf(2.0 / 9.0))
+        .floor()
+        .max(5.0) as usize;
+    let mut infl = vec![vec![0.0; p]; n_obs];
+    for (r, row) in rows.iter().enumerate() {
+        let we = w[r] * resid[r];
+        if we == 0.0 {
+            continue;
+        }
+        let target = &mut infl[r / 3];
+        for (j, t) in target.iter_mut().enumerate() {
+            *t += row.iter().map(|(c, v)| cov[(j, *c)] * v).sum::<f64>() * we;
+        }
+    }
+    (0..p)
         .map(|j| {
-            let mean = sols.iter().map(|s| s[j]).sum::<f64>() / g;
-            ((g - 1.0) / g * sols.iter().map(|s| (s[j] - mean).powi(2)).sum::<f64>()).sqrt()
+            let mut v: f64 = infl.iter().map(|a| a[j] * a[j]).sum();
+            for l in 1..=lags {
+                let k = 1.0 - l as f64 / (lags + 1) as f64;
+                v += 2.0 * k * (l..n_obs).map(|t| infl[t][j] * infl[t - l][j]).sum::<f64>();
+            }
+            v.max(0.0).sqrt()
         })
         .collect()
 }
@@ -400,7 +469,13 @@ fn offset_basis(spec: &Spec) -> Basis {
 }
 
 /// K and U0 of a fitted spec (baseline and bends), row i at temperature `temps[i]`.
-fn static_at(spec: &Spec, labels: &[Param], x: &DVector<f64>, t0: f64, temps: [f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
+fn static_at(
+    spec: &Spec,
+    labels: &[Param],
+    x: &DVector<f64>,
+    t0: f64,
+    temps: [f64; 3],
+) -> ([[f64; 3]; 3], [f64; 3]) {
     let obasis = offset_basis(spec);
     let phi = temps.map(|t| spec.basis.eval(t0, t));
     let ophi = temps.map(|t| obasis.eval(t0, t));

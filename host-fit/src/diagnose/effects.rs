@@ -125,14 +125,33 @@ impl Extra {
             Extra::Curvature(b) => format!("offsets bend through {} breakpoints", b.len()),
             Extra::Bend { knot_c } => format!("a bend at {knot_c:.1} C"),
             Extra::Lag { taus } => {
-                let poles = if taus.iter().any(|t| t[1] > 0.0) { "two poles" } else { "one pole" };
+                let poles = if taus.iter().any(|t| t[1] > 0.0) {
+                    "two poles"
+                } else {
+                    "one pole"
+                };
                 let same = taus.iter().all(|t| *t == taus[0]);
-                format!("{poles}, {}", if same { "one time constant for all axes" } else { "a time constant per axis" })
+                format!(
+                    "{poles}, {}",
+                    if same {
+                        "one time constant for all axes"
+                    } else {
+                        "a time constant per axis"
+                    }
+                )
             }
             Extra::Rate { tau_s } => format!("rate through a {tau_s:.0} s low-pass"),
-            Extra::Hysteresis { threshold_c, initial, scale } => format!(
+            Extra::Hysteresis {
+                threshold_c,
+                initial,
+                scale,
+            } => format!(
                 "{} switch after {threshold_c} C; {} before the first change",
-                if *scale { "offsets and scale factors" } else { "offsets" },
+                if *scale {
+                    "offsets and scale factors"
+                } else {
+                    "offsets"
+                },
                 if *initial > 0.0 { "heated" } else { "cooled" }
             ),
             Extra::K2 | Extra::Asymmetry => "per axis".into(),

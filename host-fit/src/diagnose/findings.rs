@@ -2,7 +2,7 @@
 //! the axes where it matters, its parameters with uncertainties scaled by the dispersion,
 //! where it shows, and how much it improves held-out data; and the candidates the data
 //! cannot tell apart, with the measurement that would.
-use crate::diagnose::design::{Data, Fit};
+use crate::diagnose::design::{Data, Fit, Spec};
 use crate::diagnose::effects::Extra;
 use crate::diagnose::location::locate;
 use crate::diagnose::metrics::{dispersion, max_dg, residual_rms};
@@ -88,50 +88,102 @@ fn linear_parameters(full: &Fit, e: usize, phi: f64) -> Vec<(String, f64, f64)> 
         .collect()
 }
 
-/// The time constants of a form, with their 1-sigma where the profile defines one
-/// (chi-square up by the dispersion).
-fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<(String, f64, f64)> {
-    let extra = &full.spec.extras[e];
-    let sigma = |make: &dyn Fn(f64) -> Extra, tau: f64| {
-        let at = |t: f64| {
-            let mut s = full.spec.clone();
-            s.extras[e] = make(t);
-            data.fit(&s, None, false).map(|f| f.chi2).unwrap_or(f64::INFINITY)
-        };
-        let h = 0.05;
-        let curv = (at(tau * (1.0 + h)) + at(tau * (1.0 - h)) - 2.0 * full.chi2) / (h * tau).powi(2);
-        if curv > 0.0 {
-            (2.0 * phi / curv).sqrt()
-        } else {
-            f64::INFINITY
-        }
+/// The 1-sigma of a structural parameter `v` (a time constant, a knot) from the profile:
+/// the larger of the curvature's (chi-square up by the dispersion) and a delete-one-chunk
+/// jackknife by the delta method (each chunk's pull on the profile's slope, over its
+/// curvature), which holds residuals correlated in time. `make` puts a value into the
+/// model's spec.
+fn profile_sigma(data: &Data, full: &Fit, phi: f64, v: f64, make: &dyn Fn(f64) -> Spec) -> f64 {
+    let h = 0.02 * v.abs().max(1e-3);
+    let (Some(up), Some(down)) = (
+        data.fit(&make(v + h), None, false),
+        data.fit(&make(v - h), None, false),
+    ) else {
+        return f64::INFINITY;
     };
-    match extra {
+    let curv = (up.chi2 + down.chi2 - 2.0 * full.chi2) / (h * h);
+    if curv.is_nan() || curv <= 0.0 {
+        return f64::INFINITY;
+    }
+    let n_chunks = data.obs.iter().map(|o| o.chunk + 1).max().unwrap_or(1);
+    let mut slope = vec![0.0; n_chunks];
+    for (r, o) in data.obs.iter().enumerate() {
+        for row in 3 * r..3 * r + 3 {
+            slope[o.chunk] += (up.insample_rows[row] - down.insample_rows[row]) / (2.0 * h);
+        }
+    }
+    // without chunk c the profile's slope at v is -slope[c] (the whole is flat there)
+    let shifts: Vec<f64> = slope.iter().map(|g| g / (curv / 2.0)).collect();
+    let g = shifts.len() as f64;
+    let mean = shifts.iter().sum::<f64>() / g;
+    let jk = ((g - 1.0) / g * shifts.iter().map(|s| (s - mean).powi(2)).sum::<f64>()).sqrt();
+    (2.0 * phi / curv).sqrt().max(jk)
+}
+
+/// The structural parameters of a form, with their 1-sigma where a profile defines one.
+fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<(String, f64, f64)> {
+    let with = |x: Extra| {
+        let mut s = full.spec.clone();
+        s.extras[e] = x;
+        s
+    };
+    let sigma =
+        |v: f64, make: &dyn Fn(f64) -> Extra| profile_sigma(data, full, phi, v, &|t| with(make(t)));
+    match full.spec.extras[e].clone() {
         Extra::Warmup { tau_s, restart } => {
-            let r = *restart;
-            vec![("tau_s".into(), *tau_s, sigma(&|t| Extra::Warmup { tau_s: t, restart: r }, *tau_s))]
+            vec![(
+                "tau_s".into(),
+                tau_s,
+                sigma(tau_s, &|t| Extra::Warmup { tau_s: t, restart }),
+            )]
         }
         Extra::Lag { taus } => {
-            let same = taus.iter().all(|t| *t == taus[0]);
-            if same && taus[0][1] == 0.0 {
-                vec![("tau_s".into(), taus[0][0], sigma(&|t| Extra::Lag { taus: [[t, 0.0]; 3] }, taus[0][0]))]
-            } else {
-                let mut v = Vec::new();
-                for (i, t) in taus.iter().enumerate() {
-                    v.push((format!("tau1_{}_s", AXES[i]), t[0], f64::NAN));
-                    if t[1] > 0.0 {
-                        v.push((format!("tau2_{}_s", AXES[i]), t[1], f64::NAN));
-                    }
+            if taus.iter().all(|t| *t == taus[0]) {
+                let [t1, t2] = taus[0];
+                let mut v = vec![(
+                    "tau_s".into(),
+                    t1,
+                    sigma(t1, &|t| Extra::Lag { taus: [[t, t2]; 3] }),
+                )];
+                if t2 > 0.0 {
+                    v.push((
+                        "tau2_s".into(),
+                        t2,
+                        sigma(t2, &|t| Extra::Lag { taus: [[t1, t]; 3] }),
+                    ));
                 }
                 v
+            } else {
+                (0..3)
+                    .map(|i| {
+                        let make = |t: f64| {
+                            let mut v = taus;
+                            v[i][0] = t;
+                            Extra::Lag { taus: v }
+                        };
+                        (
+                            format!("tau_{}_s", AXES[i]),
+                            taus[i][0],
+                            sigma(taus[i][0], &make),
+                        )
+                    })
+                    .collect()
             }
         }
-        Extra::Rate { tau_s } => vec![("rate_tau_s".into(), *tau_s, f64::NAN)],
-        Extra::Hysteresis { threshold_c, initial, .. } => vec![
-            ("threshold_c".into(), *threshold_c, f64::NAN),
-            ("initial_direction".into(), *initial, f64::NAN),
+        Extra::Rate { tau_s } => vec![("rate_tau_s".into(), tau_s, f64::NAN)],
+        Extra::Hysteresis {
+            threshold_c,
+            initial,
+            ..
+        } => vec![
+            ("threshold_c".into(), threshold_c, f64::NAN),
+            ("initial_direction".into(), initial, f64::NAN),
         ],
-        Extra::Bend { knot_c } => vec![("knot_c".into(), *knot_c, f64::NAN)],
+        Extra::Bend { knot_c } => vec![(
+            "knot_c".into(),
+            knot_c,
+            sigma(knot_c, &|k| Extra::Bend { knot_c: k }),
+        )],
         Extra::Curvature(b) => vec![("breakpoints".into(), b.len() as f64, 0.0)],
         _ => Vec::new(),
     }
@@ -145,12 +197,17 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
     // where the effect has its own per-axis terms, one of them must be significant too
     let term_z = |i: usize| {
         (0..full.k)
-            .filter(|&j| full.labels[j].extra() == Some(e) && full.labels[j].effect_axis() == Some(i))
+            .filter(|&j| {
+                full.labels[j].extra() == Some(e) && full.labels[j].effect_axis() == Some(i)
+            })
             .map(|j| full.x[j].abs() / sigma(full, j, phi))
             .reduce(f64::max)
     };
     let axes: Vec<String> = (0..3)
-        .filter(|&i| gains[i] >= Z_SIGNIFICANT * Z_SIGNIFICANT && term_z(i).is_none_or(|z| z >= Z_SIGNIFICANT))
+        .filter(|&i| {
+            gains[i] >= Z_SIGNIFICANT * Z_SIGNIFICANT
+                && term_z(i).is_none_or(|z| z >= Z_SIGNIFICANT)
+        })
         .map(|i| AXES[i].to_string())
         .collect();
     if axes.is_empty() {
@@ -198,7 +255,12 @@ fn evidence(data: &Data, full: &Fit, reduced: &Fit, extra: &Extra) -> String {
         .iter()
         .filter(|h| h.group != "direction" || matches!(extra, Extra::Hysteresis { .. }))
         .take(2)
-        .map(|h| format!("{} axis in {} {} ({:.1}x the floor)", h.axis, h.group, h.value, h.rms_sigma))
+        .map(|h| {
+            format!(
+                "{} axis in {} {} ({:.1}x the floor)",
+                h.axis, h.group, h.value, h.rms_sigma
+            )
+        })
         .collect();
     let why = match extra {
         Extra::Lag { .. } => "the residual follows the temperature changes and scales with each coefficient's temperature slope, as a lagging element temperature does",
@@ -212,7 +274,11 @@ fn evidence(data: &Data, full: &Fit, reduced: &Fit, extra: &Extra) -> String {
     };
     format!(
         "Shows most on {}; {why} ({}).",
-        if top.is_empty() { "no group".into() } else { top.join(" and ") },
+        if top.is_empty() {
+            "no group".into()
+        } else {
+            top.join(" and ")
+        },
         extra.form()
     )
 }
@@ -229,6 +295,8 @@ pub fn needed(a: &str, b: &str) -> String {
     } else if pair("warmup_drift", "thermal_lag") || pair("warmup_drift", "temp_rate") {
         "a power cycle or handling at a steady temperature, away from any temperature change".into()
     } else {
-        format!("data that changes {a} and {b} differently (other positions, temperatures or timing)")
+        format!(
+            "data that changes {a} and {b} differently (other positions, temperatures or timing)"
+        )
     }
 }

@@ -8,9 +8,11 @@ use crate::data::recording::Recording;
 const CHI2_1_MEDIAN: f64 = 0.454_936_423_119_572_8;
 /// A scale is measured when at least this many second differences support it.
 const MIN_SUPPORT: usize = 12;
-/// Block triples are used only where the temperature spans at most this (C): at long
-/// time scales a moving temperature drives the outputs, and that is physics, not noise.
-const STEADY_SPAN_C: f64 = 0.2;
+/// A piece is steady when the means of its thirds differ by at most this (C) end to end
+/// (the second difference removes a linear drift) ...
+const STEADY_SPAN_C: f64 = 1.0;
+/// ... and bend by at most this (C).
+const STEADY_BEND_C: f64 = 0.02;
 /// A sample whose second difference is this many robust sigmas out is a spike.
 pub const SPIKE_Z: f64 = 8.0;
 
@@ -32,48 +34,51 @@ pub struct Floor {
 }
 
 impl AxisFloor {
-    /// The floor model `v(m) = white / m + flat`: white noise, plus a part that does not
-    /// average down within a window (flicker, slow wander). Fitted by least squares in
-    /// relative terms to the measured scales (each weighted by its support), both parts
-    /// kept non-negative. `None` when no scale was measurable (one sample per dwell).
-    pub fn model(&self) -> Option<(f64, f64)> {
-        let s = &self.scales;
-        let (_, _, v0) = *s.first()?;
-        // minimise sum n_j ((A/m_j + B) / v_j - 1)^2 over A, B >= 0
-        let (mut saa, mut sab, mut sbb, mut sa, mut sb) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for &(m, n, v) in s {
-            let (x, y) = (1.0 / (m * v), 1.0 / v);
-            saa += n * x * x;
-            sab += n * x * y;
-            sbb += n * y * y;
-            sa += n * x;
-            sb += n * y;
+    /// The measured scales made consistent with stationary, positively correlated
+    /// noise: the variance of a mean never rises with more samples, nor falls faster than
+    /// white noise (1/m); each estimate is clamped into that band from the one before.
+    fn consistent(&self) -> Vec<(f64, f64)> {
+        let mut out: Vec<(f64, f64)> = Vec::with_capacity(self.scales.len());
+        for &(m, _, v) in &self.scales {
+            let v = match out.last() {
+                Some(&(pm, pv)) => v.clamp(pv * pm / m, pv),
+                None => v,
+            };
+            out.push((m, v));
         }
-        let det = saa * sbb - sab * sab;
-        let (a, b) = if det > 0.0 {
-            ((sa * sbb - sb * sab) / det, (sb * saa - sa * sab) / det)
-        } else {
-            (v0, 0.0)
-        };
-        Some(match (a >= 0.0, b >= 0.0) {
-            (true, true) => (a, b),
-            (false, _) => (0.0, sb / sbb),
-            (true, false) => (sa / saa, 0.0),
-        })
+        out
     }
 
-    /// Variance of the mean of `n` consecutive samples ([`AxisFloor::model`]).
+    /// Variance of the mean of `n` consecutive samples: interpolated in log-log between
+    /// the (consistent) measured scales; beyond the longest one, continued with the last
+    /// slope (between white, -1, and flat, 0). `None` when no scale was measurable (one
+    /// sample per dwell).
     pub fn var_of_mean(&self, n: f64) -> Option<f64> {
-        let (a, b) = self.model()?;
-        Some(a / n.max(1.0) + b)
+        let s = self.consistent();
+        let (m0, v0) = *s.first()?;
+        let n = n.max(1.0);
+        if n <= m0 {
+            return Some(v0 * m0 / n);
+        }
+        let slope = |a: (f64, f64), b: (f64, f64)| (b.1.ln() - a.1.ln()) / (b.0.ln() - a.0.ln());
+        for w in s.windows(2) {
+            if n <= w[1].0 {
+                let k = slope(w[0], w[1]);
+                return Some((w[0].1.ln() + k * (n.ln() - w[0].0.ln())).exp());
+            }
+        }
+        let k = match s.len() {
+            1 => -1.0,
+            l => slope(s[l - 2], s[l - 1]).clamp(-1.0, 0.0),
+        };
+        let (ml, vl) = s[s.len() - 1];
+        Some((vl.ln() + k * (n.ln() - ml.ln())).exp())
     }
 
     /// How much more a mean of `n` samples scatters than white noise of the same
     /// per-sample variance predicts (1 = white).
     pub fn colour(&self, n: f64) -> Option<f64> {
-        let (a, b) = self.model()?;
-        let white = (a + b) / n.max(1.0);
-        Some((a / n.max(1.0) + b) / white)
+        Some(self.var_of_mean(n)? * n.max(1.0) / self.var_of_mean(1.0)?)
     }
 
     /// Standard deviation of one sample.
@@ -116,44 +121,66 @@ fn spikes(rec: &Recording) -> Vec<usize> {
     out
 }
 
+/// The second differences of three m-sample block means (start, middle and end of a
+/// piece of `piece` samples) of every clean, steady piece of every dwell, on `axis`; the
+/// pieces overlap by three quarters (more support; the median does not mind). Far-apart
+/// blocks are (nearly) independent even when the noise is correlated, and the second
+/// difference removes a linear drift.
+fn triples(rec: &Recording, spikes: &[usize], axis: usize, m: usize, piece: usize) -> Vec<f64> {
+    let mut sq = Vec::new();
+    let stride = (piece / 4).max(1);
+    for d in &rec.dwells {
+        let rows = rec.dwell_rows(d);
+        for j in (0..rows.len().saturating_sub(piece - 1)).step_by(stride) {
+            let p = &rows[j..j + piece];
+            let first = d.start + j;
+            if (first..first + piece).any(|r| spikes.binary_search(&r).is_ok()) {
+                continue;
+            }
+            let third = piece / 3;
+            let tm = |k: usize| {
+                p[k * third..(k + 1) * third]
+                    .iter()
+                    .map(|r| r.temp_c)
+                    .sum::<f64>()
+                    / third as f64
+            };
+            let (ta, tb, tc) = (tm(0), tm(1), tm(2));
+            if (tc - ta).abs() > STEADY_SPAN_C || (tc - 2.0 * tb + ta).abs() > STEADY_BEND_C {
+                continue;
+            }
+            let mean = |k: usize| p[k..k + m].iter().map(|r| r.u[axis]).sum::<f64>() / m as f64;
+            let v = mean(piece - m) - 2.0 * mean((piece - m) / 2) + mean(0);
+            sq.push(v * v);
+        }
+    }
+    sq
+}
+
+/// Pieces this long (samples) keep the three blocks of a second difference far apart;
+/// recordings without such steady spans fall back to adjacent blocks (white noise assumed
+/// between neighbours).
+const PIECE: usize = 120;
+
 /// Measure the floor of `rec`.
 pub fn floor(rec: &Recording) -> Floor {
     let spikes = spikes(rec);
-    let is_spike = |r: usize| spikes.binary_search(&r).is_ok();
     let longest = rec.dwells.iter().map(|d| d.len()).max().unwrap_or(0);
+    let base = if triples(rec, &spikes, 0, 1, PIECE).len() >= MIN_SUPPORT {
+        PIECE
+    } else {
+        3
+    };
     let axes = std::array::from_fn(|axis| {
         let mut scales = Vec::new();
+        // scales up to a third of a piece: longer blocks would take in the slow
+        // physics of the outputs as noise; beyond, the floor is extrapolated
         let mut m = 1usize;
-        while 3 * m <= longest {
-            let mut sq = Vec::new();
-            for d in &rec.dwells {
-                let rows = rec.dwell_rows(d);
-                // (mean, lowest and highest temperature) of each clean block
-                let blocks: Vec<Option<(f64, f64, f64)>> = rows
-                    .chunks_exact(m)
-                    .enumerate()
-                    .map(|(j, c)| {
-                        let clean = (0..m).all(|k| !is_spike(d.start + j * m + k));
-                        clean.then(|| {
-                            let (lo, hi) = c.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), r| {
-                                (l.min(r.temp_c), h.max(r.temp_c))
-                            });
-                            (c.iter().map(|r| r.u[axis]).sum::<f64>() / m as f64, lo, hi)
-                        })
-                    })
-                    .collect();
-                for w in blocks.windows(3) {
-                    if let [Some(a), Some(b), Some(c)] = w {
-                        let span = a.2.max(b.2).max(c.2) - a.1.min(b.1).min(c.1);
-                        if span <= STEADY_SPAN_C {
-                            let v = c.0 - 2.0 * b.0 + a.0;
-                            sq.push(v * v);
-                        }
-                    }
-                }
-            }
+        while 3 * m <= longest.min(base.max(3)) {
+            let mut sq = triples(rec, &spikes, axis, m, base.max(3 * m));
             if sq.len() >= MIN_SUPPORT {
-                // Var(b2 - 2 b1 + b0) = 6 Var(b) for independent block means
+                // the middle block sits (piece - m) / 2 from both ends: independent blocks
+                // give Var(b2 - 2 b1 + b0) = 6 Var(b)
                 let n = sq.len() as f64;
                 scales.push((m as f64, n, robust_var(&mut sq) / 6.0));
             }
@@ -180,18 +207,20 @@ mod tests {
     }
 
     #[test]
-    fn a_part_that_does_not_average_down_is_kept() {
-        // v(m) = 4/m + 1
+    fn correlated_noise_keeps_its_scatter_and_estimates_stay_consistent() {
+        // flat up to 8 samples, then 1/m: colour 8 at 64 samples
         let f = AxisFloor {
-            scales: (0..6)
-                .map(|k| {
-                    let m = f64::from(1u32 << k);
-                    (m, 100.0 / m, 4.0 / m + 1.0)
-                })
-                .collect(),
+            scales: vec![(1.0, 50.0, 1.0), (8.0, 50.0, 1.2), (64.0, 50.0, 0.125)],
         };
-        let (a, b) = f.model().unwrap();
-        assert!((a - 4.0).abs() < 1e-9 && (b - 1.0).abs() < 1e-9, "{a} {b}");
-        assert!(f.colour(64.0).unwrap() > 10.0);
+        assert!(
+            (f.var_of_mean(8.0).unwrap() - 1.0).abs() < 1e-12,
+            "a rise is clamped"
+        );
+        assert!((f.colour(64.0).unwrap() - 8.0).abs() < 1e-9);
+        // never below white noise's 1/m from the scale before
+        let g = AxisFloor {
+            scales: vec![(1.0, 50.0, 1.0), (2.0, 50.0, 0.1)],
+        };
+        assert!((g.var_of_mean(2.0).unwrap() - 0.5).abs() < 1e-12);
     }
 }

@@ -27,16 +27,26 @@ pub struct Hotspot {
 /// The groups every observation belongs to: `(group, value)`.
 fn groups(data: &Data) -> Vec<(String, String, Vec<usize>)> {
     let mut groups: Vec<(String, String, Vec<usize>)> = Vec::new();
-    let mut add = |g: &str, v: String, idx: usize| match groups.iter_mut().find(|x| x.0 == g && x.1 == v) {
-        Some(x) => x.2.push(idx),
-        None => groups.push((g.to_string(), v, vec![idx])),
-    };
+    let mut add =
+        |g: &str, v: String, idx: usize| match groups.iter_mut().find(|x| x.0 == g && x.1 == v) {
+            Some(x) => x.2.push(idx),
+            None => groups.push((g.to_string(), v, vec![idx])),
+        };
     let temps: Vec<f64> = data.obs.iter().map(|o| o.temp_c).collect();
     let clusters = temperature_clusters(&temps);
-    let (t_lo, t_hi) = data.obs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), o| (a.min(o.t_s), b.max(o.t_s)));
+    let (t_lo, t_hi) = data
+        .obs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), o| {
+            (a.min(o.t_s), b.max(o.t_s))
+        });
     let span = (t_hi - t_lo).max(1.0);
     for (r, o) in data.obs.iter().enumerate() {
-        add("position", data.rec.positions.name(o.position).to_string(), r);
+        add(
+            "position",
+            data.rec.positions.name(o.position).to_string(),
+            r,
+        );
         let c = clusters
             .iter()
             .min_by(|a, b| (*a - o.temp_c).abs().total_cmp(&(*b - o.temp_c).abs()))
@@ -68,7 +78,12 @@ fn groups(data: &Data) -> Vec<(String, String, Vec<usize>)> {
 /// Every group where `z` (per observation and axis, floor units) has an RMS above
 /// `min_rms`, worst first; `raw` gives the means in output units.
 pub fn locate(data: &Data, z: &[[f64; 3]], raw: &[[f64; 3]], min_rms: f64) -> Vec<Hotspot> {
-    let total: f64 = z.iter().flatten().map(|v| v * v).sum::<f64>().max(f64::MIN_POSITIVE);
+    let total: f64 = z
+        .iter()
+        .flatten()
+        .map(|v| v * v)
+        .sum::<f64>()
+        .max(f64::MIN_POSITIVE);
     let mut out = Vec::new();
     for (g, v, idx) in groups(data) {
         for i in 0..3 {

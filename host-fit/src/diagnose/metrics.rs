@@ -57,7 +57,8 @@ pub fn max_dg(data: &Data, f: &Fit) -> f64 {
         // residual is the model; its static part is K a + U0
         let u: [f64; 3] = std::array::from_fn(|i| {
             let model = o.u[i] - f.resid[r][i];
-            let static_part = k[i][0] * o.a[0] + k[i][1] * o.a[1] + k[i][2] * o.a[2] + f.u0_at[r][i];
+            let static_part =
+                k[i][0] * o.a[0] + k[i][1] * o.a[1] + k[i][2] * o.a[2] + f.u0_at[r][i];
             o.u[i] - (model - static_part)
         });
         let a = firmware_core::model::apply(&n, u, f.u0_at[r]);

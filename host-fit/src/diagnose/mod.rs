@@ -79,11 +79,23 @@ pub struct Diagnosis {
 impl Diagnosis {
     /// The data the diagnosis was made on (to evaluate its fits again).
     pub fn data<'a>(&self, rec: &'a Recording) -> Data<'a> {
-        make_data(rec, self.obs.clone(), self.spikes.clone(), self.w.clone(), self.events.clone())
+        make_data(
+            rec,
+            self.obs.clone(),
+            self.spikes.clone(),
+            self.w.clone(),
+            self.events.clone(),
+        )
     }
 }
 
-fn make_data(rec: &Recording, obs: Vec<DObs>, spikes: Vec<usize>, w: Vec<f64>, events: Events) -> Data<'_> {
+fn make_data(
+    rec: &Recording,
+    obs: Vec<DObs>,
+    spikes: Vec<usize>,
+    w: Vec<f64>,
+    events: Events,
+) -> Data<'_> {
     let rate = window_means(&obs, &regressors::rates(rec, 60.0), &spikes);
     let dir = window_means(&obs, &regressors::directions(rec, 0.5, 0.0), &spikes);
     Data {
@@ -104,8 +116,12 @@ fn final_table(data: &Data, f: &Fit) -> Vec<(f64, [f64; 12])> {
     let (tmin, tmax) = data
         .obs
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), o| (a.min(o.temp_c), b.max(o.temp_c)));
-    let nb = 16usize.min(((tmax - tmin) / 2.0).floor() as usize + 1).max(2);
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), o| {
+            (a.min(o.temp_c), b.max(o.temp_c))
+        });
+    let nb = 16usize
+        .min(((tmax - tmin) / 2.0).floor() as usize + 1)
+        .max(2);
     let grid: Vec<f64> = (0..nb)
         .map(|k| tmin + (tmax - tmin) * k as f64 / (nb - 1) as f64)
         .collect();
@@ -123,7 +139,9 @@ fn weights(data: &mut Data, floor: &Floor) -> bool {
         data.w = data
             .obs
             .iter()
-            .flat_map(|o| (0..3).map(move |i| 1.0 / floor.axes[i].var_of_mean(o.n as f64).unwrap_or(1.0)))
+            .flat_map(|o| {
+                (0..3).map(move |i| 1.0 / floor.axes[i].var_of_mean(o.n as f64).unwrap_or(1.0))
+            })
             .collect();
         return true;
     }
@@ -151,10 +169,13 @@ fn scope(data: &Data, measured: bool, n_temps: usize, notes: &mut Vec<String>) -
     if !s.dynamics {
         notes.push("thermal_lag, temp_rate, warmup_drift, hysteresis: need a time series through temperature changes with a measurable floor".into());
     } else if !s.reversals {
-        notes.push("hysteresis: needs a temperature visited after heating and after cooling".into());
+        notes
+            .push("hysteresis: needs a temperature visited after heating and after cooling".into());
     }
     if !s.temperature {
-        notes.push("temp_curvature and every temperature model: need more than one temperature".into());
+        notes.push(
+            "temp_curvature and every temperature model: need more than one temperature".into(),
+        );
     }
     s
 }
@@ -195,7 +216,13 @@ pub fn diagnose(rec: &Recording) -> Result<Diagnosis> {
             ),
         ));
     }
-    let mut data = make_data(rec, obs, floor.spikes.clone(), Vec::new(), regressors::events(rec));
+    let mut data = make_data(
+        rec,
+        obs,
+        floor.spikes.clone(),
+        Vec::new(),
+        regressors::events(rec),
+    );
     let measured = weights(&mut data, &floor);
     let temps: Vec<f64> = data.obs.iter().map(|o| o.temp_c).collect();
     let n_temps = temperature_clusters(&temps).len();

@@ -16,9 +16,24 @@ fn try_fit(data: &Data, spec: &Spec, extra: Extra, base: &Fit) -> Option<Fit> {
     data.fit(&spec.with(extra), Some(base), false)
 }
 
-/// A time constant profiled: a log grid from 20 s (x1.7), then golden-section search in
-/// log tau around the best grid point.
-pub fn time_constant(make: &dyn Fn(f64) -> Option<Fit>, lo_s: f64, steps: i32) -> Option<(f64, Fit)> {
+/// A time constant profiled: a log grid from `lo_s` (x1.7), then golden-section search
+/// in log tau around the best grid point.
+pub fn time_constant(
+    make: &dyn Fn(f64) -> Option<Fit>,
+    lo_s: f64,
+    steps: i32,
+) -> Option<(f64, Fit)> {
+    time_constant_within(make, lo_s, steps, f64::INFINITY)
+}
+
+/// [`time_constant`] never beyond `max_s`.
+fn time_constant_within(
+    make: &dyn Fn(f64) -> Option<Fit>,
+    lo_s: f64,
+    steps: i32,
+    max_s: f64,
+) -> Option<(f64, Fit)> {
+    let make = |t: f64| if t <= max_s { make(t) } else { None };
     let grid = (0..steps).map(|k| lo_s * 1.7f64.powi(k));
     let (mut tau, mut fit) = grid
         .filter_map(|t| make(t).map(|f| (t, f)))
@@ -47,31 +62,62 @@ pub fn time_constant(make: &dyn Fn(f64) -> Option<Fit>, lo_s: f64, steps: i32) -
 /// thermal_lag: one pole for all axes, then two poles, then a time constant per axis;
 /// every form returned (the search compares them with their parameter counts).
 pub fn lag(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
-    let common = |t1: f64, t2: f64| Extra::Lag { taus: [[t1, t2]; 3] };
-    let Some((tau, one)) = time_constant(&|t| try_fit(data, spec, common(t, 0.0), base), 20.0, 14) else {
+    let common = |t1: f64, t2: f64| Extra::Lag {
+        taus: [[t1, t2]; 3],
+    };
+    let Some((tau, one)) = time_constant(&|t| try_fit(data, spec, common(t, 0.0), base), 20.0, 14)
+    else {
         return Vec::new();
     };
     let mut out = vec![one.clone()];
-    // two poles: the second a fraction of the first (the pair keeps the total lag)
-    let two = best((1..=6).map(|k| {
-        let f = 0.08 * 1.6f64.powi(k);
-        try_fit(data, spec, common(tau * (1.0 - f), tau * f), base)
-    }));
-    out.extend(two);
-    // a time constant per axis, each refined around the common one in turn
+    // two poles: the pair first splits the single one's lag, then each pole is profiled
+    // in turn with the other held, twice round
+    // (the sum and the split of the pair on a grid: the valley runs along the sum)
+    let grid = [0.8, 0.9, 1.0, 1.1, 1.25]
+        .iter()
+        .flat_map(|k| [0.05, 0.12, 0.2, 0.3, 0.4, 0.5].map(move |f| (k * tau, f)));
+    let split = grid
+        .filter_map(|(sum, f)| {
+            let pair = [sum * (1.0 - f), sum * f];
+            try_fit(data, spec, common(pair[0], pair[1]), base).map(|fit| (pair, fit))
+        })
+        .min_by(|a, b| a.1.chi2.total_cmp(&b.1.chi2));
+    if let Some((mut pair, mut two)) = split {
+        for _round in 0..3 {
+            for pole in 0..2 {
+                let make = |t: f64| {
+                    let mut p = pair;
+                    p[pole] = t;
+                    try_fit(data, spec, common(p[0], p[1]), base)
+                };
+                let lo = pair[pole] / 1.7f64.powi(3);
+                if let Some((t, f)) = time_constant(&make, lo, 7).filter(|(_, f)| f.chi2 < two.chi2)
+                {
+                    pair[pole] = t;
+                    two = f;
+                }
+            }
+        }
+        out.push(two);
+    }
+    // a time constant per axis: each axis's profiled in turn with the others held,
+    // twice round (the axes interact only through the shared fit)
     let mut taus = [[tau, 0.0]; 3];
     let mut per_axis = one;
-    for axis in 0..3 {
-        let cand = best((-4..=4).map(|k| {
-            let mut t = taus;
-            t[axis][0] = tau * 1.5f64.powi(k);
-            try_fit(data, spec, Extra::Lag { taus: t }, base)
-        }));
-        if let Some(c) = cand.filter(|c| c.chi2 < per_axis.chi2) {
-            if let Some(Extra::Lag { taus: t }) = c.spec.extras.last() {
-                taus = *t;
+    for _round in 0..2 {
+        for axis in 0..3 {
+            let make = |t: f64| {
+                let mut v = taus;
+                v[axis][0] = t;
+                try_fit(data, spec, Extra::Lag { taus: v }, base)
+            };
+            let lo = taus[axis][0] / 1.7f64.powi(4);
+            if let Some((t, f)) =
+                time_constant(&make, lo, 9).filter(|(_, f)| f.chi2 < per_axis.chi2)
+            {
+                taus[axis][0] = t;
+                per_axis = f;
             }
-            per_axis = c;
         }
     }
     if taus.iter().any(|t| *t != taus[0]) {
@@ -82,7 +128,10 @@ pub fn lag(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
 
 /// temp_rate: the rate estimator's time constant.
 pub fn rate(data: &Data, spec: &Spec, base: &Fit) -> Option<Fit> {
-    best([5.0, 10.0, 20.0, 40.0, 80.0, 160.0, 320.0, 640.0].map(|t| try_fit(data, spec, Extra::Rate { tau_s: t }, base)))
+    best(
+        [5.0, 10.0, 20.0, 40.0, 80.0, 160.0, 320.0, 640.0]
+            .map(|t| try_fit(data, spec, Extra::Rate { tau_s: t }, base)),
+    )
 }
 
 /// hysteresis: the switching threshold, the state before the first change, and whether
@@ -107,8 +156,12 @@ pub fn hysteresis(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
     [form(false), form(true)].into_iter().flatten().collect()
 }
 
-/// warmup_drift: the time constant for each way the clock may restart.
+/// warmup_drift: the time constant for each way the clock may restart; never longer than
+/// half the recording (a settling must be seen settling: beyond, it is a drift).
 pub fn warmup(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
+    let rows = &data.rec.rows;
+    let span =
+        rows.last().map(|r| r.t_s).unwrap_or(0.0) - rows.first().map(|r| r.t_s).unwrap_or(0.0);
     let mut restarts = vec![Restart::Start];
     if !data.events.gaps.is_empty() {
         restarts.push(Restart::Gaps);
@@ -119,8 +172,13 @@ pub fn warmup(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
     restarts
         .into_iter()
         .filter_map(|restart| {
-            time_constant(&|t| try_fit(data, spec, Extra::Warmup { tau_s: t, restart }, base), 20.0, 16)
-                .map(|(_, f)| f)
+            time_constant_within(
+                &|t| try_fit(data, spec, Extra::Warmup { tau_s: t, restart }, base),
+                20.0,
+                16,
+                span / 2.0,
+            )
+            .map(|(_, f)| f)
         })
         .collect()
 }
@@ -133,12 +191,18 @@ pub fn curvature(data: &Data, spec: &Spec, base: &Fit, broad: bool) -> Vec<Fit> 
     let (tmin, tmax) = (temps[0], temps[temps.len() - 1]);
     let mut out = Vec::new();
     if broad {
-        let nb = 16usize.min(((tmax - tmin) / 4.0).floor() as usize + 1).max(2);
-        let fine: Vec<f64> = (0..nb).map(|k| tmin + (tmax - tmin) * k as f64 / (nb - 1) as f64).collect();
+        let nb = 16usize
+            .min(((tmax - tmin) / 4.0).floor() as usize + 1)
+            .max(2);
+        let fine: Vec<f64> = (0..nb)
+            .map(|k| tmin + (tmax - tmin) * k as f64 / (nb - 1) as f64)
+            .collect();
         out.extend(try_fit(data, spec, Extra::Curvature(fine), base));
     }
     // knots at the 5 %..95 % quantiles of the data's temperatures
     let knots = (1..20).map(|q| temps[q * (temps.len() - 1) / 20]);
-    out.extend(best(knots.map(|k| try_fit(data, spec, Extra::Bend { knot_c: k }, base))));
+    out.extend(best(
+        knots.map(|k| try_fit(data, spec, Extra::Bend { knot_c: k }, base)),
+    ));
     out
 }

@@ -24,10 +24,21 @@ const COLOUR_NOTE: f64 = 2.0;
 const CHAMBER_NOTE_C: f64 = 1.0;
 
 /// The notes of a recording.
-pub fn notes(rec: &Recording, floor: &Floor, obs: &[DObs], events: &Events, n_temps: usize) -> Vec<QualityNote> {
+pub fn notes(
+    rec: &Recording,
+    floor: &Floor,
+    obs: &[DObs],
+    events: &Events,
+    n_temps: usize,
+) -> Vec<QualityNote> {
     let mut out = Vec::new();
     if !floor.spikes.is_empty() {
-        let lines: Vec<String> = floor.spikes.iter().take(5).map(|&r| rec.rows[r].line.to_string()).collect();
+        let lines: Vec<String> = floor
+            .spikes
+            .iter()
+            .take(5)
+            .map(|&r| rec.rows[r].line.to_string())
+            .collect();
         out.push(QualityNote {
             kind: "spikes",
             text: format!(
@@ -58,7 +69,12 @@ pub fn notes(rec: &Recording, floor: &Floor, obs: &[DObs], events: &Events, n_te
     ns.sort_by(f64::total_cmp);
     let n_mid = ns.get(ns.len() / 2).copied().unwrap_or(1.0);
     let coloured: Vec<String> = (0..3)
-        .filter_map(|i| floor.axes[i].colour(n_mid).filter(|c| *c > COLOUR_NOTE).map(|c| format!("{} {c:.1}x", AXES[i])))
+        .filter_map(|i| {
+            floor.axes[i]
+                .colour(n_mid)
+                .filter(|c| *c > COLOUR_NOTE)
+                .map(|c| format!("{} {c:.1}x", AXES[i]))
+        })
         .collect();
     if !coloured.is_empty() {
         out.push(QualityNote {
@@ -93,10 +109,18 @@ fn chamber(rec: &Recording) -> Option<QualityNote> {
     let mut k = hold;
     while k < rec.rows.len() {
         let w = &rec.rows[k - hold..k];
-        let (lo, hi) = w.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), r| (l.min(r.temp_c), h.max(r.temp_c)));
+        let (lo, hi) = w
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), r| {
+                (l.min(r.temp_c), h.max(r.temp_c))
+            });
         let ch: Vec<f64> = w.iter().filter_map(|r| r.chamber_c).collect();
         if ch.len() == w.len() && hi - lo < 0.2 {
-            let (cl, chh) = ch.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+            let (cl, chh) = ch
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                    (l.min(*v), h.max(*v))
+                });
             if chh - cl < 0.2 {
                 let mean = |v: &mut dyn Iterator<Item = f64>| v.sum::<f64>() / w.len() as f64;
                 offsets.push(mean(&mut w.iter().map(|r| r.temp_c)) - mean(&mut ch.iter().copied()));
@@ -109,7 +133,11 @@ fn chamber(rec: &Recording) -> Option<QualityNote> {
     if offsets.len() < 2 {
         return None;
     }
-    let (lo, hi) = offsets.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+    let (lo, hi) = offsets
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(*v), h.max(*v))
+        });
     let mean = offsets.iter().sum::<f64>() / offsets.len() as f64;
     (mean.abs() > CHAMBER_NOTE_C || hi - lo > CHAMBER_NOTE_C).then(|| QualityNote {
         kind: "sensor_vs_chamber",

@@ -57,7 +57,10 @@ pub fn events(rec: &Recording) -> Events {
             while k < rows.len() && rows[k].position.is_none() {
                 k += 1;
             }
-            let end_t = rows.get(k).map(|r| r.t_s).unwrap_or(rows[rows.len() - 1].t_s);
+            let end_t = rows
+                .get(k)
+                .map(|r| r.t_s)
+                .unwrap_or(rows[rows.len() - 1].t_s);
             if end_t - rows[s].t_s > HANDLING_S && k < rows.len() {
                 e.handling.push(k);
             }
@@ -113,7 +116,10 @@ pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
 pub fn directions(rec: &Recording, threshold_c: f64, initial: f64) -> Vec<f64> {
     let mut m = Direction::default();
     m.start(initial, first_temp(rec));
-    rec.rows.iter().map(|r| m.step(threshold_c, r.temp_c)).collect()
+    rec.rows
+        .iter()
+        .map(|r| m.step(threshold_c, r.temp_c))
+        .collect()
 }
 
 /// Per row, the warm-up weight for time constant `tau_s`, the clock restarted at the

@@ -20,7 +20,7 @@ pub const Q_MARGIN: f64 = 10.0;
 /// Two candidates within this much quasi-BIC of each other explain the data equally well.
 pub const AMBIGUITY_MARGIN: f64 = 6.0;
 /// A candidate must explain at least this share of the chi-square above the floor.
-pub const MATERIAL_SHARE: f64 = 0.1;
+pub const MATERIAL_SHARE: f64 = 0.5;
 /// A parameter is significant at this many sigmas (scaled by the dispersion).
 pub const Z_SIGNIFICANT: f64 = 4.0;
 /// Where an effect acts, the final residual must be at most this fraction of what it is
@@ -93,7 +93,8 @@ pub fn baseline(data: &Data) -> Option<(Fit, Vec<String>)> {
         let mut not_identifiable = Vec::new();
         if !cross {
             not_identifiable.push(
-                "cross-sensitivities (need >= 4 positions not in one plane): fixed at 0".to_string(),
+                "cross-sensitivities (need >= 4 positions not in one plane): fixed at 0"
+                    .to_string(),
             );
         }
         return Some((fit, not_identifiable));
@@ -110,19 +111,35 @@ fn candidates(data: &Data, current: &Fit, scope: &Scope, used: &[&str]) -> Vec<F
     let single = |e: Extra| data.fit(&spec.with(e), Some(current), false);
     if scope.temperature && open("temp_curvature") {
         let broad = !spec.extras.iter().any(|e| matches!(e, Extra::Curvature(_)));
-        out.extend(profile::curvature(data, spec, current, broad));
+        out.extend(choose_form(
+            data,
+            current,
+            profile::curvature(data, spec, current, broad),
+        ));
     }
     if scope.dynamics && open("thermal_lag") {
-        out.extend(profile::lag(data, spec, current));
+        out.extend(choose_form(
+            data,
+            current,
+            profile::lag(data, spec, current),
+        ));
     }
     if scope.dynamics && open("temp_rate") {
         out.extend(profile::rate(data, spec, current));
     }
     if scope.dynamics && scope.reversals && open("hysteresis") {
-        out.extend(profile::hysteresis(data, spec, current));
+        out.extend(choose_form(
+            data,
+            current,
+            profile::hysteresis(data, spec, current),
+        ));
     }
     if scope.dynamics && open("warmup_drift") {
-        out.extend(profile::warmup(data, spec, current));
+        out.extend(choose_form(
+            data,
+            current,
+            profile::warmup(data, spec, current),
+        ));
     }
     for e in [Extra::K2, Extra::Asymmetry] {
         if open(e.id()) {
@@ -148,6 +165,34 @@ fn candidates(data: &Data, current: &Fit, scope: &Scope, used: &[&str]) -> Vec<F
     out
 }
 
+/// Of several forms of one effect on top of `current`, the simplest, unless a richer one
+/// fits better AND passes every acceptance rule against it (a richer form must earn its
+/// parameters as an effect must).
+fn choose_form(data: &Data, current: &Fit, mut forms: Vec<Fit>) -> Option<Fit> {
+    forms.sort_by_key(|f| f.params());
+    let mut pick: Option<Fit> = None;
+    for f in forms {
+        let Some(p) = &pick else {
+            pick = Some(f);
+            continue;
+        };
+        if f.chi2 >= p.chi2 {
+            continue;
+        }
+        let (Some(pf), Some(ff)) = (
+            data.fit(&p.spec, Some(current), true),
+            data.fit(&f.spec, Some(current), true),
+        ) else {
+            continue;
+        };
+        let e = ff.spec.extras.len() - 1;
+        if judge(data, &pf, &ff, e).accepted() {
+            pick = Some(f);
+        }
+    }
+    pick
+}
+
 /// How a candidate compares with the model it extends.
 #[derive(Debug, Clone)]
 pub struct Judgement {
@@ -160,6 +205,9 @@ pub struct Judgement {
     /// Largest |parameter| / scaled sigma among the effect's own parameters (None when the
     /// effect has none: lag and broad curvature act through the temperature).
     pub max_z: Option<f64>,
+    /// The effect's largest contribution to one window, in floor sigmas (95th
+    /// percentile over the windows, so one window cannot carry it).
+    pub peak: f64,
 }
 
 impl Judgement {
@@ -177,12 +225,19 @@ impl Judgement {
 pub fn judge(data: &Data, smaller: &Fit, larger: &Fit, e: usize) -> Judgement {
     let phi = dispersion(data, larger);
     let dk = larger.params().saturating_sub(smaller.params()).max(1) as f64;
-    let excess = (smaller.chi2 - data.n_rows().saturating_sub(smaller.params()) as f64).max(f64::MIN_POSITIVE);
+    let excess = (smaller.chi2 - data.n_rows().saturating_sub(smaller.params()) as f64)
+        .max(f64::MIN_POSITIVE);
     let max_z = (0..larger.k)
         .filter(|&j| larger.labels[j].extra() == Some(e))
         .map(|j| larger.x[j].abs() / sigma(larger, j, phi))
         .reduce(f64::max);
+    let mut c: Vec<f64> = contribution(data, larger, smaller)
+        .iter()
+        .map(|v| v.abs())
+        .collect();
+    c.sort_by(f64::total_cmp);
     Judgement {
+        peak: c.get(c.len() * 95 / 100).copied().unwrap_or(0.0),
         gain: qbic(data, smaller, phi) - qbic(data, larger, phi),
         share: (smaller.chi2 - larger.chi2) / excess,
         heldout_gain: {
@@ -194,11 +249,15 @@ pub fn judge(data: &Data, smaller: &Fit, larger: &Fit, e: usize) -> Judgement {
 }
 
 /// The standard error of parameter `j`: the covariance's scaled by the dispersion, or the
-/// chunk jackknife's where that is larger (residuals correlated in time).
+/// Newey-West one where that is larger (residuals correlated in time).
 pub fn sigma(f: &Fit, j: usize, phi: f64) -> f64 {
-    let formal = f.cov.as_ref().map(|c| (c[(j, j)].max(0.0) * phi).sqrt()).unwrap_or(f64::INFINITY);
-    let jk = f.jackknife.as_ref().map(|v| v[j]).unwrap_or(0.0);
-    formal.max(jk)
+    let formal = f
+        .cov
+        .as_ref()
+        .map(|c| (c[(j, j)].max(0.0) * phi).sqrt())
+        .unwrap_or(f64::INFINITY);
+    let hac = f.hac.as_ref().map(|v| v[j]).unwrap_or(0.0);
+    formal.max(hac)
 }
 
 /// Where the forward search ended.
@@ -233,7 +292,10 @@ pub fn forward(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
         for (gain, f) in ranked.into_iter().take(6) {
             let id = last_id(&f);
             if let Some((best_gain, best)) = &accepted {
-                if id != last_id(best) && best_gain - gain < AMBIGUITY_MARGIN && !rivals.contains(&id) {
+                if id != last_id(best)
+                    && best_gain - gain < AMBIGUITY_MARGIN
+                    && !rivals.contains(&id)
+                {
                     rivals.push(id);
                 }
                 continue;
@@ -243,7 +305,11 @@ pub fn forward(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
             };
             let j = judge(data, &current, &full, full.spec.extras.len() - 1);
             if dbg {
-                eprintln!("  {:?}: {j:?} accepted {}", full.spec.extras.last(), j.accepted());
+                eprintln!(
+                    "  {:?}: {j:?} accepted {}",
+                    full.spec.extras.last(),
+                    j.accepted()
+                );
             }
             if j.accepted() {
                 accepted = Some((gain, full));
@@ -303,7 +369,9 @@ pub fn backward(data: &Data, mut current: Fit) -> Fit {
 /// RMS (floor units) of `f`'s residual over the rows where `contribution` (floor units)
 /// exceeds 2.
 fn region_rms(data: &Data, f: &Fit, contribution: &[f64]) -> Option<f64> {
-    let rows: Vec<usize> = (0..contribution.len()).filter(|&r| contribution[r].abs() > 2.0).collect();
+    let rows: Vec<usize> = (0..contribution.len())
+        .filter(|&r| contribution[r].abs() > 2.0)
+        .collect();
     if rows.is_empty() {
         return None;
     }

@@ -43,6 +43,10 @@ pub struct Sensor {
     pub noise_c: f64,
     /// Quantisation step, C (0 = none).
     pub quantum_c: f64,
+    /// The sensor reads the case plus this, C.
+    pub offset_c: f64,
+    /// ... plus this times (case - 20 C): a gain error.
+    pub gain_error: f64,
 }
 
 /// One stop of the profile.
@@ -87,6 +91,13 @@ pub struct Schedule {
     pub stops: Vec<Stop>,
     /// Extra positions (name, unit vector) beyond TP/PP.
     pub extra_positions: Vec<(String, [f64; 3])>,
+    /// Spans `[start_s, duration_s]` the logger drops (the unit runs on).
+    pub dropouts: Vec<[f64; 2]>,
+    /// Spans `[start_s, duration_s]` the unit is powered off (nothing logged; the
+    /// warm-up starts again at power-on).
+    pub power_offs: Vec<[f64; 2]>,
+    /// Write one row per dwell (its mean), as a voltmeter that averages each position.
+    pub dwell_means: bool,
 }
 
 /// How the coefficients depend on temperature.
@@ -107,6 +118,13 @@ pub struct Unit {
     pub noise_v: f64,
     /// Voltmeter resolution, V (0 = none).
     pub resolution_v: f64,
+    /// Correlation time of the voltmeter noise, s (0 = white; else first-order
+    /// autoregressive with the same per-sample sigma).
+    pub noise_corr_s: f64,
+    /// Probability per sample and axis of a spike.
+    pub spike_rate: f64,
+    /// Spike amplitude, V (random sign).
+    pub spike_v: f64,
 }
 
 /// Every effect of physics-catalogue.md; all off by default. Per-axis arrays are x, y, z.
@@ -130,6 +148,79 @@ pub struct Effects {
     pub fixture_error: Option<Fixture>,
     /// `warmup_drift`: U0 += d exp(-t / tau).
     pub warmup_drift: Option<Warmup>,
+    /// Other forms (a blind test's "physics not in the tool's own form"):
+    /// `thermal_lag` through a second pole: the element lags an intermediate stage by
+    /// these time constants, s.
+    pub thermal_lag2: Option<PerAxis>,
+    /// `temp_rate` as a thermal gradient: U0 += g (T_case - T_inner), T_inner a lag of
+    /// the case with `tau_s`.
+    pub temp_gradient: Option<Gradient>,
+    /// `hysteresis`: the state before the first change (+1 heated, -1 cooled; default +1).
+    pub hysteresis_initial: Option<f64>,
+    /// `hysteresis` that switches smoothly: the state relaxes toward the new direction
+    /// over this many C of travel after a reversal.
+    pub hysteresis_width_c: Option<f64>,
+    /// `hysteresis` of the scale factors: K_ii (1 +- s/2), relative.
+    pub scale_hysteresis: Option<PerAxis>,
+    /// A second warm-up with its own time constant.
+    pub warmup_drift2: Option<Warmup>,
+    /// `temp_curvature` as a local bend: offsets and scales change slope at `knot_c`.
+    pub temp_bend: Option<Bend>,
+    /// A second position off its nominal orientation.
+    pub fixture_error2: Option<Fixture>,
+    /// Outside the catalogue: the bias steps at `at_s` (a sudden shift).
+    pub bias_step: Option<BiasStep>,
+    /// Outside the catalogue: the bias wanders as a random walk, V per sqrt(s).
+    pub bias_walk: Option<PerAxis>,
+    /// Outside the catalogue: a cubic response U += K3 a^3, V/g^3.
+    pub nonlinearity_k3: Option<PerAxis>,
+    /// Outside the catalogue: a periodic disturbance of the bias.
+    pub periodic: Option<Periodic>,
+    /// Outside the catalogue: scale factors age, relative per hour.
+    pub scale_aging: Option<PerAxis>,
+}
+
+/// A thermal gradient across the sensor.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Gradient {
+    /// Offset per C of gradient, per axis, V/C.
+    pub value: [f64; 3],
+    /// Time constant of the inner temperature, s.
+    pub tau_s: f64,
+}
+
+/// A local bend of the temperature dependence.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Bend {
+    /// Where, C.
+    pub knot_c: f64,
+    /// Offset slope change per axis, V/C.
+    pub u0_v_per_c: [f64; 3],
+    /// Scale slope change per axis, relative per C.
+    #[serde(default)]
+    pub k_rel_per_c: [f64; 3],
+}
+
+/// A sudden bias shift.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BiasStep {
+    /// When, s.
+    pub at_s: f64,
+    /// Shift per axis, V.
+    pub value: [f64; 3],
+}
+
+/// A periodic bias disturbance.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Periodic {
+    /// Period, s.
+    pub period_s: f64,
+    /// Amplitude per axis, V.
+    pub value: [f64; 3],
 }
 
 /// Three per-axis values.
@@ -191,6 +282,8 @@ impl Default for Sensor {
         Sensor {
             noise_c: 0.02,
             quantum_c: 0.0625,
+            offset_c: 0.0,
+            gain_error: 0.0,
         }
     }
 }
@@ -214,6 +307,9 @@ impl Default for Schedule {
                 })
                 .collect(),
             extra_positions: Vec::new(),
+            dropouts: Vec::new(),
+            power_offs: Vec::new(),
+            dwell_means: false,
         }
     }
 }
@@ -227,6 +323,9 @@ impl Default for Unit {
             interp: "poly".into(),
             noise_v: 2e-5,
             resolution_v: 1e-7,
+            noise_corr_s: 0.0,
+            spike_rate: 0.0,
+            spike_v: 0.0,
         }
     }
 }

@@ -6,8 +6,8 @@ pub mod config;
 pub mod unit;
 
 pub use config::{
-    parse_config, Chamber, Curvature, Effects, Fixture, PerAxis, Schedule, Sensor, SimConfig, Stop,
-    Unit, Warmup,
+    parse_config, Bend, BiasStep, Chamber, Curvature, Effects, Fixture, Gradient, PerAxis,
+    Periodic, Schedule, Sensor, SimConfig, Stop, Unit, Warmup,
 };
 pub use unit::{TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
 
@@ -124,17 +124,26 @@ fn plan(cfg: &SimConfig, positions: &Positions, rest: usize) -> Result<Vec<Segme
     Ok(segs)
 }
 
-/// Chamber air, case and sensing elements (first-order lags), and the direction of the
-/// last temperature change of more than 0.5 C (hysteresis).
+/// Chamber air, case and sensing elements (first-order lags, a second pole where
+/// configured), the inner temperature of a gradient, and the hysteresis state: the
+/// direction of the last temperature change of more than 0.5 C, reached at once or, with
+/// a switching width, relaxing toward it over the temperature travelled.
 struct Thermal {
     k_air: f64,
     k_case: f64,
     lag: Option<[f64; 3]>,
+    lag2: Option<[f64; 3]>,
+    k_inner: f64,
     air: f64,
     case: f64,
+    elem1: [f64; 3],
     elem: [f64; 3],
+    inner: f64,
     dir: f64,
     dir_ref: f64,
+    width: Option<f64>,
+    state: f64,
+    turn: (f64, f64),
 }
 
 impl Thermal {
@@ -147,15 +156,24 @@ impl Thermal {
             }
         };
         let start = cfg.chamber.start_c;
+        let e = &cfg.effects;
+        let initial = e.hysteresis_initial.unwrap_or(1.0);
         Thermal {
             k_air: fall(cfg.chamber.tau_air_s),
             k_case: fall(cfg.chamber.tau_case_s),
-            lag: cfg.effects.thermal_lag.map(|l| l.value.map(fall)),
+            lag: e.thermal_lag.map(|l| l.value.map(fall)),
+            lag2: e.thermal_lag2.map(|l| l.value.map(fall)),
+            k_inner: e.temp_gradient.map(|g| fall(g.tau_s)).unwrap_or(1.0),
             air: start,
             case: start,
+            elem1: [start; 3],
             elem: [start; 3],
-            dir: 1.0,
+            inner: start,
+            dir: initial,
             dir_ref: start,
+            width: e.hysteresis_width_c,
+            state: initial,
+            turn: (start, initial),
         }
     }
 
@@ -164,12 +182,18 @@ impl Thermal {
         self.air += (setp - self.air) * self.k_air;
         let case_prev = self.case;
         self.case += (self.air - self.case) * self.k_case;
+        self.inner += (self.case - self.inner) * self.k_inner;
         for i in 0..3 {
-            self.elem[i] = match self.lag {
-                Some(l) => self.elem[i] + (self.case - self.elem[i]) * l[i],
+            self.elem1[i] = match self.lag {
+                Some(l) => self.elem1[i] + (self.case - self.elem1[i]) * l[i],
                 None => self.case,
             };
+            self.elem[i] = match self.lag2 {
+                Some(l) => self.elem[i] + (self.elem1[i] - self.elem[i]) * l[i],
+                None => self.elem1[i],
+            };
         }
+        let before = self.dir;
         if self.case - self.dir_ref > 0.5 {
             self.dir = 1.0;
             self.dir_ref = self.case;
@@ -180,8 +204,26 @@ impl Thermal {
         if (self.case - self.dir_ref) * self.dir > 0.0 {
             self.dir_ref = self.case;
         }
+        if self.dir != before {
+            self.turn = (self.case, self.state);
+        }
+        self.state = match self.width {
+            Some(w) => {
+                self.dir - (self.dir - self.turn.1) * (-(self.case - self.turn.0).abs() / w).exp()
+            }
+            None => self.dir,
+        };
         (self.case - case_prev) / dt
     }
+}
+
+/// Sample-to-sample state of the disturbances: the bias random walk, the voltmeter's
+/// correlated noise, the last power-on, and the random numbers behind all noise.
+struct Disturbance {
+    walk: [f64; 3],
+    noise: [f64; 3],
+    on_s: f64,
+    rng: Rng,
 }
 
 /// The voltmeter readings of the unit in orientation `a` at time `t`.
@@ -189,12 +231,14 @@ fn readings(
     cfg: &SimConfig,
     unit: &TrueUnit,
     th: &Thermal,
+    dist: &mut Disturbance,
     a: [f64; 3],
     rate: f64,
     t: f64,
-    rng: &mut Rng,
 ) -> [f64; 3] {
     let e = &cfg.effects;
+    let dt = 1.0 / cfg.schedule.rate_hz;
+    let since_on = t - dist.on_s;
     let mut u = [0.0; 3];
     for i in 0..3 {
         let c = Coeffs::from_array(&unit.coeffs(th.elem[i]));
@@ -208,19 +252,61 @@ fn readings(
         if let Some(r) = e.temp_rate {
             ui += r.value[i] * rate;
         }
+        if let Some(g) = e.temp_gradient {
+            ui += g.value[i] * (th.case - th.inner);
+        }
         if let Some(h) = e.hysteresis {
-            ui += th.dir * h.value[i] / 2.0;
+            ui += th.state * h.value[i] / 2.0;
         }
-        if let Some(w) = e.warmup_drift {
-            ui += w.d_v[i] * (-t / w.tau_s).exp();
+        if let Some(h) = e.scale_hysteresis {
+            ui += c.k[i][i] * h.value[i] * th.state / 2.0 * a[i];
         }
-        ui += cfg.unit.noise_v * rng.normal();
+        for w in [e.warmup_drift, e.warmup_drift2].into_iter().flatten() {
+            ui += w.d_v[i] * (-since_on / w.tau_s).exp();
+        }
+        if let Some(b) = e.bias_step {
+            ui += if t >= b.at_s { b.value[i] } else { 0.0 };
+        }
+        if let Some(w) = e.bias_walk {
+            dist.walk[i] += w.value[i] * dt.sqrt() * dist.rng.normal();
+            ui += dist.walk[i];
+        }
+        if let Some(k3) = e.nonlinearity_k3 {
+            ui += k3.value[i] * a[i] * a[i] * a[i];
+        }
+        if let Some(p) = e.periodic {
+            ui += p.value[i] * (std::f64::consts::TAU * t / p.period_s).sin();
+        }
+        if let Some(g) = e.scale_aging {
+            ui += c.k[i][i] * g.value[i] * t / 3600.0 * a[i];
+        }
+        ui += noise(cfg, &mut dist.noise[i], &mut dist.rng);
+        if cfg.unit.spike_rate > 0.0 && dist.rng.uniform() < cfg.unit.spike_rate {
+            ui += if dist.rng.uniform() < 0.5 { -1.0 } else { 1.0 } * cfg.unit.spike_v;
+        }
         if cfg.unit.resolution_v > 0.0 {
             ui = (ui / cfg.unit.resolution_v).round() * cfg.unit.resolution_v;
         }
         u[i] = ui;
     }
     u
+}
+
+/// One sample of voltmeter noise: white, or first-order autoregressive with the same
+/// per-sample sigma.
+fn noise(cfg: &SimConfig, state: &mut f64, rng: &mut Rng) -> f64 {
+    let sigma = cfg.unit.noise_v;
+    if cfg.unit.noise_corr_s <= 0.0 {
+        return sigma * rng.normal();
+    }
+    let rho = (-1.0 / (cfg.schedule.rate_hz * cfg.unit.noise_corr_s)).exp();
+    *state = rho * *state + (1.0 - rho * rho).sqrt() * sigma * rng.normal();
+    *state
+}
+
+/// Whether `t` falls in one of the spans `[start, duration]`.
+fn within(spans: &[[f64; 2]], t: f64) -> bool {
+    spans.iter().any(|[s, d]| t >= *s && t < s + d)
 }
 
 /// Run the simulation.
@@ -245,9 +331,22 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
         Some((fp, ang)) if fp == p => rotate(positions.vector(p), ang),
         _ => positions.vector(p),
     };
-    let mut rng = Rng::new(cfg.seed);
+    let fixture2 = match &cfg.effects.fixture_error2 {
+        Some(f) => Some((position_index(&positions, &f.position)?, f.angles_rad)),
+        None => None,
+    };
+    let vector = |p: usize| match fixture2 {
+        Some((fp, ang)) if fp == p => rotate(positions.vector(p), ang),
+        _ => vector(p),
+    };
     let mut w = RecordingWriter::new(cfg)?;
     let mut th = Thermal::new(cfg, dt);
+    let mut dist = Disturbance {
+        walk: [0.0; 3],
+        noise: [0.0; 3],
+        on_s: 0.0,
+        rng: Rng::new(cfg.seed),
+    };
     let (mut t, mut last_report) = (0.0, 0.0);
     for seg in &segs {
         let n = (seg.duration_s * sch.rate_hz).round() as usize;
@@ -264,12 +363,25 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
                     ("-", if nrm > 0.1 { m.map(|x| x / nrm) } else { u })
                 }
             };
-            let u = readings(cfg, &unit, &th, a, rate, t, &mut rng);
-            let mut ts = th.case + cfg.sensor.noise_c * rng.normal();
+            if let Some(end) = sch
+                .power_offs
+                .iter()
+                .map(|[s, d]| s + d)
+                .filter(|e| *e <= t)
+                .reduce(f64::max)
+            {
+                dist.on_s = end;
+            }
+            let u = readings(cfg, &unit, &th, &mut dist, a, rate, t);
+            let sensed = th.case + cfg.sensor.offset_c + cfg.sensor.gain_error * (th.case - 20.0);
+            let mut ts = sensed + cfg.sensor.noise_c * dist.rng.normal();
             if cfg.sensor.quantum_c > 0.0 {
                 ts = (ts / cfg.sensor.quantum_c).round() * cfg.sensor.quantum_c;
             }
-            w.row(t, name, ts, th.air, u)?;
+            if !within(&sch.dropouts, t) && !within(&sch.power_offs, t) {
+                let measuring = matches!(seg.phase, Phase::Dwell(_));
+                w.row(t, name, ts, th.air, u, measuring)?;
+            }
             t += dt;
             if t - last_report > 600.0 {
                 progress(t / total);
@@ -281,11 +393,15 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
     w.finish()
 }
 
-/// The recording's metadata lines, then its rows through a CSV writer.
+/// The recording's metadata lines, then its rows through a CSV writer; with
+/// `dwell_means`, one row per tilter dwell (its mean) and nothing else.
 struct RecordingWriter {
     head: String,
     csv: csv::Writer<Vec<u8>>,
     rows: usize,
+    dwell_means: bool,
+    /// The open dwell: its name, and the sums of t, temperature, air and outputs.
+    acc: Option<(String, usize, [f64; 6])>,
 }
 
 impl RecordingWriter {
@@ -305,14 +421,20 @@ impl RecordingWriter {
             "uz_v",
         ])
         .map_err(Self::err)?;
-        Ok(RecordingWriter { head, csv, rows: 0 })
+        Ok(RecordingWriter {
+            head,
+            csv,
+            rows: 0,
+            dwell_means: cfg.schedule.dwell_means,
+            acc: None,
+        })
     }
 
     fn err(e: csv::Error) -> HostError {
         HostError::msg(format!("cannot write the recording: {e}"))
     }
 
-    fn row(&mut self, t: f64, name: &str, ts: f64, air: f64, u: [f64; 3]) -> Result<()> {
+    fn write(&mut self, t: f64, name: &str, ts: f64, air: f64, u: [f64; 3]) -> Result<()> {
         self.rows += 1;
         self.csv
             .write_record([
@@ -327,7 +449,45 @@ impl RecordingWriter {
             .map_err(Self::err)
     }
 
-    fn finish(self) -> Result<Simulation> {
+    /// Write the open dwell's mean.
+    fn flush(&mut self) -> Result<()> {
+        if let Some((name, n, s)) = self.acc.take() {
+            let m = s.map(|v| v / n as f64);
+            self.write(m[0], &name, m[1], m[2], [m[3], m[4], m[5]])?;
+        }
+        Ok(())
+    }
+
+    fn row(
+        &mut self,
+        t: f64,
+        name: &str,
+        ts: f64,
+        air: f64,
+        u: [f64; 3],
+        measuring: bool,
+    ) -> Result<()> {
+        if !self.dwell_means {
+            return self.write(t, name, ts, air, u);
+        }
+        let same = self.acc.as_ref().is_some_and(|(n, _, _)| n == name) && measuring;
+        if !same {
+            self.flush()?;
+        }
+        if measuring {
+            let (_, n, s) = self
+                .acc
+                .get_or_insert_with(|| (name.to_string(), 0, [0.0; 6]));
+            *n += 1;
+            for (a, v) in s.iter_mut().zip([t, ts, air, u[0], u[1], u[2]]) {
+                *a += v;
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<Simulation> {
+        self.flush()?;
         let body = self
             .csv
             .into_inner()

@@ -1,7 +1,7 @@
 //! The simulated unit's true coefficients against temperature: the paper unit (its
 //! Tables 1-2 and the rows designed in docs/paper-unit.md) or a configured table.
 use crate::error::{HostError, Result};
-use crate::simulate::config::{Curvature, SimConfig};
+use crate::simulate::config::{Bend, Curvature, SimConfig};
 
 /// The built-in paper unit: the paper's Tables 1-2 at -40, +20, +70 C, and at -10 and
 /// +45 C the values designed in docs/paper-unit.md; the unit follows the quartic
@@ -89,6 +89,7 @@ pub struct TrueUnit {
     rows: Vec<[f64; 12]>,
     poly: bool,
     curvature: Option<Curvature>,
+    bend: Option<Bend>,
     t0: f64,
 }
 
@@ -123,6 +124,7 @@ impl TrueUnit {
             rows,
             poly,
             curvature: cfg.effects.temp_curvature,
+            bend: cfg.effects.temp_bend,
             t0: cfg.t0_c,
         })
     }
@@ -158,6 +160,13 @@ impl TrueUnit {
             for i in 0..3 {
                 out[9 + i] += cv.u0_v[i] * g;
                 out[i] *= 1.0 + cv.k_rel[i] * g;
+            }
+        }
+        if let Some(b) = &self.bend {
+            let h = (t - b.knot_c).max(0.0);
+            for i in 0..3 {
+                out[9 + i] += b.u0_v_per_c[i] * h;
+                out[i] *= 1.0 + b.k_rel_per_c[i] * h;
             }
         }
         out

@@ -1,0 +1,216 @@
+//! The blind suite's report: every case, the catalogue class's confusion matrix,
+//! detection by magnitude and scores, and the other classes form by form.
+use crate::blind::{Class, Outcome, EFFECTS};
+
+/// One line per case: what was concealed and what was named.
+fn case_lines(outcomes: &[Outcome]) -> String {
+    let mut s = String::from("case                                          scale seed  found / ambiguous                         pass   params  final/floor  verdict\n");
+    for o in outcomes {
+        let name = o.case.name();
+        let amb = o
+            .ambiguous
+            .iter()
+            .map(|a| format!("{{{}}}", a.join("|")))
+            .collect::<Vec<_>>()
+            .join(" ");
+        s.push_str(&format!(
+            "{name:<45} {:>5.2} {:>4}  {:<40} {:<6} {:<7} {:>6.2}       {} {}\n",
+            o.case.scale,
+            o.case.seed,
+            format!(
+                "{} {amb}",
+                if o.found.is_empty() {
+                    "none".to_string()
+                } else {
+                    o.found.join(",")
+                }
+            ),
+            if o.passed() { "yes" } else { "NO" },
+            match o.params_ok {
+                Some(true) => "ok",
+                Some(false) => "off",
+                None => "-",
+            },
+            o.final_over_noise,
+            o.verdict,
+            o.note
+        ));
+    }
+    s
+}
+
+/// Concealed single effect (rows) against the effects named (columns).
+fn confusion(outcomes: &[Outcome]) -> String {
+    let cols: Vec<&str> = std::iter::once("none").chain(EFFECTS).collect();
+    let mut s = String::from("\nconfusion (concealed single effect -> effects named, counts):\n");
+    s.push_str(&format!("{:<16}", ""));
+    for c in &cols {
+        s.push_str(&format!("{:>6}", &c[..c.len().min(5)]));
+    }
+    s.push('\n');
+    for row in std::iter::once("clean").chain(EFFECTS) {
+        let cases: Vec<&Outcome> = outcomes
+            .iter()
+            .filter(|o| {
+                !o.case.tp_only
+                    && if row == "clean" {
+                        o.case.effects.is_empty()
+                    } else {
+                        o.case.effects == [row]
+                    }
+            })
+            .collect();
+        if cases.is_empty() {
+            continue;
+        }
+        s.push_str(&format!("{row:<16}"));
+        for c in &cols {
+            let n = cases
+                .iter()
+                .filter(|o| {
+                    let named = o.named();
+                    if *c == "none" {
+                        named.is_empty()
+                    } else {
+                        named.iter().any(|x| x == c)
+                    }
+                })
+                .count();
+            s.push_str(&format!("{n:>6}"));
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// Where detection stops: the concealed effect named, by magnitude.
+fn by_magnitude(outcomes: &[Outcome]) -> String {
+    let mut scales: Vec<f64> = outcomes
+        .iter()
+        .filter(|o| !o.case.effects.is_empty())
+        .map(|o| o.case.scale)
+        .collect();
+    scales.sort_by(|a, b| b.total_cmp(a));
+    scales.dedup();
+    let mut s = String::from(
+        "\ndetection by magnitude (1 = the nominal size; effect named / exactly right / cases):\n",
+    );
+    for sc in &scales {
+        let at: Vec<&Outcome> = outcomes
+            .iter()
+            .filter(|o| !o.case.effects.is_empty() && o.case.scale == *sc)
+            .collect();
+        let hit = at
+            .iter()
+            .filter(|o| {
+                let named = o.named();
+                o.case.effects.iter().all(|e| named.iter().any(|f| f == e))
+            })
+            .count();
+        let ex = at.iter().filter(|o| o.exact).count();
+        s.push_str(&format!("  {sc:>5.2}: {hit}/{ex}/{}\n", at.len()));
+    }
+    s
+}
+
+/// The scores over the whole suite.
+fn scores(outcomes: &[Outcome]) -> String {
+    let exact = outcomes.iter().filter(|o| o.exact).count();
+    let detectable: Vec<&Outcome> = outcomes.iter().filter(|o| o.case.scale >= 0.1).collect();
+    let det_exact = detectable.iter().filter(|o| o.exact).count();
+    let mut s = format!(
+        "exactly the right set at magnitudes >= 0.1: {det_exact}/{} ({:.0}%)\n",
+        detectable.len(),
+        100.0 * det_exact as f64 / detectable.len().max(1) as f64
+    );
+    let clean: Vec<&Outcome> = outcomes
+        .iter()
+        .filter(|o| o.case.effects.is_empty())
+        .collect();
+    let false_on_clean = clean
+        .iter()
+        .filter(|o| !o.found.is_empty() || !o.ambiguous.is_empty())
+        .count();
+    let p: Vec<bool> = outcomes.iter().filter_map(|o| o.params_ok).collect();
+    let resid_ok = outcomes
+        .iter()
+        .filter(|o| o.exact && o.final_over_noise <= 1.5)
+        .count();
+    s.push_str(&format!(
+        "\nexactly the right set: {exact}/{} ({:.0}%); false findings on clean recordings: {false_on_clean}/{}; parameters within 3 sigma: {}/{}; final residual <= 1.5x noise (exact cases): {resid_ok}/{exact}\n",
+        outcomes.len(),
+        100.0 * exact as f64 / outcomes.len().max(1) as f64,
+        clean.len(),
+        p.iter().filter(|b| **b).count(),
+        p.len()
+    ));
+    s
+}
+
+/// Per form of the other classes: cases passed, and what was named or noted.
+fn by_form(outcomes: &[Outcome]) -> String {
+    let mut s = String::new();
+    for class in [Class::OtherForm, Class::Outside, Class::Nuisance] {
+        let of: Vec<&Outcome> = outcomes.iter().filter(|o| o.case.class == class).collect();
+        if of.is_empty() {
+            continue;
+        }
+        let passed = of.iter().filter(|o| o.passed()).count();
+        s.push_str(&format!(
+            "\n{}: {passed}/{} passed\n",
+            class.name(),
+            of.len()
+        ));
+        let mut forms: Vec<&str> = Vec::new();
+        for o in &of {
+            if !forms.contains(&o.case.form) {
+                forms.push(o.case.form);
+            }
+        }
+        for f in forms {
+            let cases: Vec<&&Outcome> = of.iter().filter(|o| o.case.form == f).collect();
+            let ok = cases.iter().filter(|o| o.passed()).count();
+            let mut named: Vec<String> = cases.iter().flat_map(|o| o.named()).collect();
+            named.sort();
+            named.dedup();
+            let detail = match class {
+                Class::Outside => format!(
+                    "{} with no catalogue name, {} located on the right axis",
+                    cases.iter().filter(|o| o.named().is_empty()).count(),
+                    cases.iter().filter(|o| o.located()).count()
+                ),
+                Class::Nuisance => format!(
+                    "{} with no physics, {} with the data note",
+                    cases.iter().filter(|o| o.named().is_empty()).count(),
+                    cases.iter().filter(|o| o.noted()).count()
+                ),
+                _ => format!(
+                    "named: {}",
+                    if named.is_empty() {
+                        "nothing".into()
+                    } else {
+                        named.join(", ")
+                    }
+                ),
+            };
+            s.push_str(&format!("  {f:<44} {ok}/{}  ({detail})\n", cases.len()));
+        }
+    }
+    s
+}
+
+/// The whole report: every case, then the catalogue class's confusion, magnitudes and
+/// scores, then the other classes form by form.
+pub fn report(outcomes: &[Outcome]) -> String {
+    let cat: Vec<Outcome> = outcomes
+        .iter()
+        .filter(|o| o.case.class == Class::Catalogue)
+        .cloned()
+        .collect();
+    case_lines(outcomes)
+        + &format!("\n{}:", Class::Catalogue.name())
+        + &confusion(&cat)
+        + &by_magnitude(&cat)
+        + &scores(&cat)
+        + &by_form(outcomes)
+}

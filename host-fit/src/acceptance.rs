@@ -168,3 +168,65 @@ pub fn judge(v: &Verification, spec: &Spec, t0: f64, range: (f64, f64)) -> Resul
         dwells_outside_range: outside,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::verify::DwellCheck;
+
+    fn v(dwells: &[(f64, f64)]) -> Verification {
+        Verification {
+            dwells: dwells
+                .iter()
+                .enumerate()
+                .map(|(i, (t, dg))| DwellCheck {
+                    position: format!("P{i}"),
+                    temp_c: *t,
+                    dg_mg_uncompensated: 9.0,
+                    dg_mg: *dg,
+                    samples: 60,
+                    flagged: 0,
+                })
+                .collect(),
+            max_by_temperature: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn limits_by_band_range_and_nan() {
+        let spec = Spec::default();
+        let range = (-40.0, 70.0);
+        // 0.29 mg at T0 + 4.9 C passes, 0.31 fails; 0.99 mg at -30 C passes
+        let a = judge(&v(&[(24.9, 0.29), (-30.0, -0.99)]), &spec, 20.0, range).unwrap();
+        assert_eq!(a.acceptance, Verdict::Pass, "{a:?}");
+        assert_eq!(
+            (a.worst_at_t0_mg, a.worst_over_range_mg),
+            (Some(0.29), Some(0.99))
+        );
+        let a = judge(&v(&[(24.9, 0.31), (-30.0, 0.5)]), &spec, 20.0, range).unwrap();
+        assert_eq!(a.acceptance, Verdict::Fail);
+        assert!(
+            a.reason.contains("P0") && a.reason.contains("24.9"),
+            "{}",
+            a.reason
+        );
+        // 0.5 mg 5.1 C from T0 is judged against the range's 1 mg
+        let a = judge(&v(&[(25.1, 0.5)]), &spec, 20.0, range).unwrap();
+        assert_eq!(a.acceptance, Verdict::Pass);
+        // a NaN is never a pass
+        let a = judge(&v(&[(20.0, f64::NAN), (21.0, 0.1)]), &spec, 20.0, range).unwrap();
+        assert_eq!((a.acceptance, a.dwells_failed), (Verdict::Fail, 1));
+    }
+
+    #[test]
+    fn outside_the_range_is_counted_not_judged_and_nothing_to_judge_is_an_error() {
+        let spec = Spec::default();
+        let a = judge(&v(&[(80.0, 5.0), (20.0, 0.1)]), &spec, 20.0, (-40.0, 70.0)).unwrap();
+        assert_eq!(a.acceptance, Verdict::Pass);
+        assert_eq!((a.dwells_judged, a.dwells_outside_range), (1, 1));
+        assert!(a.reason.contains("1 dwells outside"), "{}", a.reason);
+        let e = judge(&v(&[(80.0, 0.1)]), &spec, 20.0, (-40.0, 70.0)).unwrap_err();
+        assert!(e.message.contains("cannot be judged"), "{e}");
+        assert!(Spec::new(0.0, 1.0).is_err() && Spec::new(0.3, f64::NAN).is_err());
+    }
+}

@@ -41,10 +41,10 @@ pub struct ModelArgs {
 #[derive(Args, Debug, Clone)]
 pub struct AcceptArgs {
     /// Limit on |dg| within +-5 C of T0, mg.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, allow_hyphen_values = true)]
     pub accept_t0_mg: f64,
     /// Limit on |dg| over the rest of the valid range, mg.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     pub accept_range_mg: f64,
 }
 

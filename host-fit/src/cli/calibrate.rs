@@ -295,7 +295,7 @@ fn fit_text(j: &Fitted<'_>) -> String {
         j.t_min_c,
         j.t_max_c
     )];
-    if let Some(sel) = j.chosen_by {
+    if let Some(sel) = j.chosen_by.filter(|s| !s.candidates.is_empty()) {
         s.push(format!("chosen by {}: {}", sel.method, sel.reason));
         let c: Vec<String> = sel
             .candidates

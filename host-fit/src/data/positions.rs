@@ -334,3 +334,32 @@ fn parse_row<'a>(
     };
     Ok((name, v, role))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_vector_is_a_pose_of_unknown_orientation() {
+        let text = "name,fx,fy,fz,role\nW1,,,\nW2,0,0,2,verification\nTP1,,,,\n";
+        let (p, _) = Positions::parse(Path::new("p.csv"), text).unwrap();
+        let w1 = p.index("W1").unwrap();
+        assert!(!p.is_known(w1) && p.vector(w1).iter().all(|v| v.is_nan()));
+        assert!(p.has_role(w1, Role::Calibration));
+        assert_eq!(p.vector(p.index("W2").unwrap()), [0.0, 0.0, 1.0]);
+        // a built-in may be declared unknown too
+        let tp1 = p.index("TP1").unwrap();
+        assert!(!p.is_known(tp1));
+        let e = p.require_known([tp1, w1], "the fit").unwrap_err();
+        assert!(
+            e.message.contains("`TP1`") && e.message.contains("2 of unknown"),
+            "{e}"
+        );
+        let mut q = p.clone();
+        q.set_estimated(w1, [1.0, 0.0, 0.0]);
+        assert!(q.is_known(w1) && q.is_estimated(w1));
+        // half a vector is an error naming the field
+        let e = Positions::parse(Path::new("p.csv"), "name,fx,fy,fz\nW1,1,,\n").unwrap_err();
+        assert_eq!((e.line, e.field.as_deref()), (Some(2), Some("fy")), "{e}");
+    }
+}

@@ -18,6 +18,8 @@ pub struct Excluded {
     pub samples: usize,
     /// The largest of their temperature spans, C.
     pub max_span_c: f64,
+    /// Dwells the rule looked at (the selected positions').
+    pub of_dwells: usize,
 }
 
 impl Excluded {
@@ -26,10 +28,14 @@ impl Excluded {
         if self.dwells == 0 {
             return String::new();
         }
-        format!(
-            "{} dwells ({} samples) whose temperature moved more than {MAX_DWELL_DRIFT_C} C (up to {:.1} C: ramps) left out of the static fit",
-            self.dwells, self.samples, self.max_span_c
-        )
+        let mut s = format!(
+            "{} of {} calibration dwells ({} samples) moved more than {MAX_DWELL_DRIFT_C} C in temperature (up to {:.1} C: ramps, settling) and were left out of the static fit",
+            self.dwells, self.of_dwells, self.samples, self.max_span_c
+        );
+        if 2 * self.dwells > self.of_dwells {
+            s.push_str(": most of the recording was not in thermal equilibrium; lengthen the soaks, or fit the ramps with --route joint (their dynamics unmodelled)");
+        }
+        s
     }
 }
 
@@ -49,6 +55,9 @@ pub fn static_observations(
 ) -> (Vec<Obs>, Excluded) {
     let mut ex = Excluded::default();
     for (i, d) in rec.dwells.iter().enumerate() {
+        if select(d.position) {
+            ex.of_dwells += 1;
+        }
         if select(d.position) && !is_static(rec, i) {
             ex.dwells += 1;
             ex.samples += d.len();

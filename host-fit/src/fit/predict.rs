@@ -6,7 +6,9 @@
 //! direction `a` at `T` and `C_i` the axis's covariance, widened by its reduced
 //! chi-square when the residuals scatter more than the noise (misfit shows up here
 //! rather than being hidden). A dwell of `n` samples adds its own noise,
-//! `sum_i (a^T N)_i^2 sigma_i^2 / n`. Between the calibration temperatures this is the
+//! `sum_i (a^T N)_i^2 sigma_i^2 / n` (widened by the same reduced chi-square: the scatter
+//! between calibration dwells beyond their in-dwell noise, a temperature reading's error
+//! among it, is a verification dwell's too). Between the calibration temperatures this is the
 //! uncertainty of the chosen model, not a bound on how far the truth may stray from the
 //! model's shape there: only data at those temperatures can show that.
 use crate::fit::noise::Noise;
@@ -88,8 +90,10 @@ pub fn sigma_dwell_noise(fit: &ModelFit, noise: &Noise, t: f64, a: [f64; 3], n: 
         .map(|i| {
             // without an in-dwell noise level the residual scatter of the fit's
             // observations (one per dwell) is the only noise there is
+            // with it, the dwell-to-dwell scatter beyond it (the reduced chi-square of
+            // the calibration dwells) applies to a verification dwell too
             let s2 = if noise.dof > 0 {
-                noise.sigma[i].powi(2)
+                noise.sigma[i].powi(2) * fit.axis_scale(i, true)
             } else {
                 fit.axis_scale(i, false)
             };
@@ -113,11 +117,12 @@ pub fn predict(
     (lo, hi): (f64, f64),
     dwell_samples: usize,
 ) -> Prediction {
-    let n_pts = if hi - lo < 1.0 { 1 } else { 11 };
+    let constant = is_constant(&fit.basis);
+    let n_pts = if constant { 0 } else { 11 };
     let mut temps: Vec<f64> = (0..n_pts)
         .map(|k| lo + (hi - lo) * k as f64 / (n_pts.max(2) - 1) as f64)
         .collect();
-    if (lo..=hi).contains(&fit.t0_c) {
+    if constant || (lo..=hi).contains(&fit.t0_c) {
         temps.push(fit.t0_c);
         temps.sort_by(f64::total_cmp);
     }

@@ -225,3 +225,25 @@ pub fn choose(obs: &[Obs], noise: &Noise, t0: f64, path: &Path) -> Result<Select
         basis: chosen,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn candidates_are_simplest_first_and_fit_the_temperatures() {
+        let temps = [-40.0, -39.8, -10.0, 20.1, 45.0, 70.0];
+        let c = candidates(&temps);
+        let names: Vec<String> = c.iter().map(Basis::describe).collect();
+        // five temperatures: poly0..poly4, the pwl through them and three with an
+        // interior breakpoint dropped
+        assert_eq!(c.len(), 5 + 1 + 3, "{names:?}");
+        assert!(c.windows(2).all(|w| w[0].len() <= w[1].len()), "{names:?}");
+        assert_eq!(names.first().map(String::as_str), Some("poly0"));
+        assert!(
+            names.contains(&"pwl[-39.9,-10,20.1,45,70]".to_string()),
+            "{names:?}"
+        );
+        assert_eq!(candidates(&[20.0, 20.3]), vec![Basis::Poly { order: 0 }]);
+    }
+}

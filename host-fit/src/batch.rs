@@ -10,9 +10,7 @@ use crate::data::positions::{Positions, Role};
 use crate::data::recording::Recording;
 use crate::diagnose::contract::Contract;
 use crate::error::{HostError, Result};
-use crate::fit::pipeline::{
-    fit_chosen, fit_recording, ModelChoice, ModelKind, ModelRequest, Route,
-};
+use crate::fit::pipeline::{fit_chosen, ModelKind, ModelRequest};
 use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
 use crate::output::{check_writable, write_atomic, write_json};
@@ -61,7 +59,8 @@ pub struct UnitResult {
 pub struct BatchOptions {
     /// Parallel jobs (None: one per core).
     pub jobs: Option<usize>,
-    /// The temperature model (None: chosen by the data per unit).
+    /// The temperature model's family (None: chosen by the data per unit; the order or
+    /// breakpoints are chosen by the data within a family given).
     pub model: Option<ModelKind>,
     /// The acceptance specification.
     pub spec: Spec,
@@ -101,25 +100,14 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     if !rec.unit.is_empty() {
         r.unit = rec.unit.clone();
     }
-    let oc = match o.model {
-        None => fit_chosen(
-            &rec,
-            &ModelRequest {
-                kind: None,
-                order: None,
-                breakpoints: None,
-            },
-        )?,
-        Some(kind) => fit_recording(
-            &rec,
-            &ModelChoice {
-                kind,
-                order: None,
-                breakpoints: None,
-            },
-            Route::Static,
-        )?,
-    };
+    let oc = fit_chosen(
+        &rec,
+        &ModelRequest {
+            kind: o.model,
+            order: None,
+            breakpoints: None,
+        },
+    )?;
     r.model = oc.fit.basis.describe();
     let (cal, diagnosis) = if o.diagnose {
         let d = crate::diagnose::diagnose(&rec)?;

@@ -204,6 +204,42 @@ fn a_lot_that_passes_exits_zero() {
     std::fs::remove_dir_all(&root).unwrap();
 }
 
+/// With --diagnose the blob and the "after" figure are the diagnosed model's.
+#[test]
+fn batch_with_the_diagnosis_takes_the_diagnosed_blob() {
+    let root = tempfile_dir("hf-batch-diag");
+    let units = root.join("units");
+    std::fs::create_dir_all(&units).unwrap();
+    let sim = simulate(&SimConfig::default(), |_| {}).unwrap();
+    std::fs::write(units.join("u1.csv"), sim.csv).unwrap();
+    let out = root.join("out");
+    let (code, stdout, err) = cli(&[
+        "batch",
+        units.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--diagnose",
+    ]);
+    assert_eq!(code, 0, "{stdout}{err}");
+    let mut r = csv::Reader::from_path(out.join("summary.csv")).unwrap();
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let row = r.records().next().unwrap().unwrap();
+    let model = &row[header.iter().position(|h| h == "model").unwrap()];
+    assert!(model.starts_with("diagnosed"), "{row:?}");
+    // the blob is the diagnosis's: a pwl table over the data's temperatures
+    let (code, out_i, _) = cli(&["inspect", out.join("u1.blob").to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0);
+    let j: serde_json::Value = serde_json::from_str(&out_i).unwrap();
+    assert_eq!(j["model"], "pwl", "{out_i}");
+    let u: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("u1.json")).unwrap()).unwrap();
+    assert!(
+        u["diagnosis"].is_object() && u["acceptance"] == "pass",
+        "{u}"
+    );
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
 fn tempfile_dir(name: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);

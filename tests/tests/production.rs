@@ -215,6 +215,33 @@ fn options_that_do_not_apply_are_errors() {
     let j: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(j["model"], "poly2");
     assert_eq!(j["chosen_by"]["chosen"], "poly4");
+    // a family alone: the data choose its order (or breakpoints) within it
+    for (family, prefix) in [("poly", "poly"), ("pwl", "pwl[")] {
+        let (code, out, err) = cli(&[
+            "fit",
+            s(&rec),
+            "--out",
+            s(&b),
+            "--force",
+            "--model",
+            family,
+            "--json",
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert!(
+            j["model"].as_str().unwrap().starts_with(prefix),
+            "{}",
+            j["model"]
+        );
+        let cands = j["chosen_by"]["candidates"].as_array().unwrap();
+        assert!(
+            cands.len() > 1
+                && cands
+                    .iter()
+                    .all(|c| c["model"].as_str().unwrap().starts_with(prefix))
+        );
+    }
     let table = tests::repo().join("testdata/paper/paper-tables.csv");
     let (code, _, err) = cli(&["temp-fit", s(&table), "--model", "pwl", "--order", "2"]);
     assert_eq!(code, 1);

@@ -24,11 +24,12 @@ pub enum ErrModel {
 /// The temperature model options.
 #[derive(Args, Debug, Clone)]
 pub struct ModelArgs {
-    /// Temperature model (default for a recording: chosen by the data, by
-    /// cross-validation over the calibration dwells; for a table: pwl).
+    /// Temperature model family (default for a recording: chosen by the data, by
+    /// cross-validation over the calibration dwells, which also choose the order or
+    /// breakpoints within a family given alone; for a table: pwl).
     #[arg(long, value_enum)]
     pub model: Option<ModelKind>,
-    /// Polynomial order (poly only; default: chosen, or 3 with --model poly).
+    /// Polynomial order (poly only; default: chosen by the data).
     #[arg(long)]
     pub order: Option<usize>,
     /// Breakpoints for pwl, C, comma-separated (pwl only; default: the calibration

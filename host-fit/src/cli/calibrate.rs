@@ -243,7 +243,7 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     req.check()?;
     let rec = load(&a.input, a.positions_for_check.as_deref(), err)?;
     let oc = match (req.kind, a.route) {
-        (None, crate::fit::pipeline::Route::Static) => fit_chosen(&rec, &req)?,
+        (_, crate::fit::pipeline::Route::Static) => fit_chosen(&rec, &req)?,
         (None, route) => {
             return Err(HostError::msg(format!(
                 "the model is chosen by the data on the static route only; with --route {} give --model",

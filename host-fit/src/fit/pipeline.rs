@@ -12,7 +12,7 @@ use crate::fit::equilibrium::{static_observations, Excluded};
 use crate::fit::identify::{identify_stop, observations, stops, Obs, StopCoeffs};
 use crate::fit::noise::{noise, Noise};
 use crate::fit::orientation::{estimate_with, has_unknown, provisional_basis, Orientation};
-use crate::fit::select::{choose, Selection};
+use crate::fit::select::{choose_among, Selection};
 use crate::fit::temperature::{fit_joint, fit_table, temperature_clusters, Basis, ModelFit};
 
 /// Temperature model kind.
@@ -200,10 +200,25 @@ fn require_known(rec: &Recording, obs: &[Obs]) -> Result<()> {
 }
 
 /// The static route with the model the request leaves to the data (see the module
-/// doc); poses of unknown orientation are estimated with the provisional model, the
+/// doc): the family and its order or breakpoints, or only the order or breakpoints
+/// within a family the user named; poses of unknown orientation are estimated with the provisional model, the
 /// model chosen, and the poses estimated again with it.
 pub fn fit_chosen(rec: &Recording, req: &ModelRequest) -> Result<FitOutcome> {
     req.check()?;
+    let family: &dyn Fn(&Basis) -> bool = match (req.kind, &req.order, &req.breakpoints) {
+        (None, _, _) => &|_| true,
+        // the family and its order or breakpoints given: nothing is left to choose
+        (Some(kind), Some(_), _) | (Some(kind), _, Some(_)) => {
+            let choice = ModelChoice {
+                kind,
+                order: req.order,
+                breakpoints: req.breakpoints.clone(),
+            };
+            return fit_recording(rec, &choice, Route::Static);
+        }
+        (Some(ModelKind::Poly), None, None) => &|b| matches!(b, Basis::Poly { .. }),
+        (Some(ModelKind::Pwl), None, None) => &|b| matches!(b, Basis::Pwl { .. }),
+    };
     let (est, _) = with_orientations(rec, None)?;
     let r = est.as_ref().unwrap_or(rec);
     let (obs, excluded) = static_calibration(r);
@@ -212,7 +227,7 @@ pub fn fit_chosen(rec: &Recording, req: &ModelRequest) -> Result<FitOutcome> {
         return Err(no_static(rec, &excluded));
     }
     let nz = noise(r);
-    let selection = choose(&obs, &nz, r.t0_c, &r.path)?;
+    let selection = choose_among(&obs, &nz, r.t0_c, &r.path, family)?;
     let basis = req.refine(&selection.basis)?;
     let (est, orientation) = with_orientations(rec, Some(&basis))?;
     let r = est.as_ref().unwrap_or(rec);
@@ -293,7 +308,13 @@ fn fit_windows(rec: &Recording, choice: &ModelChoice, route: Route) -> Result<Fi
         if obs.is_empty() {
             return Err(no_static(rec, &excluded));
         }
-        let basis = choice.basis(&obs_temperatures(&obs));
+        // the default breakpoints are the static dwells' temperatures (the stops), also
+        // on the joint route, whose ramp windows would make every 2 C a breakpoint
+        let basis = if obs0.is_empty() {
+            choice.basis(&obs_temperatures(&obs))
+        } else {
+            basis0
+        };
         let nz = noise(r);
         let fit = fit_joint(&obs, &nz, &basis, r.t0_c, &r.path)?;
         Ok(FitOutcome {

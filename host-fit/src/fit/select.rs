@@ -144,12 +144,34 @@ fn rms_se(e: &[f64]) -> (f64, f64) {
 
 /// Choose the temperature model of the static observations `obs` (see the module doc).
 pub fn choose(obs: &[Obs], noise: &Noise, t0: f64, path: &Path) -> Result<Selection> {
+    choose_among(obs, noise, t0, path, &|_| true)
+}
+
+/// [`choose`] among the candidates `keep` accepts (one family, when the user named it).
+pub fn choose_among(
+    obs: &[Obs],
+    noise: &Noise,
+    t0: f64,
+    path: &Path,
+    keep: &dyn Fn(&Basis) -> bool,
+) -> Result<Selection> {
     let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
-    let cands = candidates(&temps);
+    let all = candidates(&temps);
+    let n_all = all.len();
+    let cands: Vec<Basis> = all.into_iter().filter(|b| keep(b)).collect();
+    if cands.is_empty() {
+        return Err(HostError::in_file(
+            path,
+            format!(
+                "no model of that family can be fitted to calibration data at {} temperature(s)",
+                temperature_clusters(&temps).len()
+            ),
+        ));
+    }
     let mut dwells: Vec<usize> = obs.iter().map(|o| o.dwell).collect();
     dwells.sort_unstable();
     dwells.dedup();
-    if cands.len() <= 1 {
+    if n_all <= 1 {
         let t = temps.iter().sum::<f64>() / temps.len().max(1) as f64;
         return Ok(Selection {
             chosen: Basis::Poly { order: 0 }.describe(),

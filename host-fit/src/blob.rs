@@ -102,7 +102,7 @@ pub fn blob_serial(serial: &str) -> Result<heapless::String<MAX_SERIAL_LEN>> {
     let mut s = heapless::String::<MAX_SERIAL_LEN>::new();
     s.push_str(serial).map_err(|_| {
         HostError::msg(format!(
-            "unit serial `{serial}` is {} bytes; the blob format holds at most {MAX_SERIAL_LEN} bytes (firmware_core::blob::MAX_SERIAL_LEN): give a shorter one with --serial",
+            "unit serial `{serial}` is {} bytes; the blob format holds at most {MAX_SERIAL_LEN} bytes (firmware_core::blob::MAX_SERIAL_LEN): give a shorter one (`fit --serial`, `diagnose --serial`)",
             serial.len()
         ))
     })?;

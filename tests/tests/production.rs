@@ -343,6 +343,21 @@ fn serials_up_to_the_blob_limit_and_a_clear_refusal_beyond() {
             assert_eq!(code, 0, "{err}");
             let (_, out, _) = cli(&["inspect", s(&b)]);
             assert!(out.contains("serial SHORT-1"), "{out}");
+            let (code, _, err) = cli(&["diagnose", s(&p), "--out", s(&b), "--force"]);
+            assert_eq!(code, 1);
+            assert!(err.contains("diagnose --serial"), "{err}");
+            let (code, _, err) = cli(&[
+                "diagnose",
+                s(&p),
+                "--out",
+                s(&b),
+                "--force",
+                "--serial",
+                "SHORT-2",
+            ]);
+            assert_eq!(code, 0, "{err}");
+            let (_, out, _) = cli(&["inspect", s(&b)]);
+            assert!(out.contains("serial SHORT-2"), "{out}");
         }
     }
     std::fs::remove_dir_all(&dir).unwrap();

@@ -192,6 +192,9 @@ pub struct DiagnoseArgs {
     /// Write the extended model (tables and in-flight physics terms) as a blob.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// The serial written into the blob (default: the recording's `unit`).
+    #[arg(long, requires = "out")]
+    pub serial: Option<String>,
     /// Overwrite existing outputs.
     #[arg(long)]
     pub force: bool,

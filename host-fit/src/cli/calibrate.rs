@@ -61,7 +61,8 @@ pub(super) fn temp_fit(a: TempFitArgs, out: &mut dyn Write) -> Result<()> {
 #[derive(Serialize)]
 struct Identified<'a> {
     unit: &'a str,
-    noise_sigma: [f64; 3],
+    /// None when no dwell has two samples (a dwell-averaged recording).
+    noise_sigma: Option<[f64; 3]>,
     stops: Vec<IdentifiedStop<'a>>,
 }
 
@@ -102,7 +103,7 @@ pub(super) fn identify(a: IdentifyArgs, out: &mut dyn Write, err: &mut dyn Write
     if a.json {
         let j = Identified {
             unit: &rec.unit,
-            noise_sigma: nz.sigma,
+            noise_sigma: (nz.dof > 0).then_some(nz.sigma),
             stops: st
                 .iter()
                 .map(|s| IdentifiedStop {
@@ -116,13 +117,16 @@ pub(super) fn identify(a: IdentifyArgs, out: &mut dyn Write, err: &mut dyn Write
         };
         w(out, json(&j)?)
     } else {
-        w(
-            out,
+        let noise_line = if nz.dof > 0 {
             format!(
-                "unit {}  noise sigma (per sample) x {:.3e} y {:.3e} z {:.3e} {}",
-                rec.unit, nz.sigma[0], nz.sigma[1], nz.sigma[2], rec.output_unit
-            ),
-        )?;
+                "noise sigma (per sample) x {:.3e} y {:.3e} z {:.3e} {}",
+                nz.sigma[0], nz.sigma[1], nz.sigma[2], rec.output_unit
+            )
+        } else {
+            // a dwell-averaged recording: nothing to take the noise from
+            "no dwell has two samples: the noise is not known, and the standard errors below are for unit noise (relative only)".to_string()
+        };
+        w(out, format!("unit {}  {noise_line}", rec.unit))?;
         w(out, table.trim_end())
     }
 }

@@ -635,3 +635,47 @@ fn dwell_averaged_recordings_work_and_say_where_their_noise_comes_from() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--unknown-orientations` treats a positions file's vectors as unknown: the wrist
+/// recording's vectors (themselves estimates) are estimated afresh, the frame by
+/// convention; without the flag they are taken as given.
+#[test]
+fn the_unknown_orientations_flag_forgets_the_files_vectors() {
+    use tests::cli;
+    let real = tests::repo().join("../shared/real/ggir-wrist");
+    let (rec, pos) = (real.join("recording.csv"), real.join("positions.csv"));
+    let dir = std::env::temp_dir().join(format!("hf-flag-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let b = dir.join("g.blob");
+    let run = |flag: bool| {
+        let mut a = vec![
+            "fit",
+            s(&rec),
+            "--positions",
+            s(&pos),
+            "--out",
+            s(&b),
+            "--force",
+            "--json",
+        ];
+        if flag {
+            a.push("--unknown-orientations");
+        }
+        let (code, out, err) = cli(&a);
+        assert_eq!(code, 0, "{err}");
+        serde_json::from_str::<serde_json::Value>(&out).unwrap()
+    };
+    let given = run(false);
+    assert!(given["orientations"].is_null());
+    let estimated = run(true);
+    assert_eq!(estimated["orientations"]["estimated"], 1050);
+    assert!(estimated["orientations"]["frame"]
+        .as_str()
+        .unwrap()
+        .contains("convention"));
+    // K(T0) lower triangular: the convention's zeros
+    for c in ["kxy", "kxz", "kyz"] {
+        assert_eq!(estimated["temperature_model"]["at_t0"][c], 0.0, "{c}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -13,7 +13,7 @@ use crate::fit::identify::{identify_stop, observations, stops, Obs, StopCoeffs};
 use crate::fit::noise::{noise, Noise};
 use crate::fit::orientation::{estimate_with, has_unknown, provisional_basis, Orientation};
 use crate::fit::select::{choose_among, Selection};
-use crate::fit::temperature::{fit_joint, fit_table, temperature_clusters, Basis, ModelFit};
+use crate::fit::temperature::{fit_joint_frame, fit_table, temperature_clusters, Basis, ModelFit};
 
 /// Temperature model kind.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -188,6 +188,12 @@ pub fn with_orientations(
     Ok((Some(r), Some(o)))
 }
 
+/// Whether the estimated poses left the frame to the convention (no known pose fixed
+/// it): then every fit keeps K(T) lower triangular, as the estimate did.
+fn free_frame(o: Option<&Orientation>) -> bool {
+    o.is_some_and(|o| o.frame.is_some())
+}
+
 fn static_calibration(rec: &Recording) -> (Vec<Obs>, Excluded) {
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
     static_observations(rec, &cal, 0.25)
@@ -219,7 +225,8 @@ pub fn fit_chosen(rec: &Recording, req: &ModelRequest) -> Result<FitOutcome> {
         (Some(ModelKind::Poly), None, None) => &|b| matches!(b, Basis::Poly { .. }),
         (Some(ModelKind::Pwl), None, None) => &|b| matches!(b, Basis::Pwl { .. }),
     };
-    let (est, _) = with_orientations(rec, None)?;
+    let (est, first) = with_orientations(rec, None)?;
+    let lower = free_frame(first.as_ref());
     let r = est.as_ref().unwrap_or(rec);
     let (obs, excluded) = static_calibration(r);
     require_known(r, &obs)?;
@@ -227,12 +234,12 @@ pub fn fit_chosen(rec: &Recording, req: &ModelRequest) -> Result<FitOutcome> {
         return Err(no_static(rec, &excluded));
     }
     let nz = noise(r);
-    let selection = choose_among(&obs, &nz, r.t0_c, &r.path, family)?;
+    let selection = choose_among(&obs, &nz, (r.t0_c, lower), &r.path, family)?;
     let basis = req.refine(&selection.basis)?;
     let (est, orientation) = with_orientations(rec, Some(&basis))?;
     let r = est.as_ref().unwrap_or(rec);
     let (obs, _) = static_calibration(r);
-    let fit = fit_joint(&obs, &nz, &basis, r.t0_c, &r.path)?;
+    let fit = fit_joint_frame(&obs, &nz, &basis, r.t0_c, &r.path, lower)?;
     Ok(FitOutcome {
         fit,
         stops: identify_stops(r).unwrap_or_default(),
@@ -316,7 +323,8 @@ fn fit_windows(rec: &Recording, choice: &ModelChoice, route: Route) -> Result<Fi
             basis0
         };
         let nz = noise(r);
-        let fit = fit_joint(&obs, &nz, &basis, r.t0_c, &r.path)?;
+        let lower = free_frame(orientation.as_ref());
+        let fit = fit_joint_frame(&obs, &nz, &basis, r.t0_c, &r.path, lower)?;
         Ok(FitOutcome {
             fit,
             stops: identify_stops(r).unwrap_or_default(),

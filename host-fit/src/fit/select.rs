@@ -8,7 +8,7 @@
 use crate::error::{HostError, Result};
 use crate::fit::identify::Obs;
 use crate::fit::noise::Noise;
-use crate::fit::temperature::{fit_joint, temperature_clusters, Basis, ModelFit};
+use crate::fit::temperature::{fit_joint_frame, temperature_clusters, Basis, ModelFit};
 use firmware_core::model::{apply, dg, invert, Coeffs};
 use firmware_core::temperature::{MAX_BREAKPOINTS, MAX_POLY_ORDER};
 use serde::Serialize;
@@ -106,7 +106,12 @@ fn folds(obs: &[Obs], k: usize) -> Vec<usize> {
 
 /// Per held-out dwell, the mean squared dg (g^2) of `basis` under k-fold
 /// cross-validation; None when a training fold does not determine the model.
-fn held_out(obs: &[Obs], noise: &Noise, basis: &Basis, t0: f64, k: usize) -> Option<Vec<f64>> {
+fn held_out(
+    obs: &[Obs],
+    noise: &Noise,
+    basis: &Basis,
+    (t0, k, lower): (f64, usize, bool),
+) -> Option<Vec<f64>> {
     let fold = folds(obs, k);
     let mut per_dwell: std::collections::BTreeMap<usize, (f64, usize)> = Default::default();
     for f in 0..k {
@@ -116,7 +121,7 @@ fn held_out(obs: &[Obs], noise: &Noise, basis: &Basis, t0: f64, k: usize) -> Opt
             .filter(|(_, g)| **g != f)
             .map(|(o, _)| o.clone())
             .collect();
-        let fit = fit_joint(&train, noise, basis, t0, Path::new("")).ok()?;
+        let fit = fit_joint_frame(&train, noise, basis, t0, Path::new(""), lower).ok()?;
         let cal = fit.calibration(0.0, false);
         for (o, _) in obs.iter().zip(&fold).filter(|(_, g)| **g == f) {
             let d = dg_with(&cal, o)?;
@@ -144,14 +149,15 @@ fn rms_se(e: &[f64]) -> (f64, f64) {
 
 /// Choose the temperature model of the static observations `obs` (see the module doc).
 pub fn choose(obs: &[Obs], noise: &Noise, t0: f64, path: &Path) -> Result<Selection> {
-    choose_among(obs, noise, t0, path, &|_| true)
+    choose_among(obs, noise, (t0, false), path, &|_| true)
 }
 
-/// [`choose`] among the candidates `keep` accepts (one family, when the user named it).
+/// [`choose`] among the candidates `keep` accepts (one family, when the user named it);
+/// with `lower`, K(T) lower triangular (the frame's convention of estimated poses).
 pub fn choose_among(
     obs: &[Obs],
     noise: &Noise,
-    t0: f64,
+    (t0, lower): (f64, bool),
     path: &Path,
     keep: &dyn Fn(&Basis) -> bool,
 ) -> Result<Selection> {
@@ -187,7 +193,7 @@ pub fn choose_among(
     let scored: Vec<(Basis, Option<(f64, f64)>)> = cands
         .into_iter()
         .map(|b| {
-            let s = held_out(obs, noise, &b, t0, k).map(|e| rms_se(&e));
+            let s = held_out(obs, noise, &b, (t0, k, lower)).map(|e| rms_se(&e));
             (b, s)
         })
         .collect();

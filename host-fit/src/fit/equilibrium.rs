@@ -1,21 +1,32 @@
-//! Which data are static: the equilibrium rule of the default fit. A dwell whose
-//! temperature moves more than the recording format's drift limit (0.5 C) was taken
-//! while the unit was not in thermal equilibrium (the rest position through a ramp and
-//! its soak, a hand-held pose while the unit warms): its readings carry the unit's
-//! dynamics (lag, gradients, settling), which the static coefficients do not model, and
-//! its many samples would outweigh the stops. Such dwells are left out of the static
-//! fit; `--route joint` takes them in on request.
+//! Which data are static: the equilibrium rule of the default fit.
+//!
+//! A dwell whose temperature stays within the recording format's drift limit (0.5 C) is
+//! static. In a dwell that drifts more, each window (at most 0.25 C) is static only where
+//! the temperature moves slower than [`MAX_RATE_C_PER_MIN`] (the rate taken between the
+//! neighbouring windows' means): a slow warm-up over hours is quasi-static, a ramp or the
+//! fast settling after one is not. Data taken while the temperature moves carry the
+//! unit's dynamics (lag, gradients, settling), which the static coefficients do not
+//! model, and a rest through a ramp would outweigh the stops with its samples; they are
+//! left out of the static fit, and `--route joint` takes them in on request.
 use crate::data::recording::{Recording, MAX_DWELL_DRIFT_C};
 use crate::fit::identify::{observations, Obs};
 use serde::Serialize;
+
+/// Inside a dwell that drifts more than 0.5 C, a window is static when the temperature
+/// moves slower than this, C/min. The production twin's stops settle at 0.02-0.1 C/min
+/// and ramp at 1 C/min; a unit warming by 1 C an hour moves at 0.017 C/min.
+pub const MAX_RATE_C_PER_MIN: f64 = 0.05;
 
 /// What the rule left out.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct Excluded {
     /// Dwells whose temperature spans more than [`MAX_DWELL_DRIFT_C`].
     pub dwells: usize,
-    /// Their samples.
+    /// Of their samples, those taken while the temperature moved faster than
+    /// [`MAX_RATE_C_PER_MIN`]: left out.
     pub samples: usize,
+    /// Of their samples, those taken slower: kept.
+    pub samples_kept: usize,
     /// The largest of their temperature spans, C.
     pub max_span_c: f64,
     /// Dwells the rule looked at (the selected positions').
@@ -23,14 +34,14 @@ pub struct Excluded {
 }
 
 impl Excluded {
-    /// One line for the user, empty when nothing was left out.
+    /// One line for the user, empty when nothing drifted.
     pub fn text(&self) -> String {
         if self.dwells == 0 {
             return String::new();
         }
         let mut s = format!(
-            "{} of {} calibration dwells ({} samples) moved more than {MAX_DWELL_DRIFT_C} C in temperature (up to {:.1} C: ramps, settling) and were left out of the static fit",
-            self.dwells, self.of_dwells, self.samples, self.max_span_c
+            "{} of {} calibration dwells moved more than {MAX_DWELL_DRIFT_C} C in temperature (up to {:.1} C: ramps, settling); of their samples {} taken while it moved faster than {MAX_RATE_C_PER_MIN} C/min were left out of the static fit, {} kept",
+            self.dwells, self.of_dwells, self.max_span_c, self.samples, self.samples_kept
         );
         if 2 * self.dwells > self.of_dwells {
             s.push_str(": most of the recording was not in thermal equilibrium; lengthen the soaks, or fit the ramps with --route joint (their dynamics unmodelled)");
@@ -39,11 +50,25 @@ impl Excluded {
     }
 }
 
-/// Whether dwell `d` of `rec` was taken in thermal equilibrium.
+/// Whether dwell `d` of `rec` stayed within the drift limit.
 pub fn is_static(rec: &Recording, d: usize) -> bool {
     rec.dwells
         .get(d)
         .is_some_and(|d| d.temp_span_c <= MAX_DWELL_DRIFT_C)
+}
+
+/// Per window of one drifting dwell (`ws`, in time order), whether the temperature
+/// moved slower than the limit there: the rate between the neighbouring windows' means
+/// (one-sided at the ends).
+fn slow(ws: &[&Obs]) -> Vec<bool> {
+    let limit = MAX_RATE_C_PER_MIN / 60.0;
+    (0..ws.len())
+        .map(|k| {
+            let (a, b) = (ws[k.saturating_sub(1)], ws[(k + 1).min(ws.len() - 1)]);
+            let dt = b.t_s - a.t_s;
+            dt > 0.0 && ((b.temp_c - a.temp_c) / dt).abs() <= limit
+        })
+        .collect()
 }
 
 /// The static observations of the positions `select` accepts (windows of at most
@@ -54,19 +79,34 @@ pub fn static_observations(
     span_c: f64,
 ) -> (Vec<Obs>, Excluded) {
     let mut ex = Excluded::default();
-    for (i, d) in rec.dwells.iter().enumerate() {
-        if select(d.position) {
-            ex.of_dwells += 1;
-        }
-        if select(d.position) && !is_static(rec, i) {
+    let all = observations(rec, select, span_c);
+    let mut keep = vec![true; all.len()];
+    let mut i = 0;
+    while i < all.len() {
+        let d = all[i].dwell;
+        let j = i + all[i..].iter().take_while(|o| o.dwell == d).count();
+        ex.of_dwells += 1;
+        if !is_static(rec, d) {
             ex.dwells += 1;
-            ex.samples += d.len();
-            ex.max_span_c = ex.max_span_c.max(d.temp_span_c);
+            ex.max_span_c = ex
+                .max_span_c
+                .max(rec.dwells.get(d).map_or(0.0, |d| d.temp_span_c));
+            let ws: Vec<&Obs> = all[i..j].iter().collect();
+            for (k, s) in slow(&ws).into_iter().enumerate() {
+                keep[i + k] = s;
+                if s {
+                    ex.samples_kept += all[i + k].n;
+                } else {
+                    ex.samples += all[i + k].n;
+                }
+            }
         }
+        i = j;
     }
-    let obs = observations(rec, select, span_c)
+    let obs = all
         .into_iter()
-        .filter(|o| is_static(rec, o.dwell))
+        .zip(keep)
+        .filter_map(|(o, k)| k.then_some(o))
         .collect();
     (obs, ex)
 }

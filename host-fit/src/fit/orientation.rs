@@ -263,7 +263,23 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
     }
     // the observations carry the directions of the last fit
     fit = fit_at(&mut obs, &dirs)?;
-    finish(rec, &obs, &nz, &poses, &dirs, fit, iterations, free_frame)
+    let done = Alternated {
+        obs: &obs,
+        poses: &poses,
+        dirs: &dirs,
+        iterations,
+        free_frame,
+    };
+    finish(rec, &nz, &done, fit)
+}
+
+/// Where the alternation ended.
+struct Alternated<'a> {
+    obs: &'a [Obs],
+    poses: &'a [usize],
+    dirs: &'a [[f64; 3]],
+    iterations: usize,
+    free_frame: bool,
 }
 
 /// How many non-parallel directions the known poses have (0, 1 or 2 = enough).
@@ -295,17 +311,19 @@ fn lower_frame(k: &Matrix3<f64>) -> Matrix3<f64> {
     q
 }
 
-#[allow(clippy::too_many_arguments)]
 fn finish(
     rec: &Recording,
-    obs: &[Obs],
     nz: &Noise,
-    poses: &[usize],
-    dirs: &[[f64; 3]],
+    done: &Alternated<'_>,
     fit: ModelFit,
-    iterations: usize,
-    free_frame: bool,
 ) -> Result<Orientation> {
+    let Alternated {
+        obs,
+        poses,
+        dirs,
+        iterations,
+        free_frame,
+    } = *done;
     let mut positions = rec.positions.clone();
     let scale = (0..3).map(|i| fit.axis_scale(i, nz.dof > 0)).sum::<f64>() / 3.0;
     let reads = read_poses(&fit, obs, nz, poses);

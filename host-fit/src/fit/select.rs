@@ -189,6 +189,11 @@ pub fn choose_among(
             basis: Basis::Poly { order: 0 },
         });
     }
+    // when all the data do not determine even the simplest candidate, say why (which
+    // positions at which temperatures), not that cross-validation failed
+    if let Some(simplest) = cands.first() {
+        fit_joint_frame(obs, noise, simplest, t0, path, lower)?;
+    }
     let k = FOLDS.min(dwells.len());
     let scored: Vec<(Basis, Option<(f64, f64)>)> = cands
         .into_iter()

@@ -679,3 +679,34 @@ fn the_unknown_orientations_flag_forgets_the_files_vectors() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Where the sensing elements lag the temperature sensor (300 s), the windows taken
+/// through the ramps read the coefficients at the wrong temperature: the static default
+/// leaves them out and compensates better than the same models fitted with them in.
+#[test]
+fn ramps_do_not_bias_the_static_default_when_the_unit_lags() {
+    let mut cfg = host_fit::simulate::SimConfig::default();
+    cfg.effects.thermal_lag = Some(host_fit::simulate::PerAxis { value: [300.0; 3] });
+    let (csv, _) = tests::twins::recording("lag", &cfg);
+    let dir = std::env::temp_dir().join(format!("hf-lag-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("rec.csv");
+    std::fs::write(&p, csv).unwrap();
+    let run = |args: &[&str]| figures::fit_verify(&dir, &p, args).1;
+    let default = run(&[]);
+    let joint4 = run(&["--model", "poly", "--order", "4", "--route", "joint"]);
+    let pwl = run(&["--model", "pwl"]);
+    let pwl_joint = run(&["--model", "pwl", "--route", "joint"]);
+    println!(
+        "default {default:.4}, joint poly4 {joint4:.4}, pwl {pwl:.4}, joint pwl {pwl_joint:.4} mg"
+    );
+    assert!(
+        default < 0.9 * joint4,
+        "default {default:.4} vs joint poly4 {joint4:.4}"
+    );
+    assert!(
+        pwl < 0.7 * pwl_joint,
+        "pwl {pwl:.4} vs joint pwl {pwl_joint:.4}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -110,3 +110,51 @@ pub fn static_observations(
         .collect();
     (obs, ex)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::positions::Positions;
+    use std::fmt::Write;
+
+    #[test]
+    fn a_slow_warm_up_is_static_a_ramp_is_not() {
+        // TP1 for 2 h warming 1 C/h (0.017 C/min), then TP2 ramping 1 C/min for 10 min,
+        // then TP3 steady
+        let mut s = String::from("t_s,position,temp_c,ux_v,uy_v,uz_v\n");
+        let mut t = 0.0;
+        for k in 0..720 {
+            let _ = writeln!(s, "{t},TP1,{:.4},0,0,1", 20.0 + k as f64 * 10.0 / 3600.0);
+            t += 10.0;
+        }
+        for k in 0..60 {
+            let _ = writeln!(s, "{t},TP2,{:.4},0,-1,0", 22.0 + k as f64 * 10.0 / 60.0);
+            t += 10.0;
+        }
+        for _ in 0..30 {
+            let _ = writeln!(s, "{t},TP3,32.0,0,0,-1");
+            t += 10.0;
+        }
+        let rec = Recording::from_reader(
+            std::path::Path::new("r.csv"),
+            s.as_bytes(),
+            Positions::default(),
+        )
+        .unwrap();
+        let (obs, ex) = static_observations(&rec, &|_| true, 0.25);
+        let n = |p: &str| {
+            let i = rec.positions.index(p).unwrap();
+            obs.iter()
+                .filter(|o| o.position == i)
+                .map(|o| o.n)
+                .sum::<usize>()
+        };
+        assert_eq!((n("TP1"), n("TP2"), n("TP3")), (720, 0, 30), "{ex:?}");
+        assert_eq!((ex.dwells, ex.samples, ex.samples_kept), (2, 60, 720));
+        assert!(
+            ex.text().contains("2 of 3 calibration dwells"),
+            "{}",
+            ex.text()
+        );
+    }
+}

@@ -291,6 +291,23 @@ fn the_default_fit_states_its_choice_and_its_predicted_error() {
         let v = q["dg_1sigma_mg"].as_f64().unwrap();
         assert!(v > 0.0 && v < 0.05, "{q}");
     }
+    // the cache's lag, stated apart, scales with the step
+    let lag = p["cache_lag_max_mg"].as_f64().unwrap();
+    assert!(lag > 0.001 && lag < 0.1, "{lag}");
+    let (code, out, err) = cli(&[
+        "fit",
+        s(&rec),
+        "--out",
+        s(&b),
+        "--json",
+        "--force",
+        "--update-step",
+        "0.2",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j2: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let lag2 = j2["predicted_error"]["cache_lag_max_mg"].as_f64().unwrap();
+    assert!((lag2 / lag - 2.0).abs() < 1e-9, "{lag} {lag2}");
     let ex = &j["excluded_not_in_equilibrium"];
     assert_eq!(ex["dwells"], 5, "the five rests through the ramps: {ex}");
     std::fs::remove_dir_all(&dir).unwrap();

@@ -194,7 +194,13 @@ fn fitted<'a>(
             r
         });
         let (dirs, n) = directions(r.as_ref().unwrap_or(rec));
-        predict(&oc.fit, &oc.noise, &dirs, (cal.t_min_c, cal.t_max_c), n)
+        predict(
+            &oc.fit,
+            &oc.noise,
+            &dirs,
+            (cal.t_min_c, cal.t_max_c),
+            (n, cal.update_step_c),
+        )
     });
     let one_temp = crate::fit::predict::is_constant(&oc.fit.basis);
     Fitted {
@@ -340,8 +346,8 @@ fn fit_text(j: &Fitted<'_>) -> String {
             pts.join(", ")
         ));
         s.push(format!(
-            "a verification dwell of {} samples adds {:.4} mg of its own noise (noise: {}); valid range {:.2}..{:.2} C",
-            p.dwell_samples, p.dwell_noise_1sigma_mg, p.noise_source, p.t_min_c, p.t_max_c
+            "a verification dwell of {} samples adds {:.4} mg of its own noise (noise: {}); the firmware's {} C cache step up to {:.4} mg; valid range {:.2}..{:.2} C",
+            p.dwell_samples, p.dwell_noise_1sigma_mg, p.noise_source, p.cache_step_c, p.cache_lag_max_mg, p.t_min_c, p.t_max_c
         ));
     }
     if !j.stops.is_empty() {

@@ -40,6 +40,11 @@ pub struct Prediction {
     pub dwell_noise_1sigma_mg: f64,
     /// The dwell length that is for.
     pub dwell_samples: usize,
+    /// The firmware's cache step (`--update-step`), C.
+    pub cache_step_c: f64,
+    /// The most the cache's lag can add to |dg| (|d|a|/dT| x step, worst of the grid and
+    /// directions), mg; not part of the 1-sigma: it is the firmware's, not the model's.
+    pub cache_lag_max_mg: f64,
     /// Where the noise level comes from.
     pub noise_source: &'static str,
     /// Per axis, the factor the residuals put on the covariance (reduced chi-square).
@@ -115,7 +120,7 @@ pub fn predict(
     noise: &Noise,
     dirs: &[(String, [f64; 3])],
     (lo, hi): (f64, f64),
-    dwell_samples: usize,
+    (dwell_samples, update_step_c): (usize, f64),
 ) -> Prediction {
     let constant = is_constant(&fit.basis);
     let n_pts = if constant { 0 } else { 11 };
@@ -138,6 +143,13 @@ pub fn predict(
             dg_1sigma_mg: worst(*t) * 1e3,
         })
         .collect();
+    // the firmware recomputes N(T) only when T has moved by the step: until then the
+    // compensation lags by up to the step, |d|a|/dT| x step
+    let cache = temps
+        .iter()
+        .flat_map(|t| dirs.iter().map(move |(_, a)| (*t, *a)))
+        .map(|(t, a)| dg_slope(fit, t, a).abs() * update_step_c)
+        .fold(0.0, f64::max);
     let dwell = dirs
         .iter()
         .map(|(_, a)| sigma_dwell_noise(fit, noise, fit.t0_c, *a, dwell_samples))
@@ -149,6 +161,8 @@ pub fn predict(
         points,
         dwell_noise_1sigma_mg: dwell * 1e3,
         dwell_samples,
+        cache_step_c: update_step_c,
+        cache_lag_max_mg: cache * 1e3,
         noise_source: if noise.dof > 0 {
             "in-dwell (successive samples)"
         } else {
@@ -156,6 +170,25 @@ pub fn predict(
         },
         covariance_scale: std::array::from_fn(|i| fit.axis_scale(i, noise.dof > 0)),
     }
+}
+
+/// How fast |a| read with the coefficients of `t` drifts from the truth as the
+/// coefficients' temperature is held while the unit's moves, g/C: `-(a^T N)(dK/dT a +
+/// dU0/dT)`, by central difference.
+fn dg_slope(fit: &ModelFit, t: f64, a: [f64; 3]) -> f64 {
+    let h = 0.05;
+    let Some((w, _)) = sensitivity(fit, t, a) else {
+        return 0.0;
+    };
+    let (up, dn) = (fit.eval(t + h), fit.eval(t - h));
+    let d: [f64; 12] = std::array::from_fn(|c| (up[c] - dn[c]) / (2.0 * h));
+    let dc = Coeffs::from_array(&d);
+    (0..3)
+        .map(|i| {
+            let du = (0..3).map(|j| dc.k[i][j] * a[j]).sum::<f64>() + dc.u0[i];
+            -w[i] * du
+        })
+        .sum()
 }
 
 /// Whether a basis is a constant (one temperature).

@@ -47,7 +47,14 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
                     ("", 0.0f64),
                     |m, x| if x.1.abs() > m.1.abs() { *x } else { m },
                 );
-            format!("{} ({c} z={z:.1})", u.unit)
+            format!(
+                "{} of {} ({c} z={z:.1})",
+                u.unit,
+                u.file
+                    .file_name()
+                    .map(|f| f.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            )
         })
         .collect();
     w(

@@ -15,7 +15,7 @@
 //! | 10 | model: 1 polynomial, 2 piecewise-linear |
 //! | 11 | rows: polynomial terms (order + 1, 2..=6) or breakpoints (2..=16) |
 //! | 12 | flags: bit 0 clamp (other bits 0) |
-//! | 13 | serial length s (0..=32) |
+//! | 13 | serial length s (0..=64) |
 //! | 14 | physics section words (0, or [`PHYSICS_WORDS`]) |
 //! | 15 | 0 (reserved) |
 //! | 16.. | serial (printable ASCII), zero-padded to a multiple of 4 bytes |
@@ -57,10 +57,11 @@ pub const FORMAT_VERSION: u16 = 3;
 pub const HEADER_LEN: usize = 16;
 /// Bytes of the trailing checksum.
 pub const CRC_LEN: usize = 4;
-/// The largest blob this version can produce (16 breakpoints, 32-byte serial, physics).
+/// The largest blob this version can produce (16 breakpoints, 64-byte serial, physics).
 pub const MAX_BLOB_LEN: usize = 1024;
-/// Longest unit serial, bytes of UTF-8.
-pub const MAX_SERIAL_LEN: usize = 32;
+/// Longest unit serial, bytes of printable ASCII (a recording's own unit names, such as
+/// "CATS-tag (real recording, see README.md)", fit).
+pub const MAX_SERIAL_LEN: usize = 64;
 
 const MODEL_POLY: u8 = 1;
 const MODEL_PWL: u8 = 2;

@@ -1,15 +1,19 @@
 //! The demo's comparison, pure: a recording fitted with the paper's model (when it has
-//! stops near -40, +20, +70 C) and with richer ones, each built into a blob and its
-//! verification positions compensated through firmware-core with methods 1 and 2.
+//! stops near -40, +20, +70 C), with the model the data choose and with the pwl through
+//! every stop, each built into a blob, its verification positions compensated through
+//! firmware-core with methods 1 and 2, and judged against the acceptance specification.
+use crate::acceptance::{judge, Acceptance, Spec};
 use crate::blob::build_blob;
 use crate::data::positions::Role;
 use crate::data::recording::Recording;
 use crate::data::table::TableRow;
 use crate::error::{HostError, Result};
-use crate::fit::identify::{observations, StopCoeffs};
+use crate::fit::equilibrium::static_observations;
+use crate::fit::identify::StopCoeffs;
 use crate::fit::noise::noise;
-use crate::fit::pipeline::{identify_stops, stop_temperatures};
-use crate::fit::temperature::{choose_poly_order, fit_joint, fit_table, Basis, ModelFit};
+use crate::fit::pipeline::{fit_chosen, identify_stops, stop_temperatures, ModelRequest};
+use crate::fit::select::Selection;
+use crate::fit::temperature::{fit_joint, fit_table, Basis, ModelFit};
 use crate::simulate::TrueUnit;
 use crate::verify::{verify, Verification};
 use firmware_core::compensate::{ErrorModel, Method};
@@ -40,6 +44,8 @@ pub struct DemoModel {
     pub blob: Vec<u8>,
     /// Verification with method 1 and method 2.
     pub verifications: [Verification; 2],
+    /// The acceptance of its blob (method 1), or why it could not be judged.
+    pub acceptance: std::result::Result<Acceptance, String>,
 }
 
 /// Everything the comparison produced (also what the report plots).
@@ -54,6 +60,10 @@ pub struct DemoOutcome {
     pub rows: Vec<SummaryRow>,
     /// The simulated truth, when the recording is simulated.
     pub truth: Option<TrueUnit>,
+    /// How the data chose their model.
+    pub selection: Selection,
+    /// The specification the models are judged by.
+    pub spec: Spec,
 }
 
 /// Fit the paper's model: formula (10) at the stops near -40, +20, +70 C, then the
@@ -76,13 +86,34 @@ pub fn paper_pwl2(stops: &[StopCoeffs], t0: f64) -> Result<ModelFit> {
     fit_table(&rows, &Basis::Pwl { breakpoints: bps }, t0)
 }
 
-/// The models compared: the paper's (when its stops exist), the polynomial order chosen
-/// by BIC, and the pwl through every stop, the last two fitted jointly.
-fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Vec<(String, &'static str, ModelFit)>> {
+/// A model's name in the table: `chosen-` and the family with its parameter count.
+pub fn chosen_name(b: &Basis) -> String {
+    match b {
+        Basis::Poly { order } => format!("chosen-poly{order}"),
+        Basis::Pwl { breakpoints } => format!("chosen-pwl{}", breakpoints.len()),
+    }
+}
+
+/// The models compared: the paper's (when its stops exist), the one the data choose,
+/// and the pwl through every stop, the last two from the dwells in equilibrium.
+type Fits = (Vec<(String, &'static str, ModelFit)>, Selection);
+
+fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Fits> {
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
-    let obs = observations(rec, &cal, 0.25);
+    let (obs, _) = static_observations(rec, &cal, 0.25);
     let nz = noise(rec);
-    let poly = choose_poly_order(&obs, &nz, rec.t0_c, 5, &rec.path)?;
+    let chosen = fit_chosen(
+        rec,
+        &ModelRequest {
+            kind: None,
+            order: None,
+            breakpoints: None,
+        },
+    )?;
+    let selection = chosen
+        .selection
+        .clone()
+        .ok_or_else(|| HostError::msg("internal: no selection"))?;
     let pwl_all = fit_joint(
         &obs,
         &nz,
@@ -96,9 +127,9 @@ fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Vec<(String, &'static s
     if let Ok(p) = paper_pwl2(stops, rec.t0_c) {
         out.push(("paper-pwl2".to_string(), "paper-pwl2.blob", p));
     }
-    out.push((poly.basis.describe(), "poly.blob", poly));
+    out.push((chosen_name(&chosen.fit.basis), "chosen.blob", chosen.fit));
     out.push(("pwl-all".to_string(), "pwl-all.blob", pwl_all));
-    Ok(out)
+    Ok((out, selection))
 }
 
 /// Compare the models on `rec` (see the module doc).
@@ -112,8 +143,11 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
     let check = |p: usize| rec.positions.has_role(p, Role::Verification);
     let mut models: Vec<DemoModel> = Vec::new();
     let mut rows = Vec::new();
-    for (name, file, fit) in fits(&rec, &stops)? {
-        let (blob, bytes, _) = build_blob(&serial, &fit.calibration(0.1, false))?;
+    let spec = Spec::default();
+    let (list, selection) = fits(&rec, &stops)?;
+    for (name, file, fit) in list {
+        let cal = fit.calibration(0.1, false);
+        let (blob, bytes, _) = build_blob(&serial, &cal)?;
         let run = |m: Method| -> Result<Verification> {
             verify(&rec, &blob, m, &check).ok_or_else(|| HostError::msg("singular K(T0)"))
         };
@@ -126,12 +160,15 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
         }
         rows.extend(summary_rows(&name, "1", &v[0], false));
         rows.extend(summary_rows(&name, "2", &v[1], false));
+        let acceptance =
+            judge(&v[0], &spec, cal.t0_c, (cal.t_min_c, cal.t_max_c)).map_err(|e| e.message);
         models.push(DemoModel {
             name,
             file,
             fit,
             blob: bytes,
             verifications: v,
+            acceptance,
         });
     }
     Ok(DemoOutcome {
@@ -140,7 +177,28 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
         models,
         rows,
         truth,
+        selection,
+        spec,
     })
+}
+
+/// The data's choice and every model's acceptance verdict (method 1), as text lines.
+pub fn verdicts(oc: &DemoOutcome) -> String {
+    let mut s = format!(
+        "data-chosen model: {} by {}\n  {}\nacceptance, method 1 ({}):\n",
+        oc.selection.chosen,
+        oc.selection.method,
+        oc.selection.reason,
+        oc.spec.text()
+    );
+    for m in &oc.models {
+        let line = match &m.acceptance {
+            Ok(a) => format!("{}: {}", a.acceptance.name(), a.reason),
+            Err(e) => format!("not judged: {e}"),
+        };
+        s.push_str(&format!("  {:<14} {line}\n", m.name));
+    }
+    s
 }
 
 fn summary_rows(

@@ -1,20 +1,31 @@
 //! Production batches: fit (and optionally diagnose) every recording in a folder in
-//! parallel, one blob and one JSON per unit, and a summary CSV. One unit's bad file is
-//! reported in the summary and does not stop the batch.
+//! parallel, one blob and one JSON per unit, each unit judged against the acceptance
+//! specification on its verification dwells, `summary.csv` (one line per unit:
+//! acceptance `pass`, `fail` or `error`, and why) and the lot's statistics (`lot.csv`:
+//! every coefficient's distribution over the units, and the units far from the lot by a
+//! robust z-score). One unit's bad file is reported and does not stop the batch.
+use crate::acceptance::{judge, Acceptance, Spec, Verdict};
 use crate::blob::build_blob;
 use crate::data::positions::{Positions, Role};
 use crate::data::recording::Recording;
 use crate::diagnose::contract::Contract;
 use crate::error::{HostError, Result};
-use crate::fit::pipeline::{fit_recording, ModelChoice, ModelKind, Route};
+use crate::fit::pipeline::{fit_chosen, ModelKind, ModelRequest};
+use crate::fit::predict::coefficient_sigma;
+use crate::fit::select::Selection;
 use crate::output::{check_writable, write_atomic, write_json};
-use crate::verify::verify;
+use crate::verify::{verify, TempMax};
 use firmware_core::compensate::Method;
+use firmware_core::model::COEFF_NAMES;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+
+/// A unit is far from the lot when one of its coefficients lies more than this many
+/// robust standard deviations (1.4826 MAD) from the lot's median.
+pub const OUTLIER_Z: f64 = 3.5;
 
 /// One unit's line of the summary.
 #[derive(Debug, Clone)]
@@ -23,41 +34,64 @@ pub struct UnitResult {
     pub file: PathBuf,
     /// Unit serial (from the metadata), or the file stem.
     pub unit: String,
-    /// `ok` or `error: ...`.
-    pub status: String,
+    /// `pass`, `fail` or `error`.
+    pub acceptance: &'static str,
+    /// Why (the acceptance's reason, or the error).
+    pub reason: String,
+    /// The model in the blob.
+    pub model: String,
     /// max |dg| in the verification positions with the T0 constants, mg.
     pub max_dg_before_mg: Option<f64>,
-    /// ... compensated with method 1.
+    /// ... compensated with method 1 by the unit's blob.
     pub max_dg_after_mg: Option<f64>,
     /// Diagnosis findings (with `--diagnose`).
     pub findings: Vec<String>,
+    /// The 12 coefficients at T0 (for the lot statistics).
+    pub at_t0: Option<[f64; 12]>,
+    /// Their 1-sigma from the unit's fit (zeros when unknown).
+    pub at_t0_sigma: [f64; 12],
+    /// The coefficients far from the lot, with their robust z-scores.
+    pub outlier: Vec<(&'static str, f64)>,
+}
+
+/// What a batch does with every unit.
+#[derive(Debug, Clone)]
+pub struct BatchOptions {
+    /// Parallel jobs (None: one per core).
+    pub jobs: Option<usize>,
+    /// The temperature model's family (None: chosen by the data per unit; the order or
+    /// breakpoints are chosen by the data within a family given).
+    pub model: Option<ModelKind>,
+    /// The acceptance specification.
+    pub spec: Spec,
+    /// Diagnose every unit, and take its blob from the diagnosed model.
+    pub diagnose: bool,
+    /// Overwrite outputs of an earlier run.
+    pub force: bool,
 }
 
 /// The per-unit JSON.
 #[derive(Serialize)]
-struct UnitJson {
-    unit: String,
+struct UnitJson<'a> {
+    unit: &'a str,
     file: String,
-    model: String,
+    model: &'a str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    chosen_by: Option<&'a Selection>,
     t_min_c: f64,
     t_max_c: f64,
     f32_departure_g: f64,
     max_abs_dg_mg_uncompensated: Option<f64>,
     max_abs_dg_mg_method1: Option<f64>,
+    #[serde(flatten)]
+    acceptance: &'a Acceptance,
     warnings: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
     diagnosis: Option<Contract>,
 }
 
 /// Fit one unit, write its blob and JSON; fills `r`.
-fn fit_unit(
-    path: &Path,
-    out: &Path,
-    kind: ModelKind,
-    diagnose: bool,
-    force: bool,
-    r: &mut UnitResult,
-) -> Result<()> {
+fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Result<()> {
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -66,61 +100,81 @@ fn fit_unit(
     if !rec.unit.is_empty() {
         r.unit = rec.unit.clone();
     }
-    let choice = ModelChoice {
-        kind,
-        order: None,
-        breakpoints: None,
-    };
-    let oc = fit_recording(&rec, &choice, Route::Joint)?;
-    let cal = oc.fit.calibration(0.1, false);
-    let (blob, bytes, dep) = build_blob(&r.unit, &cal)?;
-    write_atomic(&out.join(format!("{stem}.blob")), &bytes, force)?;
-    let check = |p: usize| rec.positions.has_role(p, Role::Verification);
-    if let Some(v) = verify(&rec, &blob, Method::CorrectConstants, &check) {
-        if !v.max_by_temperature.is_empty() {
-            let worst = |f: &dyn Fn(&crate::verify::TempMax) -> f64| {
-                v.max_by_temperature.iter().map(f).fold(0.0, f64::max)
-            };
-            r.max_dg_before_mg = Some(worst(&|t| t.max_abs_dg_mg_uncompensated));
-            r.max_dg_after_mg = Some(worst(&|t| t.max_abs_dg_mg));
-        }
-    }
-    let diagnosis = if diagnose {
+    let oc = fit_chosen(
+        &rec,
+        &ModelRequest {
+            kind: o.model,
+            order: None,
+            breakpoints: None,
+        },
+    )?;
+    r.model = oc.fit.basis.describe();
+    let (cal, diagnosis) = if o.diagnose {
         let d = crate::diagnose::diagnose(&rec)?;
         r.findings = d.findings.iter().map(|f| f.effect.clone()).collect();
-        Some(d.contract(&rec))
+        r.model = format!("diagnosed ({})", r.findings.join("+"));
+        (d.calibration(rec.t0_c)?, Some(d.contract(&rec)))
     } else {
-        None
+        (oc.fit.calibration(0.1, false), None)
     };
+    r.at_t0 = Some(cal.at_t0());
+    r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
+    let (blob, bytes, dep) = build_blob(&r.unit, &cal)?;
+    write_atomic(&out.join(format!("{stem}.blob")), &bytes, o.force)?;
+    let check = |p: usize| rec.positions.has_role(p, Role::Verification);
+    let v = verify(&rec, &blob, Method::CorrectConstants, &check)
+        .ok_or_else(|| HostError::in_file(path, "K(T0) of the blob is singular"))?;
+    let worst = |f: &dyn Fn(&TempMax) -> f64| {
+        (!v.max_by_temperature.is_empty())
+            .then(|| v.max_by_temperature.iter().map(f).fold(0.0, f64::max))
+    };
+    r.max_dg_before_mg = worst(&|t| t.max_abs_dg_mg_uncompensated);
+    r.max_dg_after_mg = worst(&|t| t.max_abs_dg_mg);
+    let acc = judge(&v, &o.spec, cal.t0_c, (cal.t_min_c, cal.t_max_c))
+        .map_err(|e| HostError::in_file(path, e.message))?;
+    r.acceptance = acc.acceptance.name();
+    r.reason = acc.reason.clone();
     let j = UnitJson {
-        unit: r.unit.clone(),
+        unit: &r.unit,
         file: path.display().to_string(),
-        model: oc.fit.basis.describe(),
+        model: &r.model,
+        chosen_by: if o.diagnose {
+            None
+        } else {
+            oc.selection.as_ref()
+        },
         t_min_c: cal.t_min_c,
         t_max_c: cal.t_max_c,
         f32_departure_g: dep,
         max_abs_dg_mg_uncompensated: r.max_dg_before_mg,
         max_abs_dg_mg_method1: r.max_dg_after_mg,
+        acceptance: &acc,
         warnings: rec.warnings.len(),
         diagnosis,
     };
-    write_json(&out.join(format!("{stem}.json")), &j, force)
+    write_json(&out.join(format!("{stem}.json")), &j, o.force)
 }
 
-fn one(path: &Path, out: &Path, kind: ModelKind, diagnose: bool, force: bool) -> UnitResult {
+fn one(path: &Path, out: &Path, o: &BatchOptions) -> UnitResult {
     let mut r = UnitResult {
         file: path.to_path_buf(),
         unit: path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default(),
-        status: "ok".into(),
+        acceptance: "error",
+        reason: String::new(),
+        model: String::new(),
         max_dg_before_mg: None,
         max_dg_after_mg: None,
         findings: Vec::new(),
+        at_t0: None,
+        at_t0_sigma: [0.0; 12],
+        outlier: Vec::new(),
     };
-    if let Err(e) = fit_unit(path, out, kind, diagnose, force, &mut r) {
-        r.status = format!("error: {e}");
+    if let Err(e) = fit_unit(path, out, o, &mut r) {
+        r.acceptance = "error";
+        r.reason = e.to_string();
     }
     r
 }
@@ -149,40 +203,163 @@ pub fn summary_csv(results: &[UnitResult]) -> Result<String> {
         &[
             "unit",
             "file",
-            "status",
+            "acceptance",
+            "reason",
+            "model",
             "max_abs_dg_mg_before",
             "max_abs_dg_mg_after",
+            "far_from_lot",
             "findings",
         ],
         results.iter().map(|r| {
             [
                 r.unit.clone(),
                 r.file.display().to_string(),
-                r.status.clone(),
+                r.acceptance.to_string(),
+                r.reason.clone(),
+                r.model.clone(),
                 opt(r.max_dg_before_mg),
                 opt(r.max_dg_after_mg),
+                r.outlier
+                    .iter()
+                    .map(|(c, z)| format!("{c} z={z:.1}"))
+                    .collect::<Vec<_>>()
+                    .join(";"),
                 r.findings.join(";"),
             ]
         }),
     )
 }
 
-/// Run a batch over every `*.csv` in `dir`; returns the per-unit results (also written
-/// as `summary.csv` in `out`).
-pub fn run(
-    dir: &Path,
-    out: &Path,
-    jobs: Option<usize>,
-    kind: ModelKind,
-    diagnose: bool,
-    force: bool,
-) -> Result<Vec<UnitResult>> {
+/// One coefficient's distribution over the lot.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct LotCoefficient {
+    /// Coefficient name.
+    pub coefficient: &'static str,
+    /// Units with a fit.
+    pub units: usize,
+    /// Median.
+    pub median: f64,
+    /// 1.4826 x the median absolute deviation (the standard deviation of a normal lot),
+    /// at least the median of the units' own 1-sigma of the coefficient.
+    pub robust_sigma: f64,
+    /// Smallest.
+    pub min: f64,
+    /// Largest.
+    pub max: f64,
+    /// Units more than [`OUTLIER_Z`] robust sigmas from the median.
+    pub far: usize,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => f64::NAN,
+        _ if n % 2 == 1 => v[n / 2],
+        _ => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// The lot statistics of the coefficients at T0, marking the units far from the lot.
+pub fn lot(results: &mut [UnitResult]) -> Vec<LotCoefficient> {
+    let mut out = Vec::new();
+    for (c, name) in COEFF_NAMES.iter().enumerate() {
+        let vals: Vec<f64> = results
+            .iter()
+            .filter_map(|r| r.at_t0.map(|a| a[c]))
+            .collect();
+        if vals.is_empty() {
+            continue;
+        }
+        let med = median(&mut vals.clone());
+        let mut dev: Vec<f64> = vals.iter().map(|v| (v - med).abs()).collect();
+        let mut own: Vec<f64> = results
+            .iter()
+            .filter(|r| r.at_t0.is_some())
+            .map(|r| r.at_t0_sigma[c])
+            .collect();
+        // a small lot's MAD can come out far below the spread its units' own
+        // measurement uncertainty alone makes: never take the lot tighter than that
+        let sigma = (1.4826 * median(&mut dev)).max(median(&mut own));
+        let mut far = 0;
+        for r in results.iter_mut() {
+            let Some(v) = r.at_t0.map(|a| a[c]) else {
+                continue;
+            };
+            let z = (v - med) / sigma;
+            // with fewer than 5 units, or a lot of identical units, no one is "far"
+            if vals.len() >= 5 && sigma > 0.0 && z.abs() > OUTLIER_Z {
+                r.outlier.push((name, z));
+                far += 1;
+            }
+        }
+        out.push(LotCoefficient {
+            coefficient: name,
+            units: vals.len(),
+            median: med,
+            robust_sigma: sigma,
+            min: vals.iter().copied().fold(f64::INFINITY, f64::min),
+            max: vals.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            far,
+        });
+    }
+    out
+}
+
+/// The lot statistics as CSV text.
+pub fn lot_csv(lot: &[LotCoefficient]) -> Result<String> {
+    crate::output::csv(
+        &[
+            "coefficient",
+            "units",
+            "median",
+            "robust_sigma",
+            "min",
+            "max",
+            "far_from_lot",
+        ],
+        lot.iter().map(|l| {
+            [
+                l.coefficient.to_string(),
+                l.units.to_string(),
+                format!("{:.9e}", l.median),
+                format!("{:.3e}", l.robust_sigma),
+                format!("{:.9e}", l.min),
+                format!("{:.9e}", l.max),
+                l.far.to_string(),
+            ]
+        }),
+    )
+}
+
+/// What a batch produced.
+pub struct BatchOutcome {
+    /// Per unit.
+    pub units: Vec<UnitResult>,
+    /// The lot's coefficients.
+    pub lot: Vec<LotCoefficient>,
+}
+
+impl BatchOutcome {
+    /// Whether every unit passed.
+    pub fn all_pass(&self) -> bool {
+        self.units
+            .iter()
+            .all(|u| u.acceptance == Verdict::Pass.name())
+    }
+}
+
+/// Run a batch over every `*.csv` in `dir`; writes `summary.csv` and `lot.csv` in `out`.
+pub fn run(dir: &Path, out: &Path, o: &BatchOptions) -> Result<BatchOutcome> {
     let files = recordings(dir)?;
     std::fs::create_dir_all(out).map_err(|e| HostError::io(out, &e))?;
     let summary = out.join("summary.csv");
-    check_writable(&summary, force)?;
+    let lot_path = out.join("lot.csv");
+    check_writable(&summary, o.force)?;
+    check_writable(&lot_path, o.force)?;
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs.unwrap_or(0))
+        .num_threads(o.jobs.unwrap_or(0))
         .build()
         .map_err(|e| HostError::msg(e.to_string()))?;
     let bar = if std::io::stderr().is_terminal() {
@@ -194,17 +371,19 @@ pub fn run(
         ProgressStyle::with_template("{pos}/{len} units [{bar:40}] {elapsed_precise} eta {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let results: Vec<UnitResult> = pool.install(|| {
+    let mut units: Vec<UnitResult> = pool.install(|| {
         files
             .par_iter()
             .map(|f| {
-                let r = one(f, out, kind, diagnose, force);
+                let r = one(f, out, o);
                 bar.inc(1);
                 r
             })
             .collect()
     });
     bar.finish_and_clear();
-    write_atomic(&summary, summary_csv(&results)?.as_bytes(), force)?;
-    Ok(results)
+    let lot = lot(&mut units);
+    write_atomic(&summary, summary_csv(&units)?.as_bytes(), o.force)?;
+    write_atomic(&lot_path, lot_csv(&lot)?.as_bytes(), o.force)?;
+    Ok(BatchOutcome { units, lot })
 }

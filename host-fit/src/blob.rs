@@ -4,7 +4,7 @@ use crate::error::{HostError, Result};
 use firmware_core::blob::{Blob, FORMAT_VERSION, MAX_BLOB_LEN, MAX_SERIAL_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
 use firmware_core::model::{Coeffs, COEFF_NAMES};
-use firmware_core::temperature::{Calibration, TempModel};
+use firmware_core::temperature::{Calibration, Physics, TempModel};
 use serde::Serialize;
 use std::path::Path;
 
@@ -78,12 +78,7 @@ pub fn build_blob_checked(
     serial: &str,
     cal64: &Calibration<f64>,
 ) -> Result<(Blob, Vec<u8>, (f64, f64))> {
-    let mut s = heapless::String::<MAX_SERIAL_LEN>::new();
-    s.push_str(serial).map_err(|_| {
-        HostError::msg(format!(
-            "unit serial `{serial}` is longer than {MAX_SERIAL_LEN} bytes"
-        ))
-    })?;
+    let s = blob_serial(serial)?;
     let blob = Blob {
         serial: s,
         calibration: cal64.convert(),
@@ -99,6 +94,25 @@ pub fn build_blob_checked(
         )));
     }
     Ok((blob, buf[..n].to_vec(), (dep, beyond)))
+}
+
+/// The serial as the blob stores it: printable ASCII of at most the blob format's limit
+/// (`firmware_core::blob::MAX_SERIAL_LEN` bytes), or an error that states which rule it
+/// breaks.
+pub fn blob_serial(serial: &str) -> Result<heapless::String<MAX_SERIAL_LEN>> {
+    if let Some(c) = serial.chars().find(|c| !(' '..='~').contains(c)) {
+        return Err(HostError::msg(format!(
+            "unit serial `{serial}` has `{c}`: the blob stores printable ASCII only (the firmware checks it in place); give another (`fit --serial`, `diagnose --serial`)"
+        )));
+    }
+    let mut s = heapless::String::<MAX_SERIAL_LEN>::new();
+    s.push_str(serial).map_err(|_| {
+        HostError::msg(format!(
+            "unit serial `{serial}` is {} bytes; the blob format holds at most {MAX_SERIAL_LEN} bytes (firmware_core::blob::MAX_SERIAL_LEN): give a shorter one (`fit --serial`, `diagnose --serial`)",
+            serial.len()
+        ))
+    })?;
+    Ok(s)
 }
 
 /// Read and decode a blob file; the error names the file and why it is invalid.
@@ -134,6 +148,108 @@ pub struct Inspection {
     pub columns: [&'static str; 12],
     /// The table rows.
     pub rows: Vec<InspectRow>,
+    /// The in-flight physics terms (`diagnose --out`), every one of them; None when the
+    /// blob has none.
+    pub physics: Option<PhysicsTerms>,
+}
+
+/// Every in-flight term of a blob, as stored, with the time constants they stand for.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct PhysicsTerms {
+    /// The sample period the per-sample constants are for, s.
+    pub sample_period_s: f32,
+    /// `thermal_lag`: the filter constant (1 = no lag).
+    pub lag_alpha: f32,
+    /// Its time constant, s (None: no lag).
+    pub lag_tau_s: Option<f64>,
+    /// `temp_rate`: offset per C/s, per axis.
+    pub rate: [f32; 3],
+    /// The rate's low-pass constant.
+    pub rate_alpha: f32,
+    /// Its time constant, s.
+    pub rate_tau_s: Option<f64>,
+    /// `hysteresis`: the offset split, per axis.
+    pub hysteresis: [f32; 3],
+    /// The change that sets the direction, C.
+    pub hysteresis_threshold_c: f32,
+    /// The direction at power-on.
+    pub hysteresis_initial: f32,
+    /// `nonlinearity_k2`, per axis.
+    pub k2: [f32; 3],
+    /// `scale_asymmetry`, per axis.
+    pub asymmetry: [f32; 3],
+    /// `warmup_drift` amplitude, per axis.
+    pub warmup: [f32; 3],
+    /// Its per-sample decay.
+    pub warmup_decay: f32,
+    /// Its time constant, s (None: no warm-up).
+    pub warmup_tau_s: Option<f64>,
+}
+
+/// The time constant of a one-pole constant `alpha = 1 - exp(-dt/tau)`.
+fn tau_of_alpha(dt: f32, alpha: f32) -> Option<f64> {
+    let a = f64::from(alpha);
+    (a > 0.0 && a < 1.0).then(|| -f64::from(dt) / (1.0 - a).ln())
+}
+
+impl PhysicsTerms {
+    fn of(p: &Physics<f32>) -> Self {
+        let decay = f64::from(p.warmup_decay);
+        PhysicsTerms {
+            sample_period_s: p.sample_period_s,
+            lag_alpha: p.lag_alpha,
+            lag_tau_s: tau_of_alpha(p.sample_period_s, p.lag_alpha),
+            rate: p.rate,
+            rate_alpha: p.rate_alpha,
+            rate_tau_s: tau_of_alpha(p.sample_period_s, p.rate_alpha),
+            hysteresis: p.hysteresis,
+            hysteresis_threshold_c: p.hysteresis_threshold_c,
+            hysteresis_initial: p.hysteresis_initial,
+            k2: p.k2,
+            asymmetry: p.asymmetry,
+            warmup: p.warmup,
+            warmup_decay: p.warmup_decay,
+            warmup_tau_s: (decay > 0.0 && decay < 1.0)
+                .then(|| -f64::from(p.sample_period_s) / decay.ln()),
+        }
+    }
+
+    fn text(&self) -> String {
+        let tau = |t: Option<f64>| t.map_or("none".to_string(), |t| format!("{t:.4e} s"));
+        let v = |a: [f32; 3]| format!("[{:.4e}, {:.4e}, {:.4e}]", a[0], a[1], a[2]);
+        [
+            format!(
+                "in-flight terms (sample period {} s):",
+                self.sample_period_s
+            ),
+            format!(
+                "  thermal_lag      alpha {:.6e}, tau {}",
+                self.lag_alpha,
+                tau(self.lag_tau_s)
+            ),
+            format!(
+                "  temp_rate        r {} per C/s, alpha {:.6e} (tau {})",
+                v(self.rate),
+                self.rate_alpha,
+                tau(self.rate_tau_s)
+            ),
+            format!(
+                "  hysteresis       h {}, threshold {} C, initial direction {}",
+                v(self.hysteresis),
+                self.hysteresis_threshold_c,
+                self.hysteresis_initial
+            ),
+            format!("  nonlinearity_k2  k2 {}", v(self.k2)),
+            format!("  scale_asymmetry  c {}", v(self.asymmetry)),
+            format!(
+                "  warmup_drift     d {}, decay {:.9} per sample (tau {})",
+                v(self.warmup),
+                self.warmup_decay,
+                tau(self.warmup_tau_s)
+            ),
+        ]
+        .join("\n")
+    }
 }
 
 /// One table row: `dT^k` (poly) or a breakpoint (pwl).
@@ -188,6 +304,7 @@ impl Inspection {
             model,
             columns: COEFF_NAMES,
             rows,
+            physics: c.physics.as_ref().map(PhysicsTerms::of),
         }
     }
 
@@ -227,6 +344,10 @@ impl Inspection {
                     .map(|v| format!("{v:>12.4e}"))
                     .collect::<String>()
             ));
+        }
+        match &self.physics {
+            Some(p) => s.push_str(&p.text()),
+            None => s.push_str("in-flight terms: none"),
         }
         s.trim_end().to_string()
     }

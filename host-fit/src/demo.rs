@@ -1,9 +1,11 @@
 //! The main job: the paper's experiment on the digital twin, compared by
 //! [`crate::analysis`], written to a folder (recording, truth, blobs, summary, report).
+use crate::acceptance::{Acceptance, Spec};
 use crate::analysis::{analyse, table, DemoOutcome, SummaryRow};
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::error::{HostError, Result};
+use crate::fit::select::Selection;
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::simulate::{simulate, SimConfig, TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -25,6 +27,19 @@ struct Summary<'a> {
     unit: &'a str,
     seed: u64,
     rows: &'a [SummaryRow],
+    chosen_by: &'a Selection,
+    spec: Spec,
+    acceptance: Vec<ModelAcceptance<'a>>,
+}
+
+/// One model's verdict in summary.json.
+#[derive(Serialize)]
+struct ModelAcceptance<'a> {
+    model: &'a str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    judged: Option<&'a Acceptance>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    not_judged: Option<&'a str>,
 }
 
 fn bar(len: u64, msg: &str) -> ProgressBar {
@@ -46,7 +61,7 @@ pub fn outputs(dir: &Path) -> Vec<PathBuf> {
         "recording.csv",
         "truth.json",
         "paper-pwl2.blob",
-        "poly.blob",
+        "chosen.blob",
         "pwl-all.blob",
         "summary.json",
         "report.html",
@@ -86,6 +101,17 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<DemoOutcome> {
         unit: &oc.recording.unit,
         seed,
         rows: &oc.rows,
+        chosen_by: &oc.selection,
+        spec: oc.spec,
+        acceptance: oc
+            .models
+            .iter()
+            .map(|m| ModelAcceptance {
+                model: &m.name,
+                judged: m.acceptance.as_ref().ok(),
+                not_judged: m.acceptance.as_ref().err().map(String::as_str),
+            })
+            .collect(),
     };
     write_json(&dir.join("summary.json"), &summary, force)?;
     let report = crate::report::demo::demo_report(&oc, &table(&oc.rows))?;

@@ -13,7 +13,7 @@
 //! | 0 | `error`, `rng`, `output` | foundations: errors, random numbers, atomic writes, JSON/CSV |
 //! | 1 | `data` | recordings, positions with their roles, coefficient tables |
 //! | 2 | `fit`, `simulate` | identification, one least-squares solver, temperature models, the pipeline; the digital twin |
-//! | 3 | `blob`, `verify`, `vectors` | blobs built and read, formula (13) through firmware-core, firmware test vectors |
+//! | 3 | `blob`, `verify`, `vectors`, `acceptance` | blobs built and read, formula (13) through firmware-core, firmware test vectors, pass/fail against a specification |
 //! | 4 | `diagnose` | locate, explain, model what the paper's model leaves out |
 //! | 5 | `analysis`, `blind` | the demo's comparison (pure), the blind tests of the diagnosis |
 //! | 6 | `report`, `batch`, `demo` | HTML reports, production batches, the main job's files |
@@ -29,6 +29,7 @@ pub mod data;
 pub mod fit;
 pub mod simulate;
 
+pub mod acceptance;
 pub mod blob;
 pub mod vectors;
 pub mod verify;

@@ -33,6 +33,8 @@ fn model(basis: Basis, seeds: &[f64], t0: f64) -> ModelFit {
         chi2: 0.0,
         n_obs: 0,
         n_params: 0,
+        axis_cov: Vec::new(),
+        axis_chi2: Vec::new(),
     }
 }
 

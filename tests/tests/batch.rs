@@ -1,24 +1,76 @@
-//! Production batches: every unit of a folder fitted, a bad file reported without
-//! stopping the batch, and a summary that stays a valid CSV whatever the paths hold.
+//! Production batches: every unit of a folder fitted with the model its data choose and
+//! judged against the acceptance specification (pass, fail, error, and why), a bad file
+//! reported without stopping the batch, a summary that stays a valid CSV whatever the
+//! paths hold, the lot's statistics flag the unit unlike the others, and the exit code
+//! says whether every unit passed.
+use host_fit::simulate::{simulate, Curvature, SimConfig, Stop, PAPER_UNIT, PAPER_UNIT_TEMPS};
 use tests::cli;
 
+/// A unit whose scale factors carry a 0.2 % bump at +32.5 C, between the stops (where
+/// no calibration dwell sees it), with PP dwells there: it must fail.
+fn bump_unit() -> SimConfig {
+    let mut cfg = SimConfig::default();
+    cfg.effects.temp_curvature = Some(Curvature {
+        u0_v: [0.0; 3],
+        k_rel: [2e-3, 2e-3, 0.0],
+        period_c: 50.0,
+    });
+    cfg.schedule.stops.insert(
+        3,
+        Stop {
+            temp_c: 32.5,
+            soak_s: 1500.0,
+            ramp_c_per_min: 1.0,
+            positions: Some((1..=6).map(|i| format!("PP{i}")).collect()),
+        },
+    );
+    cfg
+}
+
+/// The paper unit with its x offset 5 mV away from the lot's at every temperature: a
+/// good unit, but not like the others.
+fn odd_unit() -> SimConfig {
+    let mut cfg = SimConfig {
+        seed: 9,
+        ..SimConfig::default()
+    };
+    cfg.unit.model = "table".into();
+    cfg.unit.temps_c = PAPER_UNIT_TEMPS.to_vec();
+    cfg.unit.coeffs = PAPER_UNIT
+        .iter()
+        .map(|r| {
+            let mut r = *r;
+            r[9] += 5e-3;
+            r
+        })
+        .collect();
+    cfg
+}
+
 #[test]
-fn batch_summary_is_a_real_csv_and_a_bad_unit_does_not_stop_it() {
+fn batch_judges_every_unit_writes_a_real_csv_and_flags_the_odd_unit() {
     let root = tempfile_dir("hf-batch");
     // a folder name with a comma and a quote: the summary's file column must survive it
     let units = root.join("lot 7, \"B\"");
     std::fs::create_dir_all(&units).unwrap();
-    for seed in [1u64, 2] {
-        let cfg = host_fit::simulate::SimConfig {
-            seed,
-            ..Default::default()
-        };
-        let sim = host_fit::simulate::simulate(&cfg, |_| {}).unwrap();
-        std::fs::write(units.join(format!("unit{seed}.csv")), sim.csv).unwrap();
+    let write = |name: &str, cfg: &SimConfig| {
+        let sim = simulate(cfg, |_| {}).unwrap();
+        std::fs::write(units.join(format!("{name}.csv")), sim.csv).unwrap();
+    };
+    for seed in 1u64..=5 {
+        write(
+            &format!("unit{seed}"),
+            &SimConfig {
+                seed,
+                ..Default::default()
+            },
+        );
     }
+    write("odd", &odd_unit());
+    write("bump", &bump_unit());
     std::fs::write(units.join("broken.csv"), "t_s,position\n0,TP1\n").unwrap();
     let out = root.join("out");
-    let args = |force: bool| {
+    let run = |force: bool| {
         let mut a = vec![
             "batch".to_string(),
             units.display().to_string(),
@@ -30,16 +82,15 @@ fn batch_summary_is_a_real_csv_and_a_bad_unit_does_not_stop_it() {
         if force {
             a.push("--force".into());
         }
-        a
-    };
-    let run = |force: bool| {
-        let a = args(force);
         cli(&a.iter().map(String::as_str).collect::<Vec<_>>())
     };
     let (code, stdout, stderr) = run(false);
-    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(
+        code, 3,
+        "a unit failed and one errored: exit 3\n{stdout}\n{stderr}"
+    );
     assert!(
-        stdout.contains("3 units") && stdout.contains("2 ok, 1 failed"),
+        stdout.contains("8 units") && stdout.contains("6 pass, 1 fail, 1 error"),
         "{stdout}"
     );
     assert!(
@@ -49,37 +100,143 @@ fn batch_summary_is_a_real_csv_and_a_bad_unit_does_not_stop_it() {
 
     let mut r = csv::Reader::from_path(out.join("summary.csv")).unwrap();
     let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
-    assert_eq!(header[..3], ["unit", "file", "status"]);
+    assert_eq!(header[..4], ["unit", "file", "acceptance", "reason"]);
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
     let rows: Vec<csv::StringRecord> = r.records().map(Result::unwrap).collect();
-    assert_eq!(rows.len(), 3);
+    assert_eq!(rows.len(), 8);
     for row in &rows {
         assert_eq!(row.len(), header.len(), "{row:?}");
         let file = std::path::Path::new(&row[1]);
         assert_eq!(file.parent(), Some(units.as_path()), "{row:?}");
         let stem = file.file_stem().unwrap().to_string_lossy();
-        if stem == "broken" {
-            assert!(
-                row[2].starts_with("error:") && row[2].contains("temp_c"),
-                "{row:?}"
-            );
-            assert!(!out.join("broken.blob").exists());
-        } else {
-            assert_eq!(&row[2], "ok", "{row:?}");
-            assert_eq!(&row[0], "PAPER-UNIT");
-            let before: f64 = row[3].parse().unwrap();
-            let after: f64 = row[4].parse().unwrap();
-            assert!(after < before, "{row:?}");
-            for ext in ["blob", "json"] {
-                assert!(out.join(format!("{stem}.{ext}")).exists());
+        let (acc, reason, far) = (&row[2], &row[3], &row[col("far_from_lot")]);
+        assert!(!reason.is_empty(), "{row:?}");
+        match stem.as_ref() {
+            "broken" => {
+                assert_eq!(acc, "error");
+                assert!(reason.contains("temp_c"), "{row:?}");
+                assert!(!out.join("broken.blob").exists());
+            }
+            "bump" => {
+                assert_eq!(acc, "fail", "{row:?}");
+                assert!(
+                    reason.contains("32."),
+                    "the failing temperature is named: {row:?}"
+                );
+            }
+            _ => {
+                assert_eq!(acc, "pass", "{row:?}");
+                let before: f64 = row[col("max_abs_dg_mg_before")].parse().unwrap();
+                let after: f64 = row[col("max_abs_dg_mg_after")].parse().unwrap();
+                assert!(after < 0.3 && after < before, "{row:?}");
+                for ext in ["blob", "json"] {
+                    assert!(out.join(format!("{stem}.{ext}")).exists());
+                }
+                if stem == "odd" {
+                    assert!(far.contains("u0x"), "the odd unit is flagged: {row:?}");
+                } else {
+                    assert!(far.is_empty(), "{row:?}");
+                }
             }
         }
     }
+    // the per-unit JSON carries the verdict and the data's choice
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("unit1.json")).unwrap()).unwrap();
+    assert_eq!(j["acceptance"], "pass");
+    assert!(j["chosen_by"]["method"]
+        .as_str()
+        .unwrap()
+        .contains("cross-validation"));
+    // the lot: 12 coefficients over the 7 units with a fit, u0x far for one unit
+    let mut lot = csv::Reader::from_path(out.join("lot.csv")).unwrap();
+    let lot: Vec<csv::StringRecord> = lot.records().map(Result::unwrap).collect();
+    assert_eq!(lot.len(), 12);
+    let u0x = lot.iter().find(|r| &r[0] == "u0x").unwrap();
+    assert_eq!((&u0x[1], &u0x[6]), ("7", "1"), "{u0x:?}");
+
     // nothing the user had is overwritten without --force
     let (code, _, stderr) = run(false);
     assert_eq!(code, 1, "{stderr}");
     assert!(stderr.contains("--force"), "{stderr}");
     let (code, _, stderr) = run(true);
-    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(code, 3, "{stderr}");
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+/// A lot where every unit passes exits 0.
+#[test]
+fn a_lot_that_passes_exits_zero() {
+    let root = tempfile_dir("hf-batch-pass");
+    let units = root.join("units");
+    std::fs::create_dir_all(&units).unwrap();
+    for seed in [3u64, 4] {
+        let sim = simulate(
+            &SimConfig {
+                seed,
+                ..Default::default()
+            },
+            |_| {},
+        )
+        .unwrap();
+        std::fs::write(units.join(format!("u{seed}.csv")), sim.csv).unwrap();
+    }
+    let (code, out, err) = cli(&[
+        "batch",
+        units.to_str().unwrap(),
+        "--out",
+        root.join("out").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("2 pass, 0 fail, 0 error"), "{out}");
+    // the same lot against a specification no unit can meet fails, exit 3
+    let (code, out, _) = cli(&[
+        "batch",
+        units.to_str().unwrap(),
+        "--out",
+        root.join("out").to_str().unwrap(),
+        "--force",
+        "--accept-t0-mg",
+        "0.0001",
+    ]);
+    assert_eq!(code, 3, "{out}");
+    assert!(out.contains("0 pass, 2 fail"), "{out}");
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+/// With --diagnose the blob and the "after" figure are the diagnosed model's.
+#[test]
+fn batch_with_the_diagnosis_takes_the_diagnosed_blob() {
+    let root = tempfile_dir("hf-batch-diag");
+    let units = root.join("units");
+    std::fs::create_dir_all(&units).unwrap();
+    let sim = simulate(&SimConfig::default(), |_| {}).unwrap();
+    std::fs::write(units.join("u1.csv"), sim.csv).unwrap();
+    let out = root.join("out");
+    let (code, stdout, err) = cli(&[
+        "batch",
+        units.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--diagnose",
+    ]);
+    assert_eq!(code, 0, "{stdout}{err}");
+    let mut r = csv::Reader::from_path(out.join("summary.csv")).unwrap();
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let row = r.records().next().unwrap().unwrap();
+    let model = &row[header.iter().position(|h| h == "model").unwrap()];
+    assert!(model.starts_with("diagnosed"), "{row:?}");
+    // the blob is the diagnosis's: a pwl table over the data's temperatures
+    let (code, out_i, _) = cli(&["inspect", out.join("u1.blob").to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0);
+    let j: serde_json::Value = serde_json::from_str(&out_i).unwrap();
+    assert_eq!(j["model"], "pwl", "{out_i}");
+    let u: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("u1.json")).unwrap()).unwrap();
+    assert!(
+        u["diagnosis"].is_object() && u["acceptance"] == "pass",
+        "{u}"
+    );
     std::fs::remove_dir_all(&root).unwrap();
 }
 

@@ -51,7 +51,7 @@ fn fit_inspect_verify_and_never_overwrite() {
     let (code, out, err) = cli(&["fit", r, "--model", "pwl", "--out", b, "--json"]);
     assert_eq!(code, 0, "{err}");
     let j: serde_json::Value = serde_json::from_str(&out).unwrap();
-    assert_eq!(j["route"], "joint");
+    assert_eq!(j["route"], "static");
     assert_eq!(j["unit"], "SYN-1");
     assert!(j["f32_departure_g"].as_f64().unwrap() <= 2e-6);
     let bytes = std::fs::read(&blob).unwrap();

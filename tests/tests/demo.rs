@@ -55,8 +55,8 @@ fn demo_outputs_agree_with_each_other_and_the_report_holds_its_data() {
     .into_iter()
     .chain(
         r.iter()
-            .find(|x| x.0.starts_with("poly"))
-            .map(|x| (x.0.as_str(), "poly.blob")),
+            .find(|x| x.0.starts_with("chosen-"))
+            .map(|x| (x.0.as_str(), "chosen.blob")),
     ) {
         for method in ["1", "2"] {
             let blob = dir.join(file);
@@ -69,8 +69,20 @@ fn demo_outputs_agree_with_each_other_and_the_report_holds_its_data() {
                 method,
                 "--json",
             ]);
-            assert_eq!(code, 0, "{err}");
-            let v: Value = serde_json::from_str(&out).unwrap();
+            let v: Value = serde_json::from_str(&out).unwrap_or_else(|_| panic!("{err}"));
+            // verify's verdict is summary.json's, and its exit code says it (method 1
+            // is what summary.json judges)
+            let verdict = v["acceptance"].as_str().unwrap();
+            assert_eq!(code, if verdict == "pass" { 0 } else { 3 }, "{err}");
+            if method == "1" {
+                let judged = summary["acceptance"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .find(|a| a["model"] == model)
+                    .unwrap_or_else(|| panic!("{model} not judged in summary.json"));
+                assert_eq!(judged["judged"]["acceptance"], verdict, "{model}");
+            }
             for t in v["max_by_temperature"].as_array().unwrap() {
                 let temp = t["temp_c"].as_f64().unwrap();
                 let got = t["max_abs_dg_mg"].as_f64().unwrap();

@@ -53,12 +53,7 @@ fn json_contract_on_a_clean_and_an_effect_recording() {
     let dir = std::env::temp_dir().join(format!("hf-diag-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     for (name, effects) in [("clean", vec![]), ("rate", vec!["temp_rate"])] {
-        let case = host_fit::blind::Case {
-            effects,
-            scale: 1.0,
-            seed: 3,
-            tp_only: false,
-        };
+        let case = host_fit::blind::Case::catalogue(effects, 1.0, 3);
         let cfg = host_fit::blind::configure(&case);
         let sim = host_fit::simulate::simulate(&cfg, |_| {}).unwrap();
         let p = dir.join(format!("{name}.csv"));

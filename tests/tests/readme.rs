@@ -62,6 +62,26 @@ fn blind_long_suite() {
 }
 
 #[test]
+fn model_choice_against_plain_least_squares() {
+    same("model-choice", &figures::model_choice().1);
+}
+
+#[test]
+fn coverage_of_the_predicted_error() {
+    same("coverage", &figures::coverage().1);
+}
+
+#[test]
+fn ggir_wrist_held_out() {
+    same("ggir-wrist", &figures::ggir_wrist().2);
+}
+
+#[test]
+fn imucal_one_temperature() {
+    same("imucal", &figures::imucal().1);
+}
+
+#[test]
 fn the_check_can_fail() {
     let readme = "x\n<!-- figure: t -->\n```text\na  \nb\n```\n<!-- figure: e -->\n```\n```\n";
     assert_eq!(block(readme, "t"), "a  \nb");

@@ -24,15 +24,29 @@ pub enum ErrModel {
 /// The temperature model options.
 #[derive(Args, Debug, Clone)]
 pub struct ModelArgs {
-    /// Temperature model.
-    #[arg(long, value_enum, default_value = "pwl")]
-    pub model: ModelKind,
-    /// Polynomial order (default: 3, or less if fewer temperatures).
+    /// Temperature model family (default for a recording: chosen by the data, by
+    /// cross-validation over the calibration dwells, which also choose the order or
+    /// breakpoints within a family given alone; for a table: pwl).
+    #[arg(long, value_enum)]
+    pub model: Option<ModelKind>,
+    /// Polynomial order (poly only; default: chosen by the data).
     #[arg(long)]
     pub order: Option<usize>,
-    /// Breakpoints for pwl, C, comma-separated (default: the calibration temperatures).
+    /// Breakpoints for pwl, C, comma-separated (pwl only; default: the calibration
+    /// temperatures).
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub breakpoints: Option<Vec<f64>>,
+}
+
+/// The acceptance specification.
+#[derive(Args, Debug, Clone)]
+pub struct AcceptArgs {
+    /// Limit on |dg| within +-5 C of T0, mg.
+    #[arg(long, default_value_t = 0.3, allow_hyphen_values = true)]
+    pub accept_t0_mg: f64,
+    /// Limit on |dg| over the rest of the valid range, mg.
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    pub accept_range_mg: f64,
 }
 
 /// A recording and its positions.
@@ -40,9 +54,14 @@ pub struct ModelArgs {
 pub struct Input {
     /// The recording.
     pub recording: PathBuf,
-    /// Positions file (name,fx,fy,fz[,role]).
+    /// Positions file (name,fx,fy,fz[,role]; an empty vector `W1,,,` is a pose of
+    /// unknown orientation, estimated from the data).
     #[arg(long)]
     pub positions: Option<PathBuf>,
+    /// Treat every vector of the positions file as unknown (vectors that were
+    /// themselves estimated from data): estimate them.
+    #[arg(long, requires = "positions")]
+    pub unknown_orientations: bool,
 }
 
 /// `temp-fit`.
@@ -90,9 +109,13 @@ pub struct FitArgs {
     /// The temperature model.
     #[command(flatten)]
     pub model: ModelArgs,
-    /// Identification route.
-    #[arg(long, value_enum, default_value = "joint")]
+    /// Identification route: static (the dwells in thermal equilibrium), joint (every
+    /// dwell, ramps included), per-stop (the paper's).
+    #[arg(long, value_enum, default_value = "static")]
     pub route: Route,
+    /// The serial written into the blob (default: the recording's `unit`).
+    #[arg(long)]
+    pub serial: Option<String>,
     /// Positions kept out of the fit for verification (default: those whose role is
     /// verification, PP1..PP6 unless a positions file says otherwise).
     #[arg(long, value_delimiter = ',')]
@@ -132,6 +155,12 @@ pub struct VerifyArgs {
     /// Positions to check (default: those whose role is verification).
     #[arg(long, value_delimiter = ',')]
     pub positions_for_check: Option<Vec<String>>,
+    /// The acceptance specification.
+    #[command(flatten)]
+    pub accept: AcceptArgs,
+    /// Verify even when the blob's serial is not the recording's unit.
+    #[arg(long)]
+    pub force: bool,
     /// Machine-readable output.
     #[arg(long)]
     pub json: bool,
@@ -163,6 +192,9 @@ pub struct DiagnoseArgs {
     /// Write the extended model (tables and in-flight physics terms) as a blob.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// The serial written into the blob (default: the recording's `unit`).
+    #[arg(long, requires = "out")]
+    pub serial: Option<String>,
     /// Overwrite existing outputs.
     #[arg(long)]
     pub force: bool,
@@ -182,10 +214,14 @@ pub struct BatchArgs {
     /// Parallel jobs (default: one per core).
     #[arg(long)]
     pub jobs: Option<usize>,
-    /// Temperature model.
-    #[arg(long, value_enum, default_value = "pwl")]
-    pub model: ModelKind,
-    /// Also run the diagnosis on every unit.
+    /// Temperature model (default: chosen by the data for every unit).
+    #[arg(long, value_enum)]
+    pub model: Option<ModelKind>,
+    /// The acceptance specification.
+    #[command(flatten)]
+    pub accept: AcceptArgs,
+    /// Also run the diagnosis on every unit; the blob and the verification are then
+    /// the diagnosed model's.
     #[arg(long)]
     pub diagnose: bool,
     /// Overwrite outputs of an earlier run.

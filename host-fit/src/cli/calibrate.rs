@@ -1,13 +1,19 @@
 //! `temp-fit`, `identify` and `fit`: from data to coefficients and blobs.
 use super::args::{FitArgs, IdentifyArgs, TempFitArgs};
-use super::common::{load, serial, w};
+use super::common::{load, oriented, serial, w};
 use crate::blob::{build_blob, F32_BOUND_G};
 use crate::data::table::{read_table, to_csv, TableRow};
 use crate::error::{HostError, Result};
 use crate::fit::describe::ModelDescription;
+use crate::fit::equilibrium::Excluded;
 use crate::fit::identify::StopCoeffs;
 use crate::fit::noise::noise;
-use crate::fit::pipeline::{fit_recording, identify_stops, ModelChoice};
+use crate::fit::orientation::PoseEstimate;
+use crate::fit::pipeline::{
+    fit_chosen, fit_recording, identify_stops, FitOutcome, ModelChoice, ModelKind, ModelRequest,
+};
+use crate::fit::predict::{directions, predict, Prediction};
+use crate::fit::select::Selection;
 use crate::fit::temperature::fit_table;
 use crate::output::{check_writable, json, write_atomic};
 use firmware_core::model::COEFF_NAMES;
@@ -15,9 +21,9 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
 
-impl From<&super::args::ModelArgs> for ModelChoice {
+impl From<&super::args::ModelArgs> for ModelRequest {
     fn from(m: &super::args::ModelArgs) -> Self {
-        ModelChoice {
+        ModelRequest {
             kind: m.model,
             order: m.order,
             breakpoints: m.breakpoints.clone(),
@@ -26,9 +32,21 @@ impl From<&super::args::ModelArgs> for ModelChoice {
 }
 
 pub(super) fn temp_fit(a: TempFitArgs, out: &mut dyn Write) -> Result<()> {
+    let req = ModelRequest::from(&a.model);
+    req.check()?;
     let rows = read_table(&a.coeffs)?;
     let temps: Vec<f64> = rows.iter().map(|r| r.temp_c).collect();
-    let basis = ModelChoice::from(&a.model).basis(&temps);
+    let kind = match (req.kind, req.order) {
+        (Some(k), _) => k,
+        (None, Some(_)) => ModelKind::Poly,
+        (None, None) => ModelKind::Pwl,
+    };
+    let choice = ModelChoice {
+        kind,
+        order: req.order,
+        breakpoints: req.breakpoints,
+    };
+    let basis = choice.basis(&temps);
     let fit =
         fit_table(&rows, &basis, a.t0).map_err(|e| HostError::in_file(&a.coeffs, e.message))?;
     let d = ModelDescription::of(&fit, a.relative);
@@ -43,7 +61,8 @@ pub(super) fn temp_fit(a: TempFitArgs, out: &mut dyn Write) -> Result<()> {
 #[derive(Serialize)]
 struct Identified<'a> {
     unit: &'a str,
-    noise_sigma: [f64; 3],
+    /// None when no dwell has two samples (a dwell-averaged recording).
+    noise_sigma: Option<[f64; 3]>,
     stops: Vec<IdentifiedStop<'a>>,
 }
 
@@ -74,7 +93,7 @@ pub(super) fn identify(a: IdentifyArgs, out: &mut dyn Write, err: &mut dyn Write
     if let Some(c) = &a.csv {
         check_writable(c, a.force)?;
     }
-    let rec = load(&a.input, None, err)?;
+    let rec = oriented(load(&a.input, None, err)?, err)?;
     let nz = noise(&rec);
     let st = identify_stops(&rec)?;
     let table = to_csv(&table_rows(&st))?;
@@ -84,7 +103,7 @@ pub(super) fn identify(a: IdentifyArgs, out: &mut dyn Write, err: &mut dyn Write
     if a.json {
         let j = Identified {
             unit: &rec.unit,
-            noise_sigma: nz.sigma,
+            noise_sigma: (nz.dof > 0).then_some(nz.sigma),
             stops: st
                 .iter()
                 .map(|s| IdentifiedStop {
@@ -98,13 +117,16 @@ pub(super) fn identify(a: IdentifyArgs, out: &mut dyn Write, err: &mut dyn Write
         };
         w(out, json(&j)?)
     } else {
-        w(
-            out,
+        let noise_line = if nz.dof > 0 {
             format!(
-                "unit {}  noise sigma (per sample) x {:.3e} y {:.3e} z {:.3e} {}",
-                rec.unit, nz.sigma[0], nz.sigma[1], nz.sigma[2], rec.output_unit
-            ),
-        )?;
+                "noise sigma (per sample) x {:.3e} y {:.3e} z {:.3e} {}",
+                nz.sigma[0], nz.sigma[1], nz.sigma[2], rec.output_unit
+            )
+        } else {
+            // a dwell-averaged recording: nothing to take the noise from
+            "no dwell has two samples: the noise is not known, and the standard errors below are for unit noise (relative only)".to_string()
+        };
+        w(out, format!("unit {}  {noise_line}", rec.unit))?;
         w(out, table.trim_end())
     }
 }
@@ -115,10 +137,23 @@ struct Fitted<'a> {
     unit: &'a str,
     route: &'static str,
     model: String,
+    /// How the data chose the model (absent when `--model` gave it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    chosen_by: Option<&'a Selection>,
+    /// Said plainly when the data hold one temperature.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    no_temperature_model: Option<String>,
     t0_c: f64,
     t_min_c: f64,
     t_max_c: f64,
     noise_sigma: [f64; 3],
+    noise_source: &'static str,
+    /// The predicted compensation error against temperature (joint fits).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    predicted_error: Option<Prediction>,
+    excluded_not_in_equilibrium: Excluded,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    orientations: Option<Orientations<'a>>,
     k2: [Option<f64>; 3],
     stops: Vec<StopSummary<'a>>,
     f32_departure_g: f64,
@@ -130,26 +165,70 @@ struct Fitted<'a> {
 }
 
 #[derive(Serialize)]
+struct Orientations<'a> {
+    estimated: usize,
+    alternations: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    frame: Option<&'a str>,
+    poses: &'a [PoseEstimate],
+}
+
+#[derive(Serialize)]
 struct StopSummary<'a> {
     temp_c: f64,
     positions: &'a [String],
 }
 
-pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
-    check_writable(&a.out, a.force)?;
-    let rec = load(&a.input, a.positions_for_check.as_deref(), err)?;
-    let oc = fit_recording(&rec, &ModelChoice::from(&a.model), a.route)?;
-    let cal = oc.fit.calibration(a.update_step, a.clamp);
-    let (blob, bytes, dep) = build_blob(serial(&rec), &cal)?;
-    write_atomic(&a.out, &bytes, a.force)?;
-    let j = Fitted {
-        unit: serial(&rec),
+fn fitted<'a>(
+    a: &'a FitArgs,
+    rec: &'a crate::data::recording::Recording,
+    oc: &'a FitOutcome,
+    cal: &firmware_core::temperature::Calibration<f64>,
+    (bytes, dep): (usize, f64),
+    serial: &'a str,
+) -> Fitted<'a> {
+    let prediction = (!oc.fit.axis_cov.is_empty()).then(|| {
+        let r = oc.orientation.as_ref().map(|o| {
+            let mut r = rec.clone();
+            r.positions = o.positions.clone();
+            r
+        });
+        let (dirs, n) = directions(r.as_ref().unwrap_or(rec));
+        predict(
+            &oc.fit,
+            &oc.noise,
+            &dirs,
+            (cal.t_min_c, cal.t_max_c),
+            (n, cal.update_step_c),
+        )
+    });
+    let one_temp = crate::fit::predict::is_constant(&oc.fit.basis);
+    Fitted {
+        unit: serial,
         route: a.route.name(),
         model: oc.fit.basis.describe(),
+        chosen_by: oc.selection.as_ref(),
+        no_temperature_model: one_temp.then(|| format!(
+            "all calibration data are at one temperature ({:.1} C): the 12 coefficients are identified there and no temperature model can be fitted; the blob holds them constant",
+            oc.fit.t_range.0
+        )),
         t0_c: cal.t0_c,
         t_min_c: cal.t_min_c,
         t_max_c: cal.t_max_c,
-        noise_sigma: noise(&rec).sigma,
+        noise_sigma: oc.noise.sigma,
+        noise_source: if oc.noise.dof > 0 {
+            "in-dwell (successive samples)"
+        } else {
+            "none in the dwells (one sample each): the fit's residual scatter is used"
+        },
+        predicted_error: prediction,
+        excluded_not_in_equilibrium: oc.excluded,
+        orientations: oc.orientation.as_ref().map(|o| Orientations {
+            estimated: o.poses.len(),
+            alternations: o.iterations,
+            frame: o.frame.as_deref(),
+            poses: &o.poses,
+        }),
         k2: oc.fit.k2,
         stops: oc
             .stops
@@ -162,30 +241,44 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
         f32_departure_g: dep,
         f32_bound_g: F32_BOUND_G,
         blob: a.out.display().to_string(),
-        blob_bytes: bytes.len(),
+        blob_bytes: bytes,
         temperature_model: ModelDescription::of(&oc.fit, false),
         warnings: &rec.warnings,
+    }
+}
+
+pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+    check_writable(&a.out, a.force)?;
+    let req = ModelRequest::from(&a.model);
+    req.check()?;
+    let rec = load(&a.input, a.positions_for_check.as_deref(), err)?;
+    let oc = match (req.kind, a.route) {
+        (_, crate::fit::pipeline::Route::Static) => fit_chosen(&rec, &req)?,
+        (None, route) => {
+            return Err(HostError::msg(format!(
+                "the model is chosen by the data on the static route only; with --route {} give --model",
+                route.name()
+            )))
+        }
+        (Some(kind), route) => fit_recording(
+            &rec,
+            &ModelChoice {
+                kind,
+                order: req.order,
+                breakpoints: req.breakpoints.clone(),
+            },
+            route,
+        )?,
     };
+    let cal = oc.fit.calibration(a.update_step, a.clamp);
+    let serial_name = a.serial.as_deref().unwrap_or(serial(&rec));
+    let (blob, bytes, dep) = build_blob(serial_name, &cal)?;
+    write_atomic(&a.out, &bytes, a.force)?;
+    let j = fitted(&a, &rec, &oc, &cal, (bytes.len(), dep), serial_name);
     if a.json {
         return w(out, json(&j)?);
     }
-    w(
-        out,
-        format!(
-            "unit {}: {} route, model {}, T0 {} C, valid {:.2}..{:.2} C",
-            j.unit, j.route, j.model, j.t0_c, j.t_min_c, j.t_max_c
-        ),
-    )?;
-    let stops: Vec<String> = j
-        .stops
-        .iter()
-        .map(|s| format!("{:.2} C ({} positions)", s.temp_c, s.positions.len()))
-        .collect();
-    w(out, format!("stops: {}", stops.join(", ")))?;
-    w(
-        out,
-        format!("f32 firmware path vs f64 model: max {dep:.2e} g (bound {F32_BOUND_G:.0e} g)"),
-    )?;
+    w(out, fit_text(&j))?;
     w(
         out,
         format!(
@@ -195,4 +288,79 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
             blob.serial
         ),
     )
+}
+
+fn fit_text(j: &Fitted<'_>) -> String {
+    let mut s = vec![format!(
+        "unit {}: {} route, model {}{}, T0 {} C, valid {:.2}..{:.2} C",
+        j.unit,
+        j.route,
+        j.model,
+        if j.chosen_by.is_some() {
+            " (chosen by the data)"
+        } else {
+            ""
+        },
+        j.t0_c,
+        j.t_min_c,
+        j.t_max_c
+    )];
+    if let Some(sel) = j.chosen_by.filter(|s| !s.candidates.is_empty()) {
+        s.push(format!("chosen by {}: {}", sel.method, sel.reason));
+        let c: Vec<String> = sel
+            .candidates
+            .iter()
+            .map(|c| match c.held_out_rms_dg_mg {
+                Some(v) => format!("{} {v:.4}", c.model),
+                None => format!("{} -", c.model),
+            })
+            .collect();
+        if !c.is_empty() {
+            s.push(format!("held-out rms |dg|, mg: {}", c.join(", ")));
+        }
+    }
+    if let Some(n) = &j.no_temperature_model {
+        s.push(n.clone());
+    }
+    let ex = j.excluded_not_in_equilibrium.text();
+    if !ex.is_empty() {
+        s.push(ex);
+    }
+    if let Some(o) = &j.orientations {
+        s.push(format!(
+            "{} poses of unknown orientation estimated ({} alternations){}",
+            o.estimated,
+            o.alternations,
+            o.frame.map(|f| format!("; {f}")).unwrap_or_default()
+        ));
+    }
+    if let Some(p) = &j.predicted_error {
+        let pts: Vec<String> = p
+            .points
+            .iter()
+            .map(|q| format!("{:.1} C {:.4}", q.temp_c, q.dg_1sigma_mg))
+            .collect();
+        s.push(format!(
+            "predicted compensation error (1 sigma of |dg| from the fit's covariance, worst of {} directions), mg: {}",
+            p.directions.len(),
+            pts.join(", ")
+        ));
+        s.push(format!(
+            "a verification dwell of {} samples adds {:.4} mg of its own noise (noise: {}); the firmware's {} C cache step up to {:.4} mg; valid range {:.2}..{:.2} C",
+            p.dwell_samples, p.dwell_noise_1sigma_mg, p.noise_source, p.cache_step_c, p.cache_lag_max_mg, p.t_min_c, p.t_max_c
+        ));
+    }
+    if !j.stops.is_empty() {
+        let stops: Vec<String> = j
+            .stops
+            .iter()
+            .map(|s| format!("{:.2} C ({} positions)", s.temp_c, s.positions.len()))
+            .collect();
+        s.push(format!("stops: {}", stops.join(", ")));
+    }
+    s.push(format!(
+        "f32 firmware path vs f64 model: max {:.2e} g (bound {F32_BOUND_G:.0e} g)",
+        j.f32_departure_g
+    ));
+    s.join("\n")
 }

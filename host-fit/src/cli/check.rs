@@ -1,7 +1,9 @@
 //! `verify`, `inspect` and `fw-vectors`: a blob against a recording, a blob alone, and
 //! the firmware's expected outputs.
 use super::args::{ErrModel, FwVectorsArgs, InspectArgs, VerifyArgs};
-use super::common::{load, w};
+use super::common::Outcome;
+use super::common::{load, serial, w};
+use crate::acceptance::{judge, Acceptance, Spec, Verdict};
 use crate::blob::{read_blob, Inspection, F32_BOUND_G};
 use crate::data::positions::Role;
 use crate::error::{HostError, Result};
@@ -15,14 +17,35 @@ use std::io::Write;
 #[derive(Serialize)]
 struct Verified<'a> {
     unit: &'a str,
+    blob_serial: &'a str,
     method: &'a str,
     dwells: &'a [DwellCheck],
     max_by_temperature: &'a [TempMax],
+    #[serde(flatten)]
+    acceptance: &'a Acceptance,
 }
 
-pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
+    let spec = Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?;
     let (b, _) = read_blob(&a.blob)?;
     let rec = load(&a.input, a.positions_for_check.as_deref(), err)?;
+    let unit = serial(&rec);
+    if b.serial.as_str() != unit {
+        if !a.force {
+            return Err(HostError::in_file(
+                &a.blob,
+                format!(
+                    "is the blob of unit `{}`, the recording is of unit `{unit}`: refusing to verify another unit's blob (give --force to verify it anyway)",
+                    b.serial
+                ),
+            ));
+        }
+        let _ = writeln!(
+            err,
+            "warning: verifying unit `{unit}` with the blob of unit `{}` (--force)",
+            b.serial
+        );
+    }
     let m = match (a.method.as_str(), a.error_model) {
         ("1", _) => Method::CorrectConstants,
         (_, ErrModel::Full) => Method::CorrectResult(ErrorModel::Full),
@@ -40,14 +63,29 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
             ),
         ));
     }
+    let cal = &b.calibration;
+    let acc = judge(
+        &v,
+        &spec,
+        f64::from(cal.t0_c),
+        (f64::from(cal.t_min_c), f64::from(cal.t_max_c)),
+    )
+    .map_err(|e| HostError::in_file(&a.input.recording, e.message))?;
+    let outcome = match acc.acceptance {
+        Verdict::Pass => Outcome::Done,
+        Verdict::Fail => Outcome::Rejected,
+    };
     if a.json {
         let j = Verified {
-            unit: b.serial.as_str(),
+            unit,
+            blob_serial: b.serial.as_str(),
             method: &a.method,
             dwells: &v.dwells,
             max_by_temperature: &v.max_by_temperature,
+            acceptance: &acc,
         };
-        return w(out, json(&j)?);
+        w(out, json(&j)?)?;
+        return Ok(outcome);
     }
     w(
         out,
@@ -74,7 +112,16 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
             ),
         )?;
     }
-    Ok(())
+    w(
+        out,
+        format!(
+            "acceptance: {} ({}): {}",
+            acc.acceptance.name(),
+            spec.text(),
+            acc.reason
+        ),
+    )?;
+    Ok(outcome)
 }
 
 pub(super) fn inspect(a: InspectArgs, out: &mut dyn Write) -> Result<()> {

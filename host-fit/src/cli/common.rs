@@ -6,6 +6,16 @@ use crate::data::recording::Recording;
 use crate::error::{HostError, Result};
 use std::io::Write;
 
+/// How a command that ran ended (`cli::run` makes it the exit code: 0, or
+/// `EXIT_REJECTED`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Done (and accepted, where acceptance is judged).
+    Done,
+    /// Ran, but the result failed acceptance (or a unit of a batch failed or errored).
+    Rejected,
+}
+
 /// Write one line of output.
 pub(super) fn w(out: &mut dyn Write, s: impl std::fmt::Display) -> Result<()> {
     writeln!(out, "{s}").map_err(|e| HostError::msg(format!("cannot write output: {e}")))
@@ -25,12 +35,45 @@ pub(super) fn load(
     if let Some(names) = check {
         pos.set_verification(names, "--positions-for-check")?;
     }
+    if input.unknown_orientations {
+        let builtin = Positions::default();
+        let from_file: Vec<String> = pos
+            .list
+            .iter()
+            .filter(|p| {
+                builtin
+                    .index(&p.name)
+                    .is_none_or(|i| builtin.vector(i) != p.a)
+            })
+            .map(|p| p.name.clone())
+            .collect();
+        pos.forget_vectors(&from_file);
+    }
     let rec = Recording::read(&input.recording, pos)?;
     warns.extend(rec.warnings.iter().cloned());
     for wn in &warns {
         let _ = writeln!(err, "warning: {wn}");
     }
     Ok(rec)
+}
+
+/// `rec` with its poses of unknown orientation estimated (a note on `err`), for the
+/// commands that need every vector.
+pub(super) fn oriented(rec: Recording, err: &mut dyn Write) -> Result<Recording> {
+    let (est, o) = crate::fit::pipeline::with_orientations(&rec, None)?;
+    if let Some(o) = &o {
+        let _ = writeln!(
+            err,
+            "note: {} poses of unknown orientation estimated from the data ({} alternations){}",
+            o.poses.len(),
+            o.iterations,
+            o.frame
+                .as_deref()
+                .map(|f| format!("; {f}"))
+                .unwrap_or_default()
+        );
+    }
+    Ok(est.unwrap_or(rec))
 }
 
 /// The unit's serial, `UNKNOWN` when the recording has none.

@@ -10,6 +10,7 @@ mod study;
 use crate::error::Result;
 use args::{Cli, Command};
 use clap::Parser;
+pub use common::Outcome;
 use std::io::Write;
 
 /// Run the tool with `args` (including the program name); returns the exit code.
@@ -31,7 +32,8 @@ where
         }
     };
     match dispatch(cli.command, out, err) {
-        Ok(()) => 0,
+        Ok(Outcome::Done) => 0,
+        Ok(Outcome::Rejected) => EXIT_REJECTED,
         Err(e) => {
             let _ = writeln!(err, "error: {e}");
             1
@@ -39,19 +41,24 @@ where
     }
 }
 
-fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+/// The exit code of a command that ran but whose result failed acceptance (`verify`),
+/// or in which a unit failed or could not be processed (`batch`). 1 stays "could not run".
+pub const EXIT_REJECTED: i32 = 3;
+
+fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
+    let done = |r: Result<()>| r.map(|()| Outcome::Done);
     match cmd {
-        Command::TempFit(a) => calibrate::temp_fit(a, out),
-        Command::Identify(a) => calibrate::identify(a, out, err),
-        Command::Fit(a) => calibrate::fit(a, out, err),
+        Command::TempFit(a) => done(calibrate::temp_fit(a, out)),
+        Command::Identify(a) => done(calibrate::identify(a, out, err)),
+        Command::Fit(a) => done(calibrate::fit(a, out, err)),
         Command::Verify(a) => check::verify(a, out, err),
-        Command::Inspect(a) => check::inspect(a, out),
-        Command::FwVectors(a) => check::fw_vectors(a, out),
-        Command::Diagnose(a) => study::diagnose(a, out, err),
-        Command::Report(a) => study::report(a, out, err),
-        Command::Blind(a) => study::blind(a, out),
+        Command::Inspect(a) => done(check::inspect(a, out)),
+        Command::FwVectors(a) => done(check::fw_vectors(a, out)),
+        Command::Diagnose(a) => done(study::diagnose(a, out, err)),
+        Command::Report(a) => done(study::report(a, out, err)),
+        Command::Blind(a) => done(study::blind(a, out)),
         Command::Batch(a) => production::batch(a, out, err),
-        Command::Simulate(a) => production::simulate(a, out),
-        Command::Demo(a) => production::demo(a, out),
+        Command::Simulate(a) => done(production::simulate(a, out)),
+        Command::Demo(a) => done(production::demo(a, out)),
     }
 }

@@ -1,30 +1,78 @@
 //! `batch`, `simulate` and `demo`: many units, the twin, and the main job.
 use super::args::{BatchArgs, DemoArgs, SimulateArgs};
 use super::common::w;
+use super::common::Outcome;
+use crate::acceptance::Spec;
+use crate::batch::BatchOptions;
 use crate::error::{HostError, Result};
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::simulate::SimConfig;
 use serde::Serialize;
 use std::io::Write;
 
-pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let t = std::time::Instant::now();
-    let res = crate::batch::run(&a.dir, &a.out, a.jobs, a.model, a.diagnose, a.force)?;
-    let bad: Vec<_> = res.iter().filter(|r| r.status != "ok").collect();
-    for r in &bad {
-        let _ = writeln!(err, "{}: {}", r.file.display(), r.status);
+    let o = BatchOptions {
+        jobs: a.jobs,
+        model: a.model,
+        spec: Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?,
+        diagnose: a.diagnose,
+        force: a.force,
+    };
+    let res = crate::batch::run(&a.dir, &a.out, &o)?;
+    let count = |s: &str| res.units.iter().filter(|r| r.acceptance == s).count();
+    for r in res.units.iter().filter(|r| r.acceptance != "pass") {
+        let _ = writeln!(err, "{}: {}: {}", r.file.display(), r.acceptance, r.reason);
     }
     w(
         out,
         format!(
-            "{} units in {:.1} s: {} ok, {} failed; summary {}",
-            res.len(),
+            "{} units in {:.1} s: {} pass, {} fail, {} error ({}); summary {}",
+            res.units.len(),
             t.elapsed().as_secs_f64(),
-            res.len() - bad.len(),
-            bad.len(),
+            count("pass"),
+            count("fail"),
+            count("error"),
+            o.spec.text(),
             a.out.join("summary.csv").display()
         ),
-    )
+    )?;
+    let far: Vec<String> = res
+        .units
+        .iter()
+        .filter(|u| !u.outlier.is_empty())
+        .map(|u| {
+            let (c, z) =
+                u.outlier.iter().fold(
+                    ("", 0.0f64),
+                    |m, x| if x.1.abs() > m.1.abs() { *x } else { m },
+                );
+            format!(
+                "{} of {} ({c} z={z:.1})",
+                u.unit,
+                u.file
+                    .file_name()
+                    .map(|f| f.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            )
+        })
+        .collect();
+    w(
+        out,
+        format!(
+            "lot: {} coefficients over {} fitted units in {}; units far from the lot (robust z > {}): {}",
+            res.lot.len(),
+            res.lot.first().map_or(0, |l| l.units),
+            a.out.join("lot.csv").display(),
+            crate::batch::OUTLIER_Z,
+            if far.is_empty() { "none".to_string() } else { far.join(", ") }
+        ),
+    )?;
+    Ok(if res.all_pass() {
+        Outcome::Done
+    } else {
+        Outcome::Rejected
+    })
 }
 
 /// `simulate --truth`.
@@ -66,7 +114,14 @@ pub(super) fn simulate(a: SimulateArgs, out: &mut dyn Write) -> Result<()> {
 
 pub(super) fn demo(a: DemoArgs, out: &mut dyn Write) -> Result<()> {
     let oc = crate::demo::run(&a.out, a.seed, a.force)?;
-    w(out, crate::analysis::table(&oc.rows))?;
+    w(
+        out,
+        format!(
+            "{}{}",
+            crate::analysis::table(&oc.rows),
+            crate::analysis::verdicts(&oc)
+        ),
+    )?;
     w(
         out,
         format!("summary: {}", a.out.join("summary.json").display()),

@@ -1,6 +1,6 @@
 //! `diagnose`, `report` and `blind`: looking into a recording, and testing the looking.
 use super::args::{BlindArgs, DiagnoseArgs, ReportArgs};
-use super::common::{load, serial, w};
+use super::common::{load, oriented, serial, w};
 use crate::analysis::{analyse, table};
 use crate::blob::build_blob;
 use crate::diagnose::contract::BlobNote;
@@ -12,11 +12,12 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
     for p in a.report.iter().chain(a.out.iter()) {
         check_writable(p, a.force)?;
     }
-    let rec = load(&a.input, None, err)?;
+    let rec = oriented(load(&a.input, None, err)?, err)?;
     let d = crate::diagnose::diagnose(&rec)?;
     let mut c = d.contract(&rec);
     if let Some(b) = &a.out {
-        let (blob, bytes, dep) = build_blob(serial(&rec), &d.calibration(rec.t0_c)?)?;
+        let name = a.serial.as_deref().unwrap_or(serial(&rec));
+        let (blob, bytes, dep) = build_blob(name, &d.calibration(rec.t0_c)?)?;
         write_atomic(b, &bytes, a.force)?;
         c.blob = Some(BlobNote {
             path: b.display().to_string(),
@@ -38,9 +39,9 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
 
 pub(super) fn report(a: ReportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     check_writable(&a.out, a.force)?;
-    let rec = load(&a.input, None, err)?;
+    let rec = oriented(load(&a.input, None, err)?, err)?;
     let oc = analyse(rec, None)?;
-    let t = table(&oc.rows);
+    let t = format!("{}{}", table(&oc.rows), crate::analysis::verdicts(&oc));
     let html = crate::report::demo::demo_report(&oc, &t)?;
     write_atomic(&a.out, html.as_bytes(), a.force)?;
     w(out, t)?;

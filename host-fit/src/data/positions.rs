@@ -30,10 +30,16 @@ impl Role {
 pub struct Position {
     /// Name as used in recordings.
     pub name: String,
-    /// Unit vector (g).
+    /// Unit vector (g); NaN while the orientation is unknown, so that a vector used
+    /// before it was estimated can never pass for data.
     pub a: [f64; 3],
     /// What its dwells are used for.
     pub role: Role,
+    /// False for a static pose of unknown orientation (an empty vector in a positions
+    /// file): its vector must be estimated (`fit::orientation`) before it is used.
+    pub known: bool,
+    /// True when the vector was estimated from the data, not given.
+    pub estimated: bool,
 }
 
 /// The set of known positions.
@@ -75,6 +81,8 @@ impl Default for Positions {
                     } else {
                         Role::Verification
                     },
+                    known: true,
+                    estimated: false,
                 })
                 .collect(),
         }
@@ -87,9 +95,60 @@ impl Positions {
         self.list.iter().position(|p| p.name == name)
     }
 
-    /// The vector of position `i`.
+    /// The vector of position `i` (NaN for a position of unknown orientation: check
+    /// [`Positions::is_known`] or [`Positions::require_known`] first).
     pub fn vector(&self, i: usize) -> [f64; 3] {
-        self.list.get(i).map(|p| p.a).unwrap_or([0.0; 3])
+        self.list.get(i).map(|p| p.a).unwrap_or([f64::NAN; 3])
+    }
+
+    /// Whether position `i` has a known (given or estimated) orientation.
+    pub fn is_known(&self, i: usize) -> bool {
+        self.list.get(i).is_some_and(|p| p.known)
+    }
+
+    /// An error naming the first of `used` whose orientation is unknown, for code that
+    /// needs vectors and was not given estimated ones.
+    pub fn require_known(&self, used: impl IntoIterator<Item = usize>, what: &str) -> Result<()> {
+        let mut unknown: Vec<&str> = used
+            .into_iter()
+            .filter(|i| !self.is_known(*i))
+            .map(|i| self.name(i))
+            .collect();
+        unknown.sort_unstable();
+        unknown.dedup();
+        match unknown.first() {
+            None => Ok(()),
+            Some(first) => Err(HostError::msg(format!(
+                "{what} needs the orientation of every position it uses; `{first}` ({} of unknown orientation in all) has none: estimate them first (fit::orientation)",
+                unknown.len()
+            ))),
+        }
+    }
+
+    /// Give position `i` an (estimated) orientation, `a` a unit vector.
+    pub fn set_estimated(&mut self, i: usize, a: [f64; 3]) {
+        if let Some(p) = self.list.get_mut(i) {
+            p.a = a;
+            p.known = true;
+            p.estimated = true;
+        }
+    }
+
+    /// Whether position `i`'s vector was estimated from the data.
+    pub fn is_estimated(&self, i: usize) -> bool {
+        self.list.get(i).is_some_and(|p| p.estimated)
+    }
+
+    /// Make every position defined by a file unknown: its vector is not trusted (the
+    /// command line's `--unknown-orientations`, for vectors estimated from the data).
+    pub fn forget_vectors(&mut self, names: &[String]) {
+        for p in &mut self.list {
+            if names.contains(&p.name) {
+                p.a = [f64::NAN; 3];
+                p.known = false;
+                p.estimated = false;
+            }
+        }
     }
 
     /// The name of position `i`.
@@ -113,17 +172,31 @@ impl Positions {
 
     /// Add or replace a position; a replaced position keeps its role unless `role` says.
     pub fn set(&mut self, name: &str, a: [f64; 3], role: Option<Role>) {
+        self.put(name, Some(a), role);
+    }
+
+    /// Add or replace a static pose of unknown orientation.
+    pub fn set_unknown(&mut self, name: &str, role: Option<Role>) {
+        self.put(name, None, role);
+    }
+
+    fn put(&mut self, name: &str, a: Option<[f64; 3]>, role: Option<Role>) {
+        let v = a.unwrap_or([f64::NAN; 3]);
         match self.index(name) {
             Some(i) => {
                 if let Some(p) = self.list.get_mut(i) {
-                    p.a = a;
+                    p.a = v;
+                    p.known = a.is_some();
+                    p.estimated = false;
                     p.role = role.unwrap_or(p.role);
                 }
             }
             None => self.list.push(Position {
                 name: name.to_string(),
-                a,
+                a: v,
                 role: role.unwrap_or(Role::Calibration),
+                known: a.is_some(),
+                estimated: false,
             }),
         }
     }
@@ -146,7 +219,8 @@ impl Positions {
         Ok(())
     }
 
-    /// The built-ins plus a positions file (`name,fx,fy,fz[,role]`); returns the warnings.
+    /// The built-ins plus a positions file (`name,fx,fy,fz[,role]`; an empty vector,
+    /// `W0001,,,`, is a static pose of unknown orientation); returns the warnings.
     pub fn with_file(path: &Path) -> Result<(Positions, Vec<String>)> {
         let text = std::fs::read(path).map_err(|e| HostError::io(path, &e))?;
         let text =
@@ -173,6 +247,11 @@ impl Positions {
             };
             let fields: Vec<&str> = line.split(',').map(str::trim).collect();
             let (name, v, role) = parse_row(path, line_no, &fields, cols, role_col)?;
+            let Some(v) = v else {
+                pos.set_unknown(name, role);
+                n_rows += 1;
+                continue;
+            };
             let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
             if norm == 0.0 || !norm.is_finite() {
                 return Err(HostError::at(
@@ -200,7 +279,7 @@ impl Positions {
     }
 }
 
-type PositionRow<'a> = (&'a str, [f64; 3], Option<Role>);
+type PositionRow<'a> = (&'a str, Option<[f64; 3]>, Option<Role>);
 
 fn parse_row<'a>(
     path: &Path,
@@ -223,10 +302,22 @@ fn parse_row<'a>(
             "empty or `-` position name",
         ));
     }
-    let mut v = [0.0; 3];
-    for (slot, (k, fname)) in v.iter_mut().zip([(xi, "fx"), (yi, "fy"), (zi, "fz")]) {
-        *slot = fields::number(path, line_no, fname, get(k, fname)?)?;
-    }
+    let cols = [(xi, "fx"), (yi, "fy"), (zi, "fz")];
+    let raw: Vec<&str> = cols
+        .iter()
+        .map(|(k, f)| get(*k, f))
+        .collect::<Result<_>>()?;
+    // all three empty: a pose whose orientation is to be estimated; one or two empty is
+    // a damaged line, not a convention
+    let v = if raw.iter().all(|s| s.is_empty()) {
+        None
+    } else {
+        let mut v = [0.0; 3];
+        for (slot, (s, (_, fname))) in v.iter_mut().zip(raw.iter().zip(cols)) {
+            *slot = fields::number(path, line_no, fname, s)?;
+        }
+        Some(v)
+    };
     let role = match role_col
         .and_then(|k| fields.get(k))
         .filter(|s| !s.is_empty())
@@ -242,4 +333,33 @@ fn parse_row<'a>(
         })?),
     };
     Ok((name, v, role))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_vector_is_a_pose_of_unknown_orientation() {
+        let text = "name,fx,fy,fz,role\nW1,,,\nW2,0,0,2,verification\nTP1,,,,\n";
+        let (p, _) = Positions::parse(Path::new("p.csv"), text).unwrap();
+        let w1 = p.index("W1").unwrap();
+        assert!(!p.is_known(w1) && p.vector(w1).iter().all(|v| v.is_nan()));
+        assert!(p.has_role(w1, Role::Calibration));
+        assert_eq!(p.vector(p.index("W2").unwrap()), [0.0, 0.0, 1.0]);
+        // a built-in may be declared unknown too
+        let tp1 = p.index("TP1").unwrap();
+        assert!(!p.is_known(tp1));
+        let e = p.require_known([tp1, w1], "the fit").unwrap_err();
+        assert!(
+            e.message.contains("`TP1`") && e.message.contains("2 of unknown"),
+            "{e}"
+        );
+        let mut q = p.clone();
+        q.set_estimated(w1, [1.0, 0.0, 0.0]);
+        assert!(q.is_known(w1) && q.is_estimated(w1));
+        // half a vector is an error naming the field
+        let e = Positions::parse(Path::new("p.csv"), "name,fx,fy,fz\nW1,1,,\n").unwrap_err();
+        assert_eq!((e.line, e.field.as_deref()), (Some(2), Some("fy")), "{e}");
+    }
 }

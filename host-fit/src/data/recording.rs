@@ -76,6 +76,8 @@ pub struct Recording {
 
 /// Dwells shorter than this are warned about.
 pub const MIN_DWELL_SAMPLES: usize = 3;
+/// More short dwells than this are summarised in one warning.
+pub const MAX_NAMED_SHORT_DWELLS: usize = 3;
 /// A dwell whose temperature moves more than this (C) is warned about.
 pub const MAX_DWELL_DRIFT_C: f64 = 0.5;
 
@@ -203,6 +205,7 @@ impl Recording {
     }
 
     fn build_dwells(&mut self) {
+        let mut short: Vec<String> = Vec::new();
         let mut i = 0;
         while i < self.rows.len() {
             let Some(pos) = self.rows.get(i).and_then(|r| r.position) else {
@@ -237,7 +240,7 @@ impl Recording {
             let last = slice.last().map(|r| r.line).unwrap_or(0);
             let name = self.positions.name(pos).to_string();
             if d.len() < MIN_DWELL_SAMPLES {
-                self.warnings.push(format!(
+                short.push(format!(
                     "{}:{first}-{last}: dwell in {name} has {} samples (< {MIN_DWELL_SAMPLES}); used anyway",
                     self.path.display(),
                     d.len()
@@ -245,13 +248,32 @@ impl Recording {
             }
             if d.temp_span_c > MAX_DWELL_DRIFT_C {
                 self.warnings.push(format!(
-                    "{}:{first}-{last}: temperature drifts {:.2} C within the dwell in {name} (> {MAX_DWELL_DRIFT_C} C); used as windows at their own temperatures",
+                    "{}:{first}-{last}: temperature drifts {:.2} C within the dwell in {name} (> {MAX_DWELL_DRIFT_C} C): not in thermal equilibrium, left out of static fits",
                     self.path.display(),
                     d.temp_span_c
                 ));
             }
             self.dwells.push(d);
         }
+        self.summarise_short(short);
+    }
+
+    /// A few short dwells are named one by one; many (a dwell-averaged recording, one row
+    /// per position and temperature) are one warning, not one per dwell.
+    fn summarise_short(&mut self, short: Vec<String>) {
+        if short.len() <= MAX_NAMED_SHORT_DWELLS {
+            self.warnings.extend(short);
+            return;
+        }
+        let single = self.dwells.iter().filter(|d| d.len() == 1).count();
+        self.warnings.push(format!(
+            "{}: {} of {} dwells have fewer than {MIN_DWELL_SAMPLES} samples ({single} have one: \
+             a dwell-averaged recording?); used anyway, and where no dwell has two samples the \
+             noise is taken from the fit's residual scatter, not from successive samples",
+            self.path.display(),
+            short.len(),
+            self.dwells.len()
+        ));
     }
 
     /// Rows of a dwell.

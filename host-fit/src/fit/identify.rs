@@ -24,6 +24,9 @@ pub struct Obs {
     pub dwell: usize,
     /// Mean time, s.
     pub t_s: f64,
+    /// Whether the orientation `a` was estimated from the data (then no even-order
+    /// term is fitted: it is not separable from the directions).
+    pub estimated: bool,
 }
 
 /// Split every selected dwell into windows whose temperature spans at most `span_c`, so
@@ -55,6 +58,7 @@ pub fn observations(rec: &Recording, select: &dyn Fn(usize) -> bool, span_c: f64
                 n: w.len(),
                 dwell: di,
                 t_s: ts,
+                estimated: rec.positions.is_estimated(d.position),
             });
         }
     }

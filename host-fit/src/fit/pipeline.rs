@@ -1,13 +1,19 @@
-//! The fit pipeline: a recording's calibration dwells -> per-stop identification ->
-//! temperature model, by the joint route (every window at its own temperature) or the
-//! paper's per-stop route.
+//! The fit pipeline: a recording's calibration dwells -> temperature model, by the
+//! static route (the dwells taken in thermal equilibrium, each window at its own
+//! temperature: the default), the joint route (every window, ramps included) or the
+//! paper's per-stop route (formula (10) per stop, then a fit across stops); the model
+//! given, or chosen by the data (`fit::select`); poses of unknown orientation estimated
+//! first (`fit::orientation`).
 use crate::data::positions::Role;
 use crate::data::recording::Recording;
 use crate::data::table::TableRow;
 use crate::error::{HostError, Result};
-use crate::fit::identify::{identify_stop, observations, stops, StopCoeffs};
-use crate::fit::noise::noise;
-use crate::fit::temperature::{fit_joint, fit_table, temperature_clusters, Basis, ModelFit};
+use crate::fit::equilibrium::{static_observations, Excluded};
+use crate::fit::identify::{identify_stop, observations, stops, Obs, StopCoeffs};
+use crate::fit::noise::{noise, Noise};
+use crate::fit::orientation::{estimate_with, has_unknown, provisional_basis, Orientation};
+use crate::fit::select::{choose_among, Selection};
+use crate::fit::temperature::{fit_joint_frame, fit_table, temperature_clusters, Basis, ModelFit};
 
 /// Temperature model kind.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -21,7 +27,11 @@ pub enum ModelKind {
 /// Identification route.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Route {
-    /// All dwells at once, each (window) at its own temperature.
+    /// The dwells taken in thermal equilibrium (temperature span <= 0.5 C), each window
+    /// at its own temperature, all at once.
+    Static,
+    /// Every dwell, ramps included (their dynamics are not modelled), each window at
+    /// its own temperature.
     Joint,
     /// The paper's route: formula (10) per stop, then a fit across stops.
     PerStop,
@@ -31,6 +41,7 @@ impl Route {
     /// The name used in outputs.
     pub fn name(self) -> &'static str {
         match self {
+            Route::Static => "static",
             Route::Joint => "joint",
             Route::PerStop => "per-stop",
         }
@@ -42,7 +53,7 @@ impl Route {
 pub struct ModelChoice {
     /// Family.
     pub kind: ModelKind,
-    /// Polynomial order (default: 3, or less with fewer temperatures).
+    /// Polynomial order (default: 3, or less with fewer temperatures; 0 with one).
     pub order: Option<usize>,
     /// Breakpoints, C (default: the given temperatures).
     pub breakpoints: Option<Vec<f64>>,
@@ -55,7 +66,7 @@ impl ModelChoice {
             ModelKind::Poly => Basis::Poly {
                 order: self
                     .order
-                    .unwrap_or_else(|| 3.min(temps.len().saturating_sub(1)).max(1)),
+                    .unwrap_or_else(|| 3.min(temps.len().saturating_sub(1))),
             },
             ModelKind::Pwl => Basis::Pwl {
                 breakpoints: self.breakpoints.clone().unwrap_or_else(|| temps.to_vec()),
@@ -66,6 +77,15 @@ impl ModelChoice {
 
 /// Per-stop identification of the calibration positions.
 pub fn identify_stops(rec: &Recording) -> Result<Vec<StopCoeffs>> {
+    rec.positions
+        .require_known(
+            rec.dwells
+                .iter()
+                .map(|d| d.position)
+                .filter(|p| rec.positions.has_role(*p, Role::Calibration)),
+            "identification per stop",
+        )
+        .map_err(|e| HostError::in_file(&rec.path, e.message))?;
     let nz = noise(rec);
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
     let st = stops(rec, &cal, 3.0);
@@ -82,8 +102,167 @@ pub fn identify_stops(rec: &Recording) -> Result<Vec<StopCoeffs>> {
 pub struct FitOutcome {
     /// The fitted model.
     pub fit: ModelFit,
-    /// Per-stop identification (for the report and the paper comparison).
+    /// Per-stop identification (for the report and the paper comparison; empty when
+    /// the positions do not form full stops).
     pub stops: Vec<StopCoeffs>,
+    /// The noise the fit was weighted with.
+    pub noise: Noise,
+    /// How the data chose the model (None when it was given).
+    pub selection: Option<Selection>,
+    /// The dwells the equilibrium rule left out.
+    pub excluded: Excluded,
+    /// The estimated orientations, when the recording has poses of unknown orientation.
+    pub orientation: Option<Orientation>,
+}
+
+/// What the user asked of the model: a family (or the data's choice) and, for it, an
+/// order or breakpoints.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelRequest {
+    /// The family; None: chosen by the data.
+    pub kind: Option<ModelKind>,
+    /// `--order`.
+    pub order: Option<usize>,
+    /// `--breakpoints`.
+    pub breakpoints: Option<Vec<f64>>,
+}
+
+impl ModelRequest {
+    /// An option that does not apply to the family is an error, never ignored.
+    pub fn check(&self) -> Result<()> {
+        match (self.kind, &self.order, &self.breakpoints) {
+            (Some(ModelKind::Pwl), Some(_), _) => Err(HostError::msg(
+                "--order applies to a polynomial model, not to --model pwl (give --breakpoints)",
+            )),
+            (Some(ModelKind::Poly), _, Some(_)) => Err(HostError::msg(
+                "--breakpoints apply to a piecewise-linear model, not to --model poly (give --order)",
+            )),
+            (None, Some(_), Some(_)) => Err(HostError::msg(
+                "--order and --breakpoints belong to different models; give --model",
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// With the family chosen by the data as `chosen`, the basis the request makes of
+    /// it: an order or breakpoints given must fit the chosen family.
+    fn refine(&self, chosen: &Basis) -> Result<Basis> {
+        match (chosen, self.order, &self.breakpoints) {
+            (Basis::Poly { .. }, Some(order), _) => Ok(Basis::Poly { order }),
+            (Basis::Pwl { .. }, _, Some(b)) => Ok(Basis::Pwl {
+                breakpoints: b.clone(),
+            }),
+            (Basis::Pwl { .. }, Some(_), _) => Err(HostError::msg(format!(
+                "--order applies to a polynomial model; the data chose {} (give --model poly to insist)",
+                chosen.describe()
+            ))),
+            (Basis::Poly { .. }, _, Some(_)) => Err(HostError::msg(format!(
+                "--breakpoints apply to a piecewise-linear model; the data chose {} (give --model pwl to insist)",
+                chosen.describe()
+            ))),
+            _ => Ok(chosen.clone()),
+        }
+    }
+}
+
+/// The recording with its poses of unknown orientation estimated (with the
+/// temperature model `basis`, or the provisional one), and the estimate; the recording
+/// unchanged when it has none.
+pub fn with_orientations(
+    rec: &Recording,
+    basis: Option<&Basis>,
+) -> Result<(Option<Recording>, Option<Orientation>)> {
+    if !has_unknown(rec) {
+        return Ok((None, None));
+    }
+    let basis = match basis {
+        Some(b) => b.clone(),
+        None => {
+            let (obs, _) = static_calibration(rec);
+            provisional_basis(&obs.iter().map(|o| o.temp_c).collect::<Vec<_>>())
+        }
+    };
+    let o = estimate_with(rec, &basis)?;
+    let mut r = rec.clone();
+    r.positions = o.positions.clone();
+    Ok((Some(r), Some(o)))
+}
+
+/// Whether the estimated poses left the frame to the convention (no known pose fixed
+/// it): then every fit keeps K(T) lower triangular, as the estimate did.
+fn free_frame(o: Option<&Orientation>) -> bool {
+    o.is_some_and(|o| o.frame.is_some())
+}
+
+fn static_calibration(rec: &Recording) -> (Vec<Obs>, Excluded) {
+    let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
+    static_observations(rec, &cal, 0.25)
+}
+
+fn require_known(rec: &Recording, obs: &[Obs]) -> Result<()> {
+    rec.positions
+        .require_known(obs.iter().map(|o| o.position), "the fit")
+        .map_err(|e| HostError::in_file(&rec.path, e.message))
+}
+
+/// The static route with the model the request leaves to the data (see the module
+/// doc): the family and its order or breakpoints, or only the order or breakpoints
+/// within a family the user named; poses of unknown orientation are estimated with the provisional model, the
+/// model chosen, and the poses estimated again with it.
+pub fn fit_chosen(rec: &Recording, req: &ModelRequest) -> Result<FitOutcome> {
+    req.check()?;
+    let family: &dyn Fn(&Basis) -> bool = match (req.kind, &req.order, &req.breakpoints) {
+        (None, _, _) => &|_| true,
+        // the family and its order or breakpoints given: nothing is left to choose
+        (Some(kind), Some(_), _) | (Some(kind), _, Some(_)) => {
+            let choice = ModelChoice {
+                kind,
+                order: req.order,
+                breakpoints: req.breakpoints.clone(),
+            };
+            return fit_recording(rec, &choice, Route::Static);
+        }
+        (Some(ModelKind::Poly), None, None) => &|b| matches!(b, Basis::Poly { .. }),
+        (Some(ModelKind::Pwl), None, None) => &|b| matches!(b, Basis::Pwl { .. }),
+    };
+    let (est, first) = with_orientations(rec, None)?;
+    let lower = free_frame(first.as_ref());
+    let r = est.as_ref().unwrap_or(rec);
+    let (obs, excluded) = static_calibration(r);
+    require_known(r, &obs)?;
+    if obs.is_empty() {
+        return Err(no_static(rec, &excluded));
+    }
+    let nz = noise(r);
+    let selection = choose_among(&obs, &nz, (r.t0_c, lower), &r.path, family)?;
+    let basis = req.refine(&selection.basis)?;
+    let (est, orientation) = with_orientations(rec, Some(&basis))?;
+    let r = est.as_ref().unwrap_or(rec);
+    let (obs, _) = static_calibration(r);
+    let fit = fit_joint_frame(&obs, &nz, &basis, r.t0_c, &r.path, lower)?;
+    Ok(FitOutcome {
+        fit,
+        stops: identify_stops(r).unwrap_or_default(),
+        noise: nz,
+        selection: Some(selection),
+        excluded,
+        orientation,
+    })
+}
+
+fn no_static(rec: &Recording, ex: &Excluded) -> HostError {
+    HostError::in_file(
+        &rec.path,
+        format!(
+            "no calibration dwell was taken in thermal equilibrium (temperature steady within {} C){}",
+            crate::data::recording::MAX_DWELL_DRIFT_C,
+            if ex.dwells > 0 {
+                format!("; {}; --route joint uses them", ex.text())
+            } else {
+                String::new()
+            }
+        ),
+    )
 }
 
 /// The stops' distinct temperatures, rounded to 0.01 C (the default breakpoints).
@@ -97,32 +276,90 @@ pub fn stop_temperatures(stops: &[StopCoeffs]) -> Vec<f64> {
     b
 }
 
-/// Fit a recording's calibration positions: the joint route by default, the per-stop
-/// route on request.
+/// The distinct temperatures of observations, rounded to 0.01 C (the default
+/// breakpoints of the static and joint routes).
+fn obs_temperatures(obs: &[Obs]) -> Vec<f64> {
+    let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
+    let mut b: Vec<f64> = temperature_clusters(&temps)
+        .iter()
+        .map(|t| (t * 100.0).round() / 100.0)
+        .collect();
+    b.dedup();
+    b
+}
+
+/// Fit a recording's calibration positions with the model given in `choice`, by
+/// `route`; poses of unknown orientation are estimated first (with that model).
 pub fn fit_recording(rec: &Recording, choice: &ModelChoice, route: Route) -> Result<FitOutcome> {
+    match route {
+        Route::PerStop => fit_per_stop(rec, choice),
+        Route::Static | Route::Joint => fit_windows(rec, choice, route),
+    }
+}
+
+fn fit_windows(rec: &Recording, choice: &ModelChoice, route: Route) -> Result<FitOutcome> {
+    {
+        let (obs0, _) = static_calibration(rec);
+        let temps = obs_temperatures(&obs0);
+        let basis0 = choice.basis(&temps);
+        let (est, orientation) = with_orientations(rec, Some(&basis0))?;
+        let r = est.as_ref().unwrap_or(rec);
+        let (obs, excluded) = match route {
+            Route::Joint => {
+                let cal = |p: usize| r.positions.has_role(p, Role::Calibration);
+                (observations(r, &cal, 0.25), Excluded::default())
+            }
+            _ => static_calibration(r),
+        };
+        require_known(r, &obs)?;
+        if obs.is_empty() {
+            return Err(no_static(rec, &excluded));
+        }
+        // the default breakpoints are the static dwells' temperatures (the stops), also
+        // on the joint route, whose ramp windows would make every 2 C a breakpoint
+        let basis = if obs0.is_empty() {
+            choice.basis(&obs_temperatures(&obs))
+        } else {
+            basis0
+        };
+        let nz = noise(r);
+        let lower = free_frame(orientation.as_ref());
+        let fit = fit_joint_frame(&obs, &nz, &basis, r.t0_c, &r.path, lower)?;
+        Ok(FitOutcome {
+            fit,
+            stops: identify_stops(r).unwrap_or_default(),
+            noise: nz,
+            selection: None,
+            excluded,
+            orientation,
+        })
+    }
+}
+
+fn fit_per_stop(rec: &Recording, choice: &ModelChoice) -> Result<FitOutcome> {
+    let (est, orientation) = with_orientations(rec, None)?;
+    let rec = est.as_ref().unwrap_or(rec);
     let st = identify_stops(rec)?;
     let basis = match choice.kind {
         ModelKind::Poly => choice.basis(&st.iter().map(|s| s.temp_c).collect::<Vec<_>>()),
         ModelKind::Pwl => choice.basis(&stop_temperatures(&st)),
     };
-    let fit = match route {
-        Route::Joint => {
-            let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
-            let obs = observations(rec, &cal, 0.25);
-            fit_joint(&obs, &noise(rec), &basis, rec.t0_c, &rec.path)?
-        }
-        Route::PerStop => {
-            let rows: Vec<TableRow> = st
-                .iter()
-                .map(|s| TableRow {
-                    temp_c: s.temp_c,
-                    coeffs: s.coeffs,
-                    stderr: Some(s.stderr),
-                })
-                .collect();
-            fit_table(&rows, &basis, rec.t0_c)
-                .map_err(|e| HostError::in_file(&rec.path, e.message))?
-        }
-    };
-    Ok(FitOutcome { fit, stops: st })
+    let rows: Vec<TableRow> = st
+        .iter()
+        .map(|s| TableRow {
+            temp_c: s.temp_c,
+            coeffs: s.coeffs,
+            stderr: Some(s.stderr),
+        })
+        .collect();
+    let fit =
+        fit_table(&rows, &basis, rec.t0_c).map_err(|e| HostError::in_file(&rec.path, e.message))?;
+    Ok(FitOutcome {
+        fit,
+        stops: st,
+        noise: noise(rec),
+        selection: None,
+        excluded: Excluded::default(),
+        orientation,
+    })
 }

@@ -12,6 +12,11 @@ use firmware_core::temperature::{
 use nalgebra::{DMatrix, DVector};
 use std::path::Path;
 
+/// The valid range of a fitted model reaches this far (C) beyond its data: a dwell at
+/// the last stop, taken while the case still settles, reads a few tenths of a degree
+/// past the calibration dwells, and a model is no worse there than at its data's edge.
+pub const RANGE_MARGIN_C: f64 = 1.0;
+
 /// Polynomial fits work in `dT / POLY_SCALE_C` for conditioning.
 const POLY_SCALE_C: f64 = 50.0;
 
@@ -20,7 +25,8 @@ const POLY_SCALE_C: f64 = 50.0;
 pub enum Basis {
     /// Polynomial of `dT = T - T0`.
     Poly {
-        /// Order 1..=5.
+        /// Order 0..=5 (0: one temperature, no temperature dependence; the firmware
+        /// table then carries a zero slope).
         order: usize,
     },
     /// Piecewise-linear through strictly increasing breakpoints (C).
@@ -47,9 +53,9 @@ impl Basis {
     /// Check the order / breakpoints fit a firmware table.
     pub fn check(&self) -> Result<()> {
         match self {
-            Basis::Poly { order } if (1..=MAX_POLY_ORDER).contains(order) => Ok(()),
+            Basis::Poly { order } if *order <= MAX_POLY_ORDER => Ok(()),
             Basis::Poly { order } => Err(HostError::msg(format!(
-                "polynomial order {order} is outside 1..={MAX_POLY_ORDER}"
+                "polynomial order {order} is outside 0..={MAX_POLY_ORDER}"
             ))),
             Basis::Pwl { breakpoints } => {
                 if !(2..=MAX_BREAKPOINTS).contains(&breakpoints.len()) {
@@ -129,12 +135,39 @@ pub struct ModelFit {
     pub n_obs: usize,
     /// Parameters fitted (all axes).
     pub n_params: usize,
+    /// Per axis (joint fits only): the solver's parameters' covariance, in the order
+    /// `a_x phi, a_y phi, a_z phi, phi[, a_i^2]` with `phi` = [`Basis::eval`], from the
+    /// weights (1/noise variance) alone; [`ModelFit::axis_scale`] says by how much the
+    /// residuals ask to widen it.
+    pub axis_cov: Vec<DMatrix<f64>>,
+    /// Per axis (joint fits only): weighted residual sum of squares and degrees of freedom.
+    pub axis_chi2: Vec<(f64, usize)>,
 }
 
 impl ModelFit {
     /// Bayesian information criterion of the fit.
     pub fn bic(&self) -> f64 {
         self.chi2 + self.n_params as f64 * (self.n_obs.max(1) as f64).ln()
+    }
+
+    /// Per axis, the factor on [`ModelFit::axis_cov`]: the reduced chi-square when it
+    /// exceeds 1 (scatter beyond the in-dwell noise: the model misfits, or dwells
+    /// differ by more than their samples do), else 1. With `noise_known` false the
+    /// weights carried no noise level (a dwell-averaged recording) and the reduced
+    /// chi-square is the variance itself.
+    pub fn axis_scale(&self, axis: usize, noise_known: bool) -> f64 {
+        let Some((chi2, dof)) = self.axis_chi2.get(axis) else {
+            return 1.0;
+        };
+        if *dof == 0 {
+            return if noise_known { 1.0 } else { f64::NAN };
+        }
+        let red = chi2 / *dof as f64;
+        if noise_known {
+            red.max(1.0)
+        } else {
+            red
+        }
     }
 }
 
@@ -145,13 +178,18 @@ impl ModelFit {
     }
 
     /// As a firmware calibration (f64 tables; `convert::<f32>()` for the blob). The
-    /// valid range is the data's, widened to the breakpoints of a pwl model.
+    /// valid range is the data's widened by [`RANGE_MARGIN_C`], and to the breakpoints
+    /// of a pwl model.
     pub fn calibration(&self, update_step_c: f64, clamp: bool) -> Calibration<f64> {
-        let (mut lo, mut hi) = self.t_range;
+        let (mut lo, mut hi) = (
+            self.t_range.0 - RANGE_MARGIN_C,
+            self.t_range.1 + RANGE_MARGIN_C,
+        );
         let model = match &self.basis {
             Basis::Poly { order } => TempModel::Poly {
-                terms: (0..=*order)
-                    .map(|k| std::array::from_fn(|c| self.params[c][k]))
+                // the firmware's table has at least a slope: order 0 stores a zero one
+                terms: (0..=(*order).max(1))
+                    .map(|k| std::array::from_fn(|c| self.params[c].get(k).copied().unwrap_or(0.0)))
                     .collect(),
             },
             Basis::Pwl { breakpoints } => {
@@ -243,6 +281,21 @@ pub fn fit_joint(
     t0: f64,
     path: &Path,
 ) -> Result<ModelFit> {
+    fit_joint_frame(obs, noise, basis, t0, path, false)
+}
+
+/// [`fit_joint`]; with `lower`, K(T) lower triangular at every temperature (kxy, kxz,
+/// kyz held at 0): the frame's convention when no pose's orientation is given, which
+/// also removes a rotation of the frame that varies with temperature (each pose is
+/// seen over a narrow span of temperatures, so such a rotation is all but invisible).
+pub fn fit_joint_frame(
+    obs: &[Obs],
+    noise: &Noise,
+    basis: &Basis,
+    t0: f64,
+    path: &Path,
+    lower: bool,
+) -> Result<ModelFit> {
     basis.check()?;
     let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
     check_coverage(basis, &temps).map_err(|e| HostError::in_file(path, e.message))?;
@@ -252,9 +305,10 @@ pub fn fit_joint(
     let mut stderr: [Vec<f64>; 12] = Default::default();
     let mut k2 = [None; 3];
     let (mut chi2, mut n_params) = (0.0, 0);
+    let (mut axis_cov, mut axis_chi2) = (Vec::new(), Vec::new());
     for axis in 0..3 {
         let (s, with_k2) =
-            fit_axis(obs, &phis, noise, axis).ok_or_else(|| rank_error(obs, path, basis))?;
+            fit_axis(obs, &phis, noise, axis, lower).ok_or_else(|| rank_error(obs, path, basis))?;
         let slots = [
             K_INDEX[axis][0],
             K_INDEX[axis][1],
@@ -272,8 +326,15 @@ pub fn fit_joint(
         if with_k2 {
             k2[axis] = Some(s.x[4 * nb]);
         }
+        let free =
+            s.x.iter()
+                .zip(s.cov.diagonal().iter())
+                .filter(|(_, v)| **v > 0.0)
+                .count();
         chi2 += s.wrss;
-        n_params += s.x.len();
+        n_params += free;
+        axis_chi2.push((s.wrss, obs.len().saturating_sub(free)));
+        axis_cov.push(s.cov);
     }
     let lo = temps.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = temps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -287,35 +348,77 @@ pub fn fit_joint(
         chi2,
         n_obs: 3 * obs.len(),
         n_params,
+        axis_cov,
+        axis_chi2,
     })
 }
 
 /// One axis of [`fit_joint`]: columns `a_j phi_k(T)` for j = x, y, z, 1 and, when the
-/// positions determine it, `a_axis^2`; returns the solution and whether it has that term.
-fn fit_axis(obs: &[Obs], phis: &[Vec<f64>], noise: &Noise, axis: usize) -> Option<(Lsq, bool)> {
+/// positions determine it and none was estimated, `a_axis^2`; returns the solution and
+/// whether it has that term.
+fn fit_axis(
+    obs: &[Obs],
+    phis: &[Vec<f64>],
+    noise: &Noise,
+    axis: usize,
+    lower: bool,
+) -> Option<(Lsq, bool)> {
     let nb = phis.first().map(Vec::len).unwrap_or(0);
     let var = noise.sigma[axis].powi(2);
     let w: Vec<f64> = obs.iter().map(|o| o.n as f64 / var).collect();
     let b = DVector::from_iterator(obs.len(), obs.iter().map(|o| o.u[axis]));
+    // the columns kept: with `lower`, K[axis][j] for j > axis is held at 0
+    let keep: Vec<usize> = (0..4).filter(|j| !lower || *j == 3 || *j <= axis).collect();
     let build = |with_k2: bool| {
-        let p = 4 * nb + usize::from(with_k2);
+        let p = keep.len() * nb + usize::from(with_k2);
         let mut a = DMatrix::zeros(obs.len(), p);
         for (r, (o, phi)) in obs.iter().zip(phis).enumerate() {
             let g = [o.a[0], o.a[1], o.a[2], 1.0];
-            for (j, gj) in g.iter().enumerate() {
+            for (jj, j) in keep.iter().enumerate() {
                 for (k, f) in phi.iter().enumerate() {
-                    a[(r, j * nb + k)] = gj * f;
+                    a[(r, jj * nb + k)] = g[*j] * f;
                 }
             }
             if with_k2 {
-                a[(r, 4 * nb)] = o.a[axis] * o.a[axis];
+                a[(r, p - 1)] = o.a[axis] * o.a[axis];
             }
         }
-        weighted_lsq(&a, &b, &w)
+        weighted_lsq(&a, &b, &w).map(|s| expand(s, &keep, nb, with_k2))
     };
-    match build(true) {
+    let given = obs.iter().all(|o| !o.estimated);
+    match build(given).filter(|_| given) {
         Some(s) => Some((s, true)),
         None => build(false).map(|s| (s, false)),
+    }
+}
+
+/// A reduced solution laid out in the full order `a_x phi, a_y phi, a_z phi, phi[, k2]`,
+/// the columns held at 0 with zero value and covariance.
+fn expand(s: Lsq, keep: &[usize], nb: usize, with_k2: bool) -> Lsq {
+    if keep.len() == 4 {
+        return s;
+    }
+    let p = 4 * nb + usize::from(with_k2);
+    let mut map: Vec<usize> = keep
+        .iter()
+        .flat_map(|j| (0..nb).map(move |k| j * nb + k))
+        .collect();
+    if with_k2 {
+        map.push(4 * nb);
+    }
+    let mut x = DVector::zeros(p);
+    let mut cov = DMatrix::zeros(p, p);
+    for (r, fr) in map.iter().enumerate() {
+        x[*fr] = s.x[r];
+        for (c, fc) in map.iter().enumerate() {
+            cov[(*fr, *fc)] = s.cov[(r, c)];
+        }
+    }
+    Lsq {
+        x,
+        cov,
+        wrss: s.wrss,
+        residuals: s.residuals,
     }
 }
 
@@ -429,5 +532,7 @@ pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> 
         chi2,
         n_obs: 12 * rows.len(),
         n_params: 12 * nb,
+        axis_cov: Vec::new(),
+        axis_chi2: Vec::new(),
     })
 }

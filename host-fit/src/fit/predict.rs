@@ -1,0 +1,258 @@
+//! The predicted compensation error: the fit's covariance propagated to formula (13).
+//!
+//! The compensated output is `a = N(T) (U - U0(T))`; an error `e_i` in the predicted
+//! output of axis i moves |a| by `-(a^T N)_i e_i`. Each axis is its own least squares,
+//! so `var(dg) = sum_i (a^T N)_i^2 g_i^T C_i g_i`, with `g_i` the design row of the
+//! direction `a` at `T` and `C_i` the axis's covariance, widened by its reduced
+//! chi-square when the residuals scatter more than the noise (misfit shows up here
+//! rather than being hidden). A dwell of `n` samples adds its own noise,
+//! `sum_i (a^T N)_i^2 sigma_i^2 / n` (widened by the same reduced chi-square: the scatter
+//! between calibration dwells beyond their in-dwell noise, a temperature reading's error
+//! among it, is a verification dwell's too). Between the calibration temperatures this is the
+//! uncertainty of the chosen model, not a bound on how far the truth may stray from the
+//! model's shape there: only data at those temperatures can show that.
+use crate::fit::noise::Noise;
+use crate::fit::temperature::{Basis, ModelFit};
+use firmware_core::model::{invert, Coeffs};
+use serde::Serialize;
+
+/// The predicted 1-sigma of |dg| at one temperature.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct PredictedPoint {
+    /// Temperature, C.
+    pub temp_c: f64,
+    /// 1-sigma of |dg| from the coefficients' uncertainty, worst of the directions, mg.
+    pub dg_1sigma_mg: f64,
+}
+
+/// The predicted compensation error against temperature.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Prediction {
+    /// The directions it is evaluated at (position names).
+    pub directions: Vec<String>,
+    /// The valid range, C.
+    pub t_min_c: f64,
+    /// The valid range, C.
+    pub t_max_c: f64,
+    /// On a grid over the valid range.
+    pub points: Vec<PredictedPoint>,
+    /// A verification dwell's own noise (1 sigma, mg) for a dwell of `dwell_samples`.
+    pub dwell_noise_1sigma_mg: f64,
+    /// The dwell length that is for.
+    pub dwell_samples: usize,
+    /// The firmware's cache step (`--update-step`), C.
+    pub cache_step_c: f64,
+    /// The most the cache's lag can add to |dg| (|d|a|/dT| x step, worst of the grid and
+    /// directions), mg; not part of the 1-sigma: it is the firmware's, not the model's.
+    pub cache_lag_max_mg: f64,
+    /// Where the noise level comes from.
+    pub noise_source: &'static str,
+    /// Per axis, the factor the residuals put on the covariance (reduced chi-square).
+    pub covariance_scale: [f64; 3],
+}
+
+/// `(a^T N(T))_i` and the per-axis design rows `g` at `t`; None when K is singular.
+fn sensitivity(fit: &ModelFit, t: f64, a: [f64; 3]) -> Option<([f64; 3], Vec<f64>)> {
+    let c = Coeffs::from_array(&fit.eval(t));
+    let n = invert(&c.k)?;
+    let w: [f64; 3] = std::array::from_fn(|i| (0..3).map(|j| a[j] * n[j][i]).sum());
+    let phi = fit.basis.eval(fit.t0_c, t);
+    let g: Vec<f64> = [a[0], a[1], a[2], 1.0]
+        .iter()
+        .flat_map(|gj| phi.iter().map(move |f| gj * f))
+        .collect();
+    Some((w, g))
+}
+
+/// 1-sigma of |dg| (g) at direction `a` and temperature `t` from the coefficients'
+/// uncertainty; NaN when the fit carries no covariance.
+pub fn sigma_model(fit: &ModelFit, noise: &Noise, t: f64, a: [f64; 3]) -> f64 {
+    let Some((w, g)) = sensitivity(fit, t, a) else {
+        return f64::NAN;
+    };
+    let mut var = 0.0;
+    for (i, wi) in w.iter().enumerate() {
+        let Some(c) = fit.axis_cov.get(i) else {
+            return f64::NAN;
+        };
+        let mut q = 0.0;
+        for (r, gr) in g.iter().enumerate() {
+            for (s, gs) in g.iter().enumerate() {
+                q += gr * c[(r, s)] * gs;
+            }
+        }
+        var += wi * wi * q * fit.axis_scale(i, noise.dof > 0);
+    }
+    var.max(0.0).sqrt()
+}
+
+/// The noise of one dwell's mean of `n` samples in |dg| (g) at direction `a`.
+pub fn sigma_dwell_noise(fit: &ModelFit, noise: &Noise, t: f64, a: [f64; 3], n: usize) -> f64 {
+    let Some((w, _)) = sensitivity(fit, t, a) else {
+        return f64::NAN;
+    };
+    let var: f64 = (0..3)
+        .map(|i| {
+            // without an in-dwell noise level the residual scatter of the fit's
+            // observations (one per dwell) is the only noise there is
+            // with it, the dwell-to-dwell scatter beyond it (the reduced chi-square of
+            // the calibration dwells) applies to a verification dwell too
+            let s2 = if noise.dof > 0 {
+                noise.sigma[i].powi(2) * fit.axis_scale(i, true)
+            } else {
+                fit.axis_scale(i, false)
+            };
+            w[i] * w[i] * s2 / n.max(1) as f64
+        })
+        .sum();
+    var.sqrt()
+}
+
+/// The 1-sigma of a verification dwell's |dg| (g): the model's and the dwell's own.
+pub fn sigma_dwell(fit: &ModelFit, noise: &Noise, t: f64, a: [f64; 3], n: usize) -> f64 {
+    sigma_model(fit, noise, t, a).hypot(sigma_dwell_noise(fit, noise, t, a, n))
+}
+
+/// The prediction over the valid range `(lo, hi)` at `dirs`, for dwells of
+/// `dwell_samples` samples.
+pub fn predict(
+    fit: &ModelFit,
+    noise: &Noise,
+    dirs: &[(String, [f64; 3])],
+    (lo, hi): (f64, f64),
+    (dwell_samples, update_step_c): (usize, f64),
+) -> Prediction {
+    let constant = is_constant(&fit.basis);
+    let n_pts = if constant { 0 } else { 11 };
+    let mut temps: Vec<f64> = (0..n_pts)
+        .map(|k| lo + (hi - lo) * k as f64 / (n_pts.max(2) - 1) as f64)
+        .collect();
+    if constant || (lo..=hi).contains(&fit.t0_c) {
+        temps.push(fit.t0_c);
+        temps.sort_by(f64::total_cmp);
+    }
+    let worst = |t: f64| {
+        dirs.iter()
+            .map(|(_, a)| sigma_model(fit, noise, t, *a))
+            .fold(0.0, f64::max)
+    };
+    let points = temps
+        .iter()
+        .map(|t| PredictedPoint {
+            temp_c: (t * 100.0).round() / 100.0,
+            dg_1sigma_mg: worst(*t) * 1e3,
+        })
+        .collect();
+    // the firmware recomputes N(T) only when T has moved by the step: until then the
+    // compensation lags by up to the step, |d|a|/dT| x step
+    let cache = temps
+        .iter()
+        .flat_map(|t| dirs.iter().map(move |(_, a)| (*t, *a)))
+        .map(|(t, a)| dg_slope(fit, t, a).abs() * update_step_c)
+        .fold(0.0, f64::max);
+    let dwell = dirs
+        .iter()
+        .map(|(_, a)| sigma_dwell_noise(fit, noise, fit.t0_c, *a, dwell_samples))
+        .fold(0.0, f64::max);
+    Prediction {
+        directions: dirs.iter().map(|(n, _)| n.clone()).collect(),
+        t_min_c: lo,
+        t_max_c: hi,
+        points,
+        dwell_noise_1sigma_mg: dwell * 1e3,
+        dwell_samples,
+        cache_step_c: update_step_c,
+        cache_lag_max_mg: cache * 1e3,
+        noise_source: if noise.dof > 0 {
+            "in-dwell (successive samples)"
+        } else {
+            "the fit's residual scatter (no dwell has two samples: a dwell-averaged recording)"
+        },
+        covariance_scale: std::array::from_fn(|i| fit.axis_scale(i, noise.dof > 0)),
+    }
+}
+
+/// How fast |a| read with the coefficients of `t` drifts from the truth as the
+/// coefficients' temperature is held while the unit's moves, g/C: `-(a^T N)(dK/dT a +
+/// dU0/dT)`, by central difference.
+fn dg_slope(fit: &ModelFit, t: f64, a: [f64; 3]) -> f64 {
+    let h = 0.05;
+    let Some((w, _)) = sensitivity(fit, t, a) else {
+        return 0.0;
+    };
+    let (up, dn) = (fit.eval(t + h), fit.eval(t - h));
+    let d: [f64; 12] = std::array::from_fn(|c| (up[c] - dn[c]) / (2.0 * h));
+    let dc = Coeffs::from_array(&d);
+    (0..3)
+        .map(|i| {
+            let du = (0..3).map(|j| dc.k[i][j] * a[j]).sum::<f64>() + dc.u0[i];
+            -w[i] * du
+        })
+        .sum()
+}
+
+/// Whether a basis is a constant (one temperature).
+pub fn is_constant(b: &Basis) -> bool {
+    matches!(b, Basis::Poly { order: 0 })
+}
+
+/// The directions a prediction is stated for: the recording's verification positions
+/// with a known vector, else its calibration positions; with their median dwell length.
+pub fn directions(rec: &crate::data::recording::Recording) -> (Vec<(String, [f64; 3])>, usize) {
+    use crate::data::positions::Role;
+    for role in [Role::Verification, Role::Calibration] {
+        let mut idx: Vec<usize> = rec
+            .dwells
+            .iter()
+            .map(|d| d.position)
+            .filter(|p| rec.positions.has_role(*p, role) && rec.positions.is_known(*p))
+            .collect();
+        idx.sort_unstable();
+        idx.dedup();
+        if idx.is_empty() {
+            continue;
+        }
+        let mut lens: Vec<usize> = rec
+            .dwells
+            .iter()
+            .filter(|d| idx.binary_search(&d.position).is_ok())
+            .map(|d| d.len())
+            .collect();
+        lens.sort_unstable();
+        let n = lens.get(lens.len() / 2).copied().unwrap_or(1);
+        let dirs = idx
+            .iter()
+            .map(|p| (rec.positions.name(*p).to_string(), rec.positions.vector(*p)))
+            .collect();
+        return (dirs, n);
+    }
+    (Vec::new(), 1)
+}
+
+/// The 1-sigma of the 12 coefficients at temperature `t` from the fit's covariance
+/// (widened as in [`sigma_model`]); zeros when the fit carries none.
+pub fn coefficient_sigma(fit: &ModelFit, noise: &Noise, t: f64) -> [f64; 12] {
+    use firmware_core::model::{K_INDEX, U0_INDEX};
+    let mut out = [0.0; 12];
+    let phi = fit.basis.eval(fit.t0_c, t);
+    let nb = phi.len();
+    for (axis, c) in fit.axis_cov.iter().enumerate().take(3) {
+        let scale = fit.axis_scale(axis, noise.dof > 0);
+        let slots = [
+            K_INDEX[axis][0],
+            K_INDEX[axis][1],
+            K_INDEX[axis][2],
+            U0_INDEX[axis],
+        ];
+        for (j, slot) in slots.iter().enumerate() {
+            let mut q = 0.0;
+            for (r, fr) in phi.iter().enumerate() {
+                for (s, fs) in phi.iter().enumerate() {
+                    q += fr * c[(j * nb + r, j * nb + s)] * fs;
+                }
+            }
+            out[*slot] = (q * scale).max(0.0).sqrt();
+        }
+    }
+    out
+}

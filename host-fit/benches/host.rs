@@ -11,7 +11,7 @@ use host_fit::simulate::{simulate, Stop};
 use std::path::Path;
 
 fn recording(stops: usize) -> String {
-    let mut cfg = host_fit::blind::profile(false);
+    let mut cfg = host_fit::blind::cases::profile(false);
     let temps = [20.0, -20.0, 10.0, 40.0, 10.0, 30.0, 0.0, 35.0, 15.0];
     let pos = cfg.schedule.positions.clone();
     cfg.schedule.stops = temps[..stops]

@@ -1,7 +1,7 @@
 //! The blind suite's cases beyond the catalogue's own forms, written from physics (not
 //! from the diagnosis): other forms of each effect, effects outside the catalogue, and
 //! clean recordings with the nuisances real data has.
-use crate::blind::{axes3, Case, Class};
+use crate::blind::cases::{axes3, Case, Class};
 use crate::rng::Rng;
 use crate::simulate::{
     Bend, BiasStep, Fixture, Gradient, PerAxis, Periodic, SimConfig, Stop, Warmup,
@@ -133,6 +133,15 @@ fn main_axis(rng: &mut Rng, size: f64) -> [f64; 3] {
 
 /// Conceal `case`'s form in `c`.
 pub fn apply(case: &Case, c: &mut SimConfig, rng: &mut Rng) {
+    match case.class {
+        Class::OtherForm => other_form(case, c, rng),
+        Class::Outside => outside(case, c, rng),
+        _ => nuisance(case, c),
+    }
+}
+
+/// A catalogue effect in another form.
+fn other_form(case: &Case, c: &mut SimConfig, rng: &mut Rng) {
     let e = &mut c.effects;
     let s = case.scale;
     match case.form {
@@ -209,6 +218,15 @@ pub fn apply(case: &Case, c: &mut SimConfig, rng: &mut Rng) {
                 angles_rad: angle(rng),
             });
         }
+        _ => {}
+    }
+}
+
+/// An effect outside the catalogue.
+fn outside(case: &Case, c: &mut SimConfig, rng: &mut Rng) {
+    let e = &mut c.effects;
+    let s = case.scale;
+    match case.form {
         "a sudden bias shift" => {
             e.bias_step = Some(BiasStep {
                 at_s: rng.range(6000.0, 12000.0),
@@ -236,6 +254,13 @@ pub fn apply(case: &Case, c: &mut SimConfig, rng: &mut Rng) {
                 value: main_axis(rng, 1e-4 * s),
             })
         }
+        _ => {}
+    }
+}
+
+/// A clean unit with a real-world nuisance.
+fn nuisance(case: &Case, c: &mut SimConfig) {
+    match case.form {
         "coloured voltage noise" => c.unit.noise_corr_s = 20.0,
         "spikes" => {
             c.unit.spike_rate = 2e-4;
@@ -264,9 +289,8 @@ pub fn apply(case: &Case, c: &mut SimConfig, rng: &mut Rng) {
     }
 }
 
-/// The axes an outside effect is on (all three for other cases).
-pub fn axes(case: &Case) -> Vec<usize> {
-    let c = crate::blind::configure(case);
+/// The axes an outside effect of configuration `c` is on (all three for other cases).
+pub fn axes(c: &SimConfig) -> Vec<usize> {
     let e = &c.effects;
     let v = e
         .bias_step

@@ -4,247 +4,24 @@
 //! within 3 sigma; other physical forms of an effect must still be named, and nothing
 //! else; effects outside the catalogue must get no catalogue name, the residual located
 //! on the right axis; clean recordings with real-world nuisances must get no physics.
+pub mod cases;
+pub mod config;
 pub mod forms;
+pub mod outcome;
 pub mod report;
+
+pub use cases::{Case, Class, EFFECTS};
+pub use config::configure;
+pub use outcome::Outcome;
+pub use report::report;
 
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::diagnose::diagnose;
 use crate::diagnose::findings::Finding;
 use crate::diagnose::metrics::normalized_rms;
-use crate::diagnose::EFFECT_IDS;
-use crate::rng::Rng;
-use crate::simulate::{simulate, Curvature, Fixture, PerAxis, SimConfig, Stop, Warmup};
-pub use report::report;
+use crate::simulate::{simulate, SimConfig};
 use std::path::Path;
-
-/// What a case tests.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Class {
-    /// Catalogue effects in the catalogue's own form (and clean recordings).
-    Catalogue,
-    /// A catalogue effect in another physically plausible form.
-    OtherForm,
-    /// An effect outside the catalogue.
-    Outside,
-    /// A clean recording with a real-world nuisance.
-    Nuisance,
-}
-
-impl Class {
-    /// The class's name in reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Class::Catalogue => "catalogue effects, catalogue form",
-            Class::OtherForm => "catalogue effects, other forms",
-            Class::Outside => "effects outside the catalogue",
-            Class::Nuisance => "clean recordings with nuisances",
-        }
-    }
-}
-
-/// One blind case.
-#[derive(Debug, Clone)]
-pub struct Case {
-    /// What it tests.
-    pub class: Class,
-    /// The form concealed (classes other than the catalogue's), a [`forms`] name.
-    pub form: &'static str,
-    /// The effects expected to be named (catalogue ids); empty = none.
-    pub effects: Vec<&'static str>,
-    /// Magnitude in units of the effect's nominal size (1 = clearly visible).
-    pub scale: f64,
-    /// Seed of the simulation and of the random axes/signs.
-    pub seed: u64,
-    /// Only TP positions (then k2 and asymmetry cannot be told apart).
-    pub tp_only: bool,
-}
-
-impl Case {
-    /// A catalogue case: `effects` in the catalogue's form.
-    pub fn catalogue(effects: Vec<&'static str>, scale: f64, seed: u64) -> Case {
-        Case {
-            class: Class::Catalogue,
-            form: "",
-            effects,
-            scale,
-            seed,
-            tp_only: false,
-        }
-    }
-
-    /// The case's name in reports.
-    pub fn name(&self) -> String {
-        let base = if !self.form.is_empty() {
-            self.form.to_string()
-        } else if self.effects.is_empty() {
-            "clean".to_string()
-        } else {
-            self.effects.join("+")
-        };
-        base + if self.tp_only { " (TP only)" } else { "" }
-    }
-}
-
-/// The outcome of a case.
-#[derive(Debug, Clone)]
-pub struct Outcome {
-    /// The case.
-    pub case: Case,
-    /// Effects found.
-    pub found: Vec<String>,
-    /// Ambiguous groups.
-    pub ambiguous: Vec<Vec<String>>,
-    /// Found exactly the concealed set (ambiguity counts when expected).
-    pub exact: bool,
-    /// Parameters within 3 sigma (None when not checked).
-    pub params_ok: Option<bool>,
-    /// Final residual over the floor.
-    pub final_over_noise: f64,
-    /// The verdict.
-    pub verdict: String,
-    /// The axis where the final residual is largest, when unexplained.
-    pub unexplained_axis: Option<String>,
-    /// Data-quality note kinds.
-    pub quality: Vec<String>,
-    /// Notes for the report.
-    pub note: String,
-}
-
-impl Outcome {
-    /// Every effect named, found or ambiguous.
-    pub fn named(&self) -> Vec<String> {
-        let mut named: Vec<String> = self.found.clone();
-        named.extend(self.ambiguous.iter().flatten().cloned());
-        named
-    }
-
-    /// The case passed, by its class's rule (see the module doc).
-    pub fn passed(&self) -> bool {
-        match self.case.class {
-            Class::Catalogue | Class::OtherForm => self.exact,
-            Class::Outside => self.named().is_empty() && self.located(),
-            Class::Nuisance => self.named().is_empty() && self.noted(),
-        }
-    }
-
-    /// Outside the catalogue: the unexplained residual sits on an axis the effect is on
-    /// (or nothing was seen at all).
-    pub fn located(&self) -> bool {
-        let axes = forms::axes(&self.case);
-        match &self.unexplained_axis {
-            Some(a) => axes.iter().any(|i| ["x", "y", "z"][*i] == a),
-            None => self.verdict == "none",
-        }
-    }
-
-    /// A nuisance: the data-quality note it should raise is there.
-    pub fn noted(&self) -> bool {
-        forms::note(&self.case).is_none_or(|k| self.quality.iter().any(|q| q == k))
-    }
-}
-
-/// The short test profile: 20 -> -20 -> 10 -> 40 -> 10 C (the last stop reached by
-/// cooling), TP1..TP6 and PP1..PP6 at each, 1 C/min ramps, 20 min soaks.
-pub fn profile(tp_only: bool) -> SimConfig {
-    let mut c = SimConfig::default();
-    c.unit.serial = "BLIND".into();
-    let pos: Vec<String> = if tp_only {
-        (1..=6).map(|i| format!("TP{i}")).collect()
-    } else {
-        c.schedule.positions.clone()
-    };
-    c.schedule.positions = pos.clone();
-    c.schedule.stops = [20.0, -20.0, 10.0, 40.0, 10.0]
-        .iter()
-        .map(|t| Stop {
-            temp_c: *t,
-            soak_s: 1200.0,
-            ramp_c_per_min: 1.0,
-            positions: Some(pos.clone()),
-        })
-        .collect();
-    c
-}
-
-pub(crate) fn axes3(rng: &mut Rng, scale: f64, size: f64) -> [f64; 3] {
-    // one or two axes, random signs, 0.7..1.3 of the size
-    let main = (rng.next_u64() % 3) as usize;
-    let mut v = [0.0; 3];
-    for (i, x) in v.iter_mut().enumerate() {
-        if i == main || rng.uniform() < 0.3 {
-            let s = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
-            *x = s * size * scale * rng.range(0.7, 1.3);
-        }
-    }
-    v
-}
-
-/// Conceal the effects of `case` in the profile; returns the config.
-pub fn configure(case: &Case) -> SimConfig {
-    let mut c = profile(case.tp_only);
-    c.seed = case.seed;
-    let mut rng = Rng::new(case.seed ^ 0xB11D);
-    if case.class != Class::Catalogue {
-        forms::apply(case, &mut c, &mut rng);
-        return c;
-    }
-    for e in &case.effects {
-        let s = case.scale;
-        match *e {
-            "thermal_lag" => {
-                c.effects.thermal_lag = Some(PerAxis {
-                    value: [rng.range(300.0, 900.0); 3],
-                })
-            }
-            "temp_rate" => {
-                c.effects.temp_rate = Some(PerAxis {
-                    value: axes3(&mut rng, s, 0.02),
-                })
-            }
-            "hysteresis" => {
-                c.effects.hysteresis = Some(PerAxis {
-                    value: axes3(&mut rng, s, 1e-4),
-                })
-            }
-            "nonlinearity_k2" => {
-                c.effects.nonlinearity_k2 = Some(PerAxis {
-                    value: axes3(&mut rng, s, 1e-4),
-                })
-            }
-            "scale_asymmetry" => {
-                c.effects.scale_asymmetry = Some(PerAxis {
-                    value: axes3(&mut rng, s, 2e-4),
-                })
-            }
-            "fixture_error" => {
-                let p = ["TP2", "TP3", "TP5", "PP1", "PP4"][(rng.next_u64() % 5) as usize];
-                c.effects.fixture_error = Some(Fixture {
-                    position: p.into(),
-                    angles_rad: [
-                        rng.range(-2e-4, 2e-4) * s + 2e-4 * s,
-                        rng.range(-2e-4, 2e-4) * s,
-                    ],
-                });
-            }
-            "warmup_drift" => {
-                c.effects.warmup_drift = Some(Warmup {
-                    d_v: axes3(&mut rng, s, 2e-4),
-                    tau_s: rng.range(600.0, 2400.0),
-                })
-            }
-            "temp_curvature" => {
-                c.effects.temp_curvature = Some(Curvature {
-                    u0_v: axes3(&mut rng, s, 1e-4),
-                    k_rel: [0.0; 3],
-                    period_c: 25.0,
-                })
-            }
-            _ => {}
-        }
-    }
-    c
-}
 
 /// Run one case.
 pub fn run(case: &Case) -> Outcome {
@@ -382,8 +159,6 @@ fn params_within_3_sigma(cfg: &SimConfig, findings: &[Finding]) -> Option<bool> 
     params_ok
 }
 
-/// Every catalogue effect the simulator conceals.
-pub const EFFECTS: [&str; 8] = EFFECT_IDS;
 
 /// The suite: per seed, a clean recording, each catalogue effect at several magnitudes,
 /// pairs, the TP-only ambiguity, and one case of every other form, outside effect and

@@ -1,6 +1,7 @@
 //! The blind suite's report: every case, the catalogue class's confusion matrix,
 //! detection by magnitude and scores, and the other classes form by form.
-use crate::blind::{Class, Outcome, EFFECTS};
+use crate::blind::cases::{Class, EFFECTS};
+use crate::blind::outcome::Outcome;
 
 /// One line per case: what was concealed and what was named.
 fn case_lines(outcomes: &[Outcome]) -> String {

@@ -1,17 +1,65 @@
-//! The extended model as a firmware calibration, for `diagnose --out`: the final model's
-//! coefficients as a piecewise-linear table and the in-flight physics terms it found, in
-//! exactly the form that was fitted (a form the firmware cannot apply is refused, never
-//! approximated).
-use crate::diagnose::effects::{Extra, Restart};
+//! The extended model as a firmware calibration, for `diagnose --out`: the final model in
+//! the forms the firmware applies (one lag pole for all axes, hysteresis of the offsets,
+//! one warm-up since power-on), refitted in those forms where the diagnosis found a
+//! richer one, so the blob carries exactly a model that was fitted; its coefficients as a
+//! piecewise-linear table and its in-flight physics terms.
+use crate::diagnose::design::{Data, Fit};
+use crate::diagnose::effects::Extra;
 use crate::diagnose::params::{Param, Term};
+use crate::diagnose::profile::time_constant;
+use crate::diagnose::regressors::alpha;
 use crate::diagnose::Diagnosis;
 use crate::error::{HostError, Result};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
 
+/// `f` in the firmware's forms, refitted (a single lag pole profiled again) where it
+/// differs; `f` itself when it is already flashable or a refit is not determined.
+pub fn flashable(data: &Data, f: &Fit) -> Fit {
+    let mut spec = f.spec.clone();
+    let mut changed = false;
+    let mut warmups = 0;
+    spec.extras.retain(|e| match e {
+        Extra::Warmup { .. } => {
+            warmups += 1;
+            changed |= warmups > 1;
+            warmups == 1
+        }
+        _ => true,
+    });
+    let mut lag_at = None;
+    for (i, e) in spec.extras.iter_mut().enumerate() {
+        match e {
+            Extra::Hysteresis { scale, .. } if *scale => {
+                *scale = false;
+                changed = true;
+            }
+            Extra::Lag { taus } if taus.iter().any(|t| *t != taus[0] || t[1] > 0.0) => {
+                lag_at = Some((i, taus.iter().map(|t| t[0] + t[1]).sum::<f64>() / 3.0));
+                changed = true;
+            }
+            _ => {}
+        }
+    }
+    if !changed {
+        return f.clone();
+    }
+    if let Some((i, tau)) = lag_at {
+        let make = |t: f64| {
+            let mut s = spec.clone();
+            s.extras[i] = Extra::Lag { taus: [[t, 0.0]; 3] };
+            data.fit(&s, None, false)
+        };
+        if let Some((t, _)) = time_constant(&make, tau / 1.7f64.powi(3), 7) {
+            spec.extras[i] = Extra::Lag { taus: [[t, 0.0]; 3] };
+        }
+    }
+    data.fit(&spec, None, true).unwrap_or_else(|| f.clone())
+}
+
 impl Diagnosis {
     /// The final model's values of a per-axis term of extra `e` (0 where not fitted).
     fn term(&self, e: usize, term: Term) -> [f64; 3] {
-        let f = &self.final_fit;
+        let f = &self.flashed;
         std::array::from_fn(|axis| {
             f.labels
                 .iter()
@@ -49,7 +97,7 @@ impl Diagnosis {
             )))
         };
         let mut any = false;
-        for (e, x) in self.final_fit.spec.extras.iter().enumerate() {
+        for (e, x) in self.flashed.spec.extras.iter().enumerate() {
             any |= !matches!(
                 x,
                 Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(_)
@@ -59,11 +107,11 @@ impl Diagnosis {
                     if taus.iter().any(|t| *t != taus[0] || t[1] > 0.0) {
                         return refuse("thermal lag (per-axis or two-pole)");
                     }
-                    ph.lag_alpha = crate::diagnose::regressors::alpha(dt, taus[0][0]);
+                    ph.lag_alpha = alpha(dt, taus[0][0]);
                 }
                 Extra::Rate { tau_s } => {
                     ph.rate = self.term(e, Term::Rate);
-                    ph.rate_alpha = crate::diagnose::regressors::alpha(dt, *tau_s);
+                    ph.rate_alpha = alpha(dt, *tau_s);
                 }
                 Extra::Hysteresis {
                     threshold_c,
@@ -79,11 +127,12 @@ impl Diagnosis {
                 }
                 Extra::K2 => ph.k2 = self.term(e, Term::K2),
                 Extra::Asymmetry => ph.asymmetry = self.term(e, Term::Asymmetry),
-                Extra::Warmup { tau_s, restart } => {
+                Extra::Warmup { tau_s, .. } => {
+                    // in flight the clock restarts at power-on only, as it does here at
+                    // the recording's start (and its gaps); handling does not happen
                     if ph.warmup != [0.0; 3] {
                         return refuse("second warm-up time constant");
                     }
-                    let _ = matches!(restart, Restart::Start);
                     ph.warmup = self.term(e, Term::Warmup);
                     ph.warmup_decay = (-dt / tau_s).exp();
                 }

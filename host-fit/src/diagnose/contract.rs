@@ -45,6 +45,8 @@ pub struct Contract {
     /// The final model.
     #[serde(rename = "final")]
     pub final_model: FinalFigures,
+    /// The model `--out` writes into the blob: the final one in the firmware's forms.
+    pub flashed: FlashedFigures,
     /// `none` (at the floor, nothing found), `explained` (findings bring it to the
     /// floor), `partly_explained` (findings, but above the floor), `unexplained` (above
     /// the floor, nothing in the catalogue explains it).
@@ -127,6 +129,19 @@ pub struct FinalFigures {
     pub heldout_chi2_before: f64,
     /// Held-out chi-square of the final model.
     pub heldout_chi2_after: f64,
+}
+
+/// The model the blob carries.
+#[derive(Debug, Clone, Serialize)]
+pub struct FlashedFigures {
+    /// Whether it is the final model itself (else refitted in the firmware's forms).
+    pub same_as_final: bool,
+    /// Its effects, with their forms.
+    pub model: Vec<String>,
+    /// Residual RMS in floor units.
+    pub residual_rms_over_noise: f64,
+    /// Worst |dg| in the static windows, mg.
+    pub max_abs_dg_mg: f64,
 }
 
 /// The blob written with `diagnose --out`.
@@ -234,6 +249,12 @@ impl Diagnosis {
                 heldout_chi2_before: held_before,
                 heldout_chi2_after: held_after,
             },
+            flashed: FlashedFigures {
+                same_as_final: self.flashed.spec == f.spec,
+                model: self.flashed.spec.extras.iter().map(|e| format!("{}: {}", e.id(), e.form())).collect(),
+                residual_rms_over_noise: normalized_rms(&data, &self.flashed),
+                max_abs_dg_mg: max_dg(&data, &self.flashed),
+            },
             verdict: self.verdict(final_rms <= AT_FLOOR_RMS),
             blob: None,
         }
@@ -268,13 +289,14 @@ impl Contract {
         }
         for x in &self.findings {
             s.push_str(&format!(
-                "finding: {} on axes {} ({}; dBIC {:.0}, {:.0}% of the excess, held-out gain {:.1} per parameter)\n",
+                "finding: {} on axes {} ({}; dBIC {:.0}, {:.0}% of the excess, held-out gain {:.1} per parameter; {})\n",
                 x.effect,
                 serde_json::to_string(&x.axes).unwrap_or_default(),
                 x.form,
                 x.delta_bic,
                 100.0 * x.share,
-                x.heldout_gain
+                x.heldout_gain,
+                if x.reproduced { "reproduced on both halves" } else { "NOT reproduced on both halves" }
             ));
             for (k, v) in &x.parameters {
                 let u = x.uncertainties.get(k).copied().unwrap_or(f64::NAN);
@@ -297,6 +319,15 @@ impl Contract {
             for x in u.located.iter().take(6) {
                 s.push_str(&hotspot_line(x));
             }
+        }
+        let fl = &self.flashed;
+        if !fl.same_as_final {
+            s.push_str(&format!(
+                "flashed (the firmware's forms, refitted): {}; residual {:.1}x the floor, max |dg| {:.3} mg\n",
+                fl.model.join("; "),
+                fl.residual_rms_over_noise,
+                fl.max_abs_dg_mg
+            ));
         }
         let f = &self.final_model;
         s.push_str(&format!(

@@ -128,7 +128,21 @@ impl Design {
     }
 }
 
-impl Data<'_> {
+impl<'a> Data<'a> {
+    /// A copy of the data (to fit it with other weights).
+    pub fn clone_parts(&self) -> Data<'a> {
+        Data {
+            rec: self.rec,
+            obs: self.obs.clone(),
+            spikes: self.spikes.clone(),
+            w: self.w.clone(),
+            t0: self.t0,
+            events: self.events.clone(),
+            rate: self.rate.clone(),
+            dir: self.dir.clone(),
+        }
+    }
+
     /// Residual rows.
     pub fn n_rows(&self) -> usize {
         3 * self.obs.len()

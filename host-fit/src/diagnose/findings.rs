@@ -31,6 +31,9 @@ pub struct Finding {
     pub share: f64,
     /// Held-out chi-square drop per parameter, in floor units.
     pub heldout_gain: f64,
+    /// The effect reproduces on both halves of the recording (alternate time chunks,
+    /// each fitted alone): it lowers each half's quasi-BIC by more than the margin.
+    pub reproduced: bool,
     /// Residual RMS of the final model (output units).
     pub residual_rms_after: f64,
     /// max |dg| of the final model, mg.
@@ -232,6 +235,7 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
         delta_bic: -j.gain,
         share: j.share,
         heldout_gain: j.heldout_gain,
+        reproduced: reproduced(data, full, reduced),
         residual_rms_after: residual_rms(full),
         max_abs_dg_mg_after: max_dg(data, full),
         evidence: evidence(data, full, reduced, extra),
@@ -239,6 +243,33 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
             Extra::Fixture(p) => Some(data.rec.positions.name(*p).to_string()),
             _ => None,
         },
+    })
+}
+
+/// Whether extra `e` shows the same signature on both halves of the data (even and odd
+/// time chunks, each spanning the whole recording): on each half alone, the residual
+/// without the effect projects onto the effect's contribution with an amplitude of 0.5 to
+/// 1.5 of the joint fit's, at least [`Z_SIGNIFICANT`] sigmas from zero. The rest of the
+/// model is held at the joint fit (a half alone need not determine it).
+pub fn reproduced(data: &Data, full: &Fit, reduced: &Fit) -> bool {
+    let c = contribution(data, full, reduced);
+    (0..2).all(|half| {
+        let (mut rc, mut cc, mut rr) = (0.0, 0.0, 0.0);
+        let mut n = 0usize;
+        for r in (0..data.n_rows()).filter(|r| data.obs[r / 3].chunk % 2 == half) {
+            let z = reduced.resid[r / 3][r % 3] * data.w[r].sqrt();
+            rc += z * c[r];
+            cc += c[r] * c[r];
+            rr += z * z;
+            n += 1;
+        }
+        if cc <= 0.0 {
+            return false;
+        }
+        let s = rc / cc;
+        let phi = ((rr - s * rc) / n.saturating_sub(1).max(1) as f64).max(1.0);
+        let z = s / (phi / cc).sqrt();
+        (0.5..=1.5).contains(&s) && z >= Z_SIGNIFICANT
     })
 }
 

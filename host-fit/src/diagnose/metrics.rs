@@ -44,8 +44,19 @@ pub fn z(data: &Data, f: &Fit) -> Vec<[f64; 3]> {
 
 /// max |dg| (mg) over the static windows: the position's |a| from the fitted model.
 pub fn max_dg(data: &Data, f: &Fit) -> f64 {
-    let mut worst: f64 = 0.0;
+    dg_per_window(data, f)
+        .into_iter()
+        .flatten()
+        .fold(0.0, |w, v| w.max(v.abs()))
+}
+
+/// dg (mg) of every window by the fitted model (None where the temperature moves faster
+/// than 0.002 C/s, or K is singular): the window's specific force from its mean outputs
+/// with the fitted in-flight terms removed, against 1 g.
+pub fn dg_per_window(data: &Data, f: &Fit) -> Vec<Option<f64>> {
+    let mut out = Vec::with_capacity(data.obs.len());
     for (r, o) in data.obs.iter().enumerate() {
+        out.push(None);
         if data.rate[r].abs() > 0.002 {
             continue;
         }
@@ -62,7 +73,7 @@ pub fn max_dg(data: &Data, f: &Fit) -> f64 {
             o.u[i] - (model - static_part)
         });
         let a = firmware_core::model::apply(&n, u, f.u0_at[r]);
-        worst = worst.max(firmware_core::model::dg(&a).abs() * 1e3);
+        out[r] = Some(firmware_core::model::dg(&a) * 1e3);
     }
-    worst
+    out
 }

@@ -70,7 +70,10 @@ pub struct Diagnosis {
     pub events: Events,
     /// Expected residual RMS from the floor alone (output units, per window).
     pub noise_rms: f64,
-    /// The final model's coefficients on a grid over the data's temperatures (for the blob).
+    /// The model the blob carries: the final one in the firmware's forms (one lag pole
+    /// for all axes, offsets-only hysteresis, one warm-up), refitted where it differs.
+    pub flashed: Fit,
+    /// The flashed model's coefficients on a grid over the data's temperatures.
     pub table: Vec<(f64, [f64; 12])>,
     /// Median sample period of the recording, s.
     pub sample_period_s: f64,
@@ -122,17 +125,32 @@ fn final_table(data: &Data, f: &Fit) -> Vec<(f64, [f64; 12])> {
     let nb = 16usize
         .min(((tmax - tmin) / 2.0).floor() as usize + 1)
         .max(2);
-    let grid: Vec<f64> = (0..nb)
+    let mut grid: Vec<f64> = (0..nb)
         .map(|k| tmin + (tmax - tmin) * k as f64 / (nb - 1) as f64)
         .collect();
+    // a bend sits on a breakpoint (the nearest interior one moves to it), so the table
+    // carries it sharp
+    for e in &f.spec.extras {
+        if let effects::Extra::Bend { knot_c } = e {
+            if let Some(g) = grid[1..nb - 1]
+                .iter_mut()
+                .min_by(|a, b| (**a - knot_c).abs().total_cmp(&(**b - knot_c).abs()))
+            {
+                *g = *knot_c;
+            }
+        }
+    }
+    grid.sort_by(f64::total_cmp);
+    grid.dedup();
     grid.iter()
         .zip(data.coefficients_at(f, &grid))
         .map(|(t, (k, u0))| (*t, firmware_core::model::Coeffs { k, u0 }.to_array()))
         .collect()
 }
 
-/// Weights from the floor, or (floor not measurable) from the baseline's own scatter per
-/// axis.
+/// Weights from the floor, or (floor not measurable) from the scatter per axis that the
+/// most general static model leaves (the baseline with every static catalogue term the
+/// positions determine: what none of the candidates could explain is the floor).
 fn weights(data: &mut Data, floor: &Floor) -> bool {
     let measured = floor.axes.iter().all(|a| !a.scales.is_empty());
     if measured {
@@ -147,9 +165,27 @@ fn weights(data: &mut Data, floor: &Floor) -> bool {
     }
     data.w = vec![1.0; data.n_rows()];
     if let Some((b, _)) = search::baseline(data) {
+        let general = [
+            vec![effects::Extra::K2, effects::Extra::Asymmetry],
+            vec![effects::Extra::K2],
+            vec![],
+        ]
+        .into_iter()
+        .find_map(|extras| {
+            let spec = design::Spec {
+                extras,
+                basis: crate::fit::temperature::Basis::Poly {
+                    order: search::max_order(data),
+                },
+                ..b.spec.clone()
+            };
+            data.fit(&spec, None, false)
+        })
+        .unwrap_or(b);
         let per_axis: [f64; 3] = std::array::from_fn(|i| {
-            let ss: f64 = b.resid.iter().map(|r| r[i] * r[i]).sum();
-            (ss / (data.obs.len().saturating_sub(b.k / 3)).max(1) as f64).max(1e-300)
+            let ss: f64 = general.resid.iter().map(|r| r[i] * r[i]).sum();
+            let dof = data.obs.len().saturating_sub(general.k.div_ceil(3));
+            (ss / dof.max(1) as f64).max(1e-300)
         });
         data.w = (0..data.n_rows()).map(|r| 1.0 / per_axis[r % 3]).collect();
     }
@@ -256,9 +292,11 @@ pub fn diagnose(rec: &Recording) -> Result<Diagnosis> {
         Vec::new()
     };
     let quality = quality::notes(rec, &floor, &data.obs, &data.events, n_temps);
+    let flashed = calibration::flashable(&data, &final_fit);
     Ok(Diagnosis {
         noise_rms: metrics::floor_rms(&data),
-        table: final_table(&data, &final_fit),
+        table: final_table(&data, &flashed),
+        flashed,
         sample_period_s: regressors::median_step(rec),
         floor,
         floor_measured: measured,

@@ -206,3 +206,30 @@ pub fn curvature(data: &Data, spec: &Spec, base: &Fit, broad: bool) -> Vec<Fit> 
     ));
     out
 }
+
+/// Whether extra `e` of `f` has a determined structure (see
+/// [`crate::diagnose::search::Judgement::determined`]): the chi-square profile over its time
+/// constant (in log) or bend place curves up by the dispersion `phi` within the limit.
+pub fn determined(data: &Data, f: &Fit, e: usize, phi: f64) -> bool {
+    let at = |x: Extra| {
+        let mut s = f.spec.clone();
+        s.extras[e] = x;
+        data.fit(&s, None, false).map(|g| g.chi2).unwrap_or(f64::INFINITY)
+    };
+    // (the chi-square at both sides of the value, the step, the limit on 1 sigma)
+    let (up, down, h, limit) = match f.spec.extras[e].clone() {
+        Extra::Warmup { tau_s, restart } => {
+            let w = |t: f64| Extra::Warmup { tau_s: t, restart };
+            (at(w(tau_s * 1.2)), at(w(tau_s / 1.2)), 1.2f64.ln(), 0.5)
+        }
+        Extra::Lag { taus } if taus.iter().all(|t| *t == taus[0]) => {
+            let [t1, t2] = taus[0];
+            let l = |k: f64| Extra::Lag { taus: [[t1 * k, t2 * k]; 3] };
+            (at(l(1.2)), at(l(1.0 / 1.2)), 1.2f64.ln(), 0.5)
+        }
+        Extra::Bend { knot_c } => (at(Extra::Bend { knot_c: knot_c + 1.0 }), at(Extra::Bend { knot_c: knot_c - 1.0 }), 1.0, 5.0),
+        _ => return true,
+    };
+    let curv = (up + down - 2.0 * f.chi2) / (h * h);
+    curv > 0.0 && (2.0 * phi / curv).sqrt() <= limit
+}

@@ -8,7 +8,8 @@
 //! - the quasi-BIC drops by more than [`Q_MARGIN`];
 //! - the effect explains at least [`MATERIAL_SHARE`] of the chi-square above the floor;
 //! - one of its parameters is at least [`Z_SIGNIFICANT`] scaled sigmas from zero;
-//! - the held-out time chunks improve by more than 2 per parameter (in floor units).
+//! - the held-out time chunks improve by more than 2 per parameter (in floor units);
+//! - its profiled structure (time constant, bend) is determined by the data.
 use crate::diagnose::design::{Data, Fit, Spec};
 use crate::diagnose::effects::{Extra, EFFECT_IDS};
 use crate::diagnose::metrics::{dispersion, qbic};
@@ -20,7 +21,7 @@ pub const Q_MARGIN: f64 = 10.0;
 /// Two candidates within this much quasi-BIC of each other explain the data equally well.
 pub const AMBIGUITY_MARGIN: f64 = 6.0;
 /// A candidate must explain at least this share of the chi-square above the floor.
-pub const MATERIAL_SHARE: f64 = 0.5;
+pub const MATERIAL_SHARE: f64 = 0.2;
 /// A parameter is significant at this many sigmas (scaled by the dispersion).
 pub const Z_SIGNIFICANT: f64 = 4.0;
 /// Where an effect acts, the final residual must be at most this fraction of what it is
@@ -208,6 +209,10 @@ pub struct Judgement {
     /// The effect's largest contribution to one window, in floor sigmas (95th
     /// percentile over the windows, so one window cannot carry it).
     pub peak: f64,
+    /// The profiled time constant (or bend) is determined by the data: the profile
+    /// curves enough that its 1-sigma is within a factor e^0.5 (time constants) or 5 C (a
+    /// bend). A flat profile means the form is not what the data show.
+    pub determined: bool,
 }
 
 impl Judgement {
@@ -217,6 +222,7 @@ impl Judgement {
             && self.share >= MATERIAL_SHARE
             && self.heldout_gain > 2.0
             && self.max_z.is_none_or(|z| z >= Z_SIGNIFICANT)
+            && self.determined
     }
 }
 
@@ -237,6 +243,7 @@ pub fn judge(data: &Data, smaller: &Fit, larger: &Fit, e: usize) -> Judgement {
         .collect();
     c.sort_by(f64::total_cmp);
     Judgement {
+        determined: profile::determined(data, larger, e, phi),
         peak: c.get(c.len() * 95 / 100).copied().unwrap_or(0.0),
         gain: qbic(data, smaller, phi) - qbic(data, larger, phi),
         share: (smaller.chi2 - larger.chi2) / excess,

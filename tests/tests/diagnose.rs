@@ -1,51 +1,55 @@
-//! The diagnosis: blind tests on concealed effects, the JSON contract, and the real
-//! recording of ../shared/real/cats-tag.
-use host_fit::blind::{report, run, suite};
+//! The diagnosis: the blind suite by class, the JSON contract, an effect outside the
+//! catalogue, the flashed model in firmware, the input forms users have, and the real
+//! recordings of ../shared/real.
+use host_fit::blind::{report, run, suite, Case, Class};
+use host_fit::data::positions::Positions;
+use host_fit::data::recording::Recording;
+use host_fit::diagnose::diagnose;
+use host_fit::simulate::{simulate, SimConfig};
+use serde_json::Value;
 use tests::{cli, repo};
 
+fn recording(cfg: &SimConfig) -> Recording {
+    let sim = simulate(cfg, |_| {}).unwrap();
+    Recording::from_reader(
+        std::path::Path::new("twin.csv"),
+        sim.csv.as_bytes(),
+        Positions::default(),
+    )
+    .unwrap()
+}
+
+/// The short suite, judged per class: the catalogue's own forms exactly (parameters within
+/// 3 sigma, residual at the floor), other forms named right, effects outside the
+/// catalogue never given a catalogue name, nuisances never called physics.
 #[test]
-fn blind_suite_names_the_concealed_effects() {
+fn blind_suite_by_class() {
     let outcomes: Vec<_> = suite(false).iter().map(run).collect();
     let text = report(&outcomes);
     println!("{text}");
-    let exact = outcomes.iter().filter(|o| o.exact).count();
-    assert!(
-        exact as f64 >= 0.9 * outcomes.len() as f64,
-        "exactly right in {exact}/{}:\n{text}",
-        outcomes.len()
-    );
-    for o in outcomes.iter().filter(|o| o.case.effects.is_empty()) {
-        assert!(
-            o.found.is_empty() && o.ambiguous.is_empty(),
-            "false finding on a clean recording:\n{text}"
-        );
-        assert!(o.final_over_noise < 1.5);
+    let of = |c: Class| outcomes.iter().filter(move |o| o.case.class == c);
+    for o in of(Class::Catalogue) {
+        assert!(o.exact, "{}: {:?}\n{text}", o.case.name(), o.named());
+        assert_ne!(o.params_ok, Some(false), "{}\n{text}", o.case.name());
+        assert!(o.final_over_noise <= 1.5, "{}\n{text}", o.case.name());
     }
-    for o in outcomes.iter().filter(|o| o.exact) {
-        assert_ne!(
-            o.params_ok,
-            Some(false),
-            "parameters off by more than 3 sigma:\n{text}"
-        );
-        assert!(
-            o.final_over_noise <= 1.5,
-            "final residual {} x noise:\n{text}",
-            o.final_over_noise
-        );
-    }
-    // the TP-only recording cannot separate K2 from scale asymmetry: reported, not guessed
-    let tp = outcomes.iter().find(|o| o.case.tp_only).unwrap();
+    let passed = |c: Class| of(c).filter(|o| o.passed()).count();
     assert!(
-        tp.ambiguous
-            .iter()
-            .any(|a| a.contains(&"nonlinearity_k2".to_string())
-                && a.contains(&"scale_asymmetry".to_string())),
+        passed(Class::OtherForm) + 1 >= of(Class::OtherForm).count(),
         "{text}"
     );
-    assert!(tp
-        .found
-        .iter()
-        .all(|f| f != "nonlinearity_k2" && f != "scale_asymmetry"));
+    assert!(
+        passed(Class::Outside) + 1 >= of(Class::Outside).count(),
+        "{text}"
+    );
+    assert_eq!(
+        passed(Class::Nuisance),
+        of(Class::Nuisance).count(),
+        "{text}"
+    );
+    // the TP-only recording cannot separate K2 from scale asymmetry: reported, not guessed
+    let tp = outcomes.iter().find(|o| o.case.tp_only).unwrap();
+    assert!(tp.found.is_empty() && !tp.ambiguous.is_empty(), "{text}");
 }
 
 #[test]
@@ -53,9 +57,8 @@ fn json_contract_on_a_clean_and_an_effect_recording() {
     let dir = std::env::temp_dir().join(format!("hf-diag-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     for (name, effects) in [("clean", vec![]), ("rate", vec!["temp_rate"])] {
-        let case = host_fit::blind::Case::catalogue(effects, 1.0, 3);
-        let cfg = host_fit::blind::configure(&case);
-        let sim = host_fit::simulate::simulate(&cfg, |_| {}).unwrap();
+        let cfg = host_fit::blind::configure(&Case::catalogue(effects, 1.0, 3));
+        let sim = simulate(&cfg, |_| {}).unwrap();
         let p = dir.join(format!("{name}.csv"));
         std::fs::write(&p, sim.csv).unwrap();
         let report = dir.join(format!("{name}.html"));
@@ -68,106 +71,306 @@ fn json_contract_on_a_clean_and_an_effect_recording() {
             report.to_str().unwrap(),
         ]);
         assert_eq!(code, 0, "{err}");
-        let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+        let j: Value = serde_json::from_str(&out).unwrap();
         assert_eq!(j["format"], "at-diagnosis/1");
         for k in [
             "noise_rms",
+            "floor",
+            "dispersion",
             "baseline",
             "findings",
             "ambiguous",
+            "quality",
+            "unexplained",
             "final",
+            "flashed",
             "verdict",
         ] {
             assert!(j.get(k).is_some(), "{k} missing");
         }
-        assert!(j["noise_rms"].as_f64().unwrap() > 0.0);
-        for k in ["residual_rms", "max_abs_dg_mg"] {
-            assert!(j["baseline"][k].as_f64().is_some() && j["final"][k].as_f64().is_some());
+        assert_eq!(j["floor"]["measured"], true);
+        for a in j["floor"]["axes"].as_array().unwrap() {
+            // the twin's voltmeter: 2e-5 V white noise per sample
+            let s = a["sample_sigma"].as_f64().unwrap();
+            assert!((1.5e-5..2.7e-5).contains(&s), "{a}");
         }
-        assert!(j["baseline"]["temperature_model"].as_str().is_some());
         let html = std::fs::read_to_string(&report).unwrap();
         assert!(html.contains("resid-time-before") && html.contains("resid-time-after"));
         if name == "clean" {
             assert_eq!(j["verdict"], "none");
             assert!(j["findings"].as_array().unwrap().is_empty());
+            assert!(j["unexplained"].is_null());
         } else {
             let f = &j["findings"][0];
             assert_eq!(f["effect"], "temp_rate");
             for k in [
                 "axes",
+                "form",
                 "parameters",
                 "uncertainties",
                 "delta_bic",
-                "residual_rms_after",
-                "max_abs_dg_mg_after",
+                "share",
+                "heldout_gain",
+                "reproduced",
                 "evidence",
             ] {
                 assert!(f.get(k).is_some(), "finding.{k} missing");
             }
-            assert!(f["delta_bic"].as_f64().unwrap() < -10.0);
+            assert_eq!(f["reproduced"], true);
             assert_eq!(j["verdict"], "explained");
             assert!(
-                j["final"]["residual_rms"].as_f64().unwrap()
-                    < j["baseline"]["residual_rms"].as_f64().unwrap()
+                j["final"]["heldout_chi2_after"].as_f64()
+                    < j["final"]["heldout_chi2_before"].as_f64()
             );
         }
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A sudden bias shift mid-test is not in the catalogue: no catalogue name, the verdict
+/// says so, and the residual is located on the shifted axis, after the shift.
 #[test]
-fn real_tag_recording_finding_improves_the_held_out_fit() {
-    let rec = repo().join("../shared/real/cats-tag/recording.csv");
-    let pos = repo().join("../shared/real/cats-tag/positions.csv");
+fn an_effect_outside_the_catalogue_is_unexplained_and_located() {
+    let case = Case {
+        class: Class::Outside,
+        form: "a sudden bias shift",
+        effects: vec![],
+        scale: 1.0,
+        seed: 1,
+        tp_only: false,
+    };
+    let cfg = host_fit::blind::configure(&case);
+    let step = cfg.effects.bias_step.unwrap();
+    let axis = (0..3).find(|&i| step.value[i] != 0.0).unwrap();
+    let rec = recording(&cfg);
+    let d = diagnose(&rec).unwrap();
+    let c = d.contract(&rec);
+    assert!(
+        c.findings.is_empty() && c.ambiguous.is_empty(),
+        "{}",
+        c.text()
+    );
+    assert_eq!(c.verdict, "unexplained", "{}", c.text());
+    let u = c.unexplained.as_ref().unwrap();
+    assert_eq!(u.located[0].axis, ["x", "y", "z"][axis], "{}", c.text());
+    // the time spans on that axis: the residual steps by the shift's sign between the
+    // spans before it and those after (the baseline's offset sits between the levels)
+    let ax = ["x", "y", "z"][axis];
+    let spans: Vec<(f64, f64, f64)> = d
+        .unexplained
+        .iter()
+        .filter(|h| h.group == "time" && h.axis == ax)
+        .map(|h| {
+            let (a, b) = h.value.trim_end_matches(" h").split_once('-').unwrap();
+            (
+                a.parse::<f64>().unwrap() * 3600.0,
+                b.parse::<f64>().unwrap() * 3600.0,
+                h.mean,
+            )
+        })
+        .collect();
+    let before: Vec<f64> = spans
+        .iter()
+        .filter(|s| s.1 <= step.at_s)
+        .map(|s| s.2)
+        .collect();
+    let after: Vec<f64> = spans
+        .iter()
+        .filter(|s| s.0 >= step.at_s)
+        .map(|s| s.2)
+        .collect();
+    assert!(!before.is_empty() && !after.is_empty(), "{spans:?}");
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let jump = mean(&after) - mean(&before);
+    assert_eq!(jump.signum(), step.value[axis].signum(), "{spans:?}");
+    assert!(jump.abs() > 0.3 * step.value[axis].abs(), "{spans:?}");
+}
+
+/// One physics: the blob `diagnose --out` writes is compensated by firmware-core, sample
+/// by sample in f32, to the fitted model's own dg in every static window of the
+/// recording with the catalogue's in-flight effects.
+#[test]
+fn the_flashed_model_reaches_the_fits_own_residual_in_firmware() {
+    use firmware_core::compensate::{Compensator, Method};
+    let text = std::fs::read_to_string(repo().join("examples/sim/in-flight-effects.toml")).unwrap();
+    let cfg = host_fit::simulate::parse_config(std::path::Path::new("x.toml"), &text).unwrap();
+    let rec = recording(&cfg);
+    let d = diagnose(&rec).unwrap();
+    let mut cal = d.calibration(rec.t0_c).unwrap().convert::<f32>();
+    // the model itself: the cache of N(T) (0.1 C steps, a stated 0.03 mg) aside
+    cal.update_step_c = 0.0;
+    assert!(cal.physics.is_some());
+    let data = d.data(&rec);
+    let fit_dg = host_fit::diagnose::metrics::dg_per_window(&data, &d.flashed);
+    let mut comp = Compensator::new(&cal, Method::CorrectConstants).unwrap();
+    let accel: Vec<[f64; 3]> = rec
+        .rows
+        .iter()
+        .map(|r| {
+            comp.compensate(r.u.map(|v| v as f32), r.temp_c as f32)
+                .accel
+                .map(f64::from)
+        })
+        .collect();
+    let (mut worst, mut n, mut ss_fw, mut ss_fit) = (0.0f64, 0, 0.0, 0.0);
+    for (o, fit) in data.obs.iter().zip(&fit_dg) {
+        let Some(fit) = fit else { continue };
+        let rows = (o.start..o.end).filter(|k| data.spikes.binary_search(k).is_err());
+        let (mut a, mut m) = ([0.0; 3], 0.0);
+        for k in rows {
+            for i in 0..3 {
+                a[i] += accel[k][i];
+            }
+            m += 1.0;
+        }
+        let fw = ((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt() / m - 1.0) * 1e3;
+        worst = worst.max((fw - fit).abs());
+        ss_fw += fw * fw;
+        ss_fit += fit * fit;
+        n += 1;
+    }
+    let (rms_fw, rms_fit) = ((ss_fw / n as f64).sqrt(), (ss_fit / n as f64).sqrt());
+    println!("{n} windows: dg rms {rms_fw:.4} mg in firmware, {rms_fit:.4} mg by the fit; largest difference {worst:.4} mg");
+    assert!(n > 50);
+    assert!(
+        rms_fw <= 1.1 * rms_fit + 0.001,
+        "firmware {rms_fw} mg vs fit {rms_fit} mg"
+    );
+    assert!(worst < 0.005, "a window differs by {worst} mg");
+}
+
+/// Input forms users have: a dwell-averaged recording (one row per dwell) and a
+/// single-temperature one are diagnosed, each saying what it cannot judge.
+#[test]
+fn dwell_means_and_one_temperature_are_diagnosed_within_what_they_tell() {
+    let mut k2 = Case::catalogue(vec!["nonlinearity_k2"], 1.0, 2);
+    k2.seed = 2;
+    let mut averaged = host_fit::blind::configure(&k2);
+    averaged.schedule.dwell_means = true;
+    let mut one = host_fit::blind::configure(&k2);
+    one.schedule.stops.truncate(1);
+    for (cfg, note) in [(averaged, "one_sample_per_dwell"), (one, "one_temperature")] {
+        let rec = recording(&cfg);
+        let d = diagnose(&rec).unwrap();
+        let c = d.contract(&rec);
+        let found: Vec<&str> = c.findings.iter().map(|f| f.effect.as_str()).collect();
+        assert_eq!(found, ["nonlinearity_k2"], "{}", c.text());
+        assert!(c.quality.iter().any(|q| q.kind == note), "{}", c.text());
+        assert!(
+            c.not_identifiable.iter().any(|n| n.contains("temp_rate")),
+            "{}",
+            c.text()
+        );
+    }
+}
+
+fn real(name: &str, extra: &[&str]) -> Value {
+    let rec = repo().join(format!("../shared/real/{name}/recording.csv"));
     assert!(
         rec.exists(),
         "the shared real recording is missing: {}",
         rec.display()
     );
-    let (code, out, err) = cli(&[
-        "diagnose",
-        rec.to_str().unwrap(),
-        "--positions",
-        pos.to_str().unwrap(),
-        "--json",
-    ]);
+    let mut args = vec![
+        "diagnose".to_string(),
+        rec.display().to_string(),
+        "--json".into(),
+    ];
+    args.extend(extra.iter().map(|s| {
+        s.replace(
+            "{dir}",
+            &repo()
+                .join(format!("../shared/real/{name}"))
+                .display()
+                .to_string(),
+        )
+    }));
+    let (code, out, err) = cli(&args.iter().map(String::as_str).collect::<Vec<_>>());
     assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    serde_json::from_str(&out).unwrap()
+}
+
+/// What makes a diagnosis of real data credible: the worst |dg| is not made worse, the
+/// held-out chunks improve (or stay, with nothing found), and every finding reproduces on
+/// both halves of the recording.
+fn credible(j: &Value) {
+    let f = &j["final"];
     assert!(
-        j["not_identifiable"]
+        f["max_abs_dg_mg"].as_f64() <= j["baseline"]["max_abs_dg_mg"].as_f64(),
+        "{j}"
+    );
+    assert!(
+        f["heldout_chi2_after"].as_f64() <= f["heldout_chi2_before"].as_f64(),
+        "{j}"
+    );
+    for x in j["findings"].as_array().unwrap() {
+        assert_eq!(x["reproduced"], true, "{x}");
+    }
+}
+
+#[test]
+fn real_tag_recording() {
+    let j = real("cats-tag", &["--positions", "{dir}/positions.csv"]);
+    credible(&j);
+    assert!(j["not_identifiable"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|n| n.as_str().unwrap().contains("cross-sensitivities")));
+    // the tilted Y_AXIS period: a fixture-like error of that orientation, and more left
+    let found: Vec<&str> = j["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["effect"].as_str().unwrap())
+        .collect();
+    assert!(found.contains(&"fixture_error"), "{j}");
+    assert_eq!(j["verdict"], "partly_explained");
+}
+
+#[test]
+fn real_wrist_recording_with_its_orientations_unknown() {
+    let j = real(
+        "ggir-wrist",
+        &[
+            "--positions",
+            "{dir}/positions.csv",
+            "--unknown-orientations",
+        ],
+    );
+    credible(&j);
+    assert_ne!(j["verdict"], "explained", "{j}");
+}
+
+#[test]
+fn real_hand_tumble_at_one_temperature() {
+    let j = real("imucal-ferraris", &[]);
+    credible(&j);
+    assert!(
+        j["quality"]
             .as_array()
             .unwrap()
             .iter()
-            .any(|n| n.as_str().unwrap().contains("cross-sensitivities")),
-        "three orientations: cross terms not identifiable"
+            .any(|q| q["kind"] == "one_temperature"),
+        "{j}"
     );
-    assert!(!j["findings"].as_array().unwrap().is_empty(), "{out}");
-    let before = j["final"]["heldout_chi2_before"].as_f64().unwrap();
-    let after = j["final"]["heldout_chi2_after"].as_f64().unwrap();
-    assert!(after < 0.5 * before, "held-out chi2 {before} -> {after}");
-    assert!(
-        j["final"]["residual_rms"].as_f64().unwrap()
-            < j["baseline"]["residual_rms"].as_f64().unwrap()
-    );
+    for x in j["findings"].as_array().unwrap() {
+        let e = x["effect"].as_str().unwrap();
+        assert!(
+            ["nonlinearity_k2", "scale_asymmetry", "fixture_error"].contains(&e),
+            "{e}"
+        );
+    }
 }
 
-/// The extended model goes into the blob and firmware-core compensates with it: on a
-/// recording with in-flight effects (K2, rate, warm-up at 3x nominal), every dwell's
-/// |dg| is within 0.05 mg with the physics terms (over 0.5 mg at worst with the same
-/// tables alone), and the mean over all dwells is at least 20x smaller.
+/// The README's figure on the extended model: every dwell within 0.05 mg with the terms.
 #[test]
 fn extended_model_in_the_blob_compensates_better_in_firmware() {
     let (a, b, line) = tests::figures::physics_blob();
     println!("{line}");
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let worst = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
-    assert!(
-        worst(&a) <= 0.05,
-        "with the physics terms every dwell is within 0.05 mg: {line}"
-    );
-    assert!(mean(&b) >= 20.0 * mean(&a), "not 20x better: {line}");
-    assert!(
-        worst(&b) > 0.5,
-        "the effects are visible without the terms: {line}"
-    );
+    assert!(worst(&a) <= 0.05, "{line}");
+    assert!(mean(&b) >= 20.0 * mean(&a), "{line}");
+    assert!(worst(&b) > 0.5, "{line}");
 }

@@ -383,7 +383,10 @@ fn serials_up_to_the_blob_limit_and_a_clear_refusal_beyond() {
     std::fs::write(&p, text.replace("# unit=PAPER-UNIT", "# unit=Gerät-7")).unwrap();
     let (code, _, err) = cli(&["fit", s(&p), "--out", s(&b), "--force", "--model", "poly"]);
     assert_eq!(code, 1);
-    assert!(err.contains("printable ASCII") && err.contains("--serial"), "{err}");
+    assert!(
+        err.contains("printable ASCII") && err.contains("--serial"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -110,4 +110,3 @@ pub fn axes3(rng: &mut Rng, scale: f64, size: f64) -> [f64; 3] {
     }
     v
 }
-

@@ -70,4 +70,3 @@ pub fn configure(case: &Case) -> SimConfig {
     }
     c
 }
-

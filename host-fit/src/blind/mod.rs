@@ -159,7 +159,6 @@ fn params_within_3_sigma(cfg: &SimConfig, findings: &[Finding]) -> Option<bool> 
     params_ok
 }
 
-
 /// The suite: per seed, a clean recording, each catalogue effect at several magnitudes,
 /// pairs, the TP-only ambiguity, and one case of every other form, outside effect and
 /// nuisance of [`forms`]. `long` adds seeds and smaller magnitudes.

@@ -60,4 +60,3 @@ impl Outcome {
         forms::note(&self.case).is_none_or(|k| self.quality.iter().any(|q| q == k))
     }
 }
-

@@ -10,6 +10,8 @@ use crate::diagnose::profile::time_constant;
 use crate::diagnose::regressors::alpha;
 use crate::diagnose::Diagnosis;
 use crate::error::{HostError, Result};
+use crate::fit::temperature::{Basis, POLY_SCALE_C};
+use firmware_core::model::{K_INDEX, U0_INDEX};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
 
 /// `f` in the firmware's forms, refitted (a single lag pole profiled again) where it
@@ -46,11 +48,15 @@ pub fn flashable(data: &Data, f: &Fit) -> Fit {
     if let Some((i, tau)) = lag_at {
         let make = |t: f64| {
             let mut s = spec.clone();
-            s.extras[i] = Extra::Lag { taus: [[t, 0.0]; 3] };
+            s.extras[i] = Extra::Lag {
+                taus: [[t, 0.0]; 3],
+            };
             data.fit(&s, None, false)
         };
         if let Some((t, _)) = time_constant(&make, tau / 1.7f64.powi(3), 7) {
-            spec.extras[i] = Extra::Lag { taus: [[t, 0.0]; 3] };
+            spec.extras[i] = Extra::Lag {
+                taus: [[t, 0.0]; 3],
+            };
         }
     }
     data.fit(&spec, None, true).unwrap_or_else(|| f.clone())
@@ -157,11 +163,40 @@ impl Diagnosis {
             t_max_c: hi.max(lo + 1.0),
             clamp: false,
             update_step_c: 0.1,
-            model: TempModel::Pwl {
+            model: self.poly_table().unwrap_or_else(|| TempModel::Pwl {
                 breakpoints: self.table.iter().map(|r| r.0).collect(),
                 values: self.table.iter().map(|r| r.1).collect(),
-            },
+            }),
             physics: self.physics()?,
+        })
+    }
+
+    /// The flashed model's polynomial itself, when its temperature dependence is one (no
+    /// bend, no fine offsets): exact, where a table through it would interpolate.
+    fn poly_table(&self) -> Option<TempModel<f64>> {
+        let f = &self.flashed;
+        let Basis::Poly { order } = f.spec.basis else {
+            return None;
+        };
+        if f.spec
+            .extras
+            .iter()
+            .any(|e| matches!(e, Extra::Curvature(_) | Extra::Bend { .. }))
+        {
+            return None;
+        }
+        let mut terms = vec![[0.0; 12]; (order + 1).max(2)];
+        for (c, l) in f.labels.iter().enumerate() {
+            let (slot, k) = match *l {
+                Param::K { i, j, k } => (K_INDEX[i][j], k),
+                Param::U0 { i, k } => (U0_INDEX[i], k),
+                _ => continue,
+            };
+            // the fit's basis is powers of dT / POLY_SCALE_C
+            terms[k][slot] += f.x[c] / POLY_SCALE_C.powi(k as i32);
+        }
+        Some(TempModel::Poly {
+            terms: terms.into_iter().collect(),
         })
     }
 }

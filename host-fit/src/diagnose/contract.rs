@@ -251,7 +251,13 @@ impl Diagnosis {
             },
             flashed: FlashedFigures {
                 same_as_final: self.flashed.spec == f.spec,
-                model: self.flashed.spec.extras.iter().map(|e| format!("{}: {}", e.id(), e.form())).collect(),
+                model: self
+                    .flashed
+                    .spec
+                    .extras
+                    .iter()
+                    .map(|e| format!("{}: {}", e.id(), e.form()))
+                    .collect(),
                 residual_rms_over_noise: normalized_rms(&data, &self.flashed),
                 max_abs_dg_mg: max_dg(&data, &self.flashed),
             },

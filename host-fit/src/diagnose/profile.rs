@@ -214,7 +214,9 @@ pub fn determined(data: &Data, f: &Fit, e: usize, phi: f64) -> bool {
     let at = |x: Extra| {
         let mut s = f.spec.clone();
         s.extras[e] = x;
-        data.fit(&s, None, false).map(|g| g.chi2).unwrap_or(f64::INFINITY)
+        data.fit(&s, None, false)
+            .map(|g| g.chi2)
+            .unwrap_or(f64::INFINITY)
     };
     // (the chi-square at both sides of the value, the step, the limit on 1 sigma)
     let (up, down, h, limit) = match f.spec.extras[e].clone() {
@@ -224,10 +226,21 @@ pub fn determined(data: &Data, f: &Fit, e: usize, phi: f64) -> bool {
         }
         Extra::Lag { taus } if taus.iter().all(|t| *t == taus[0]) => {
             let [t1, t2] = taus[0];
-            let l = |k: f64| Extra::Lag { taus: [[t1 * k, t2 * k]; 3] };
+            let l = |k: f64| Extra::Lag {
+                taus: [[t1 * k, t2 * k]; 3],
+            };
             (at(l(1.2)), at(l(1.0 / 1.2)), 1.2f64.ln(), 0.5)
         }
-        Extra::Bend { knot_c } => (at(Extra::Bend { knot_c: knot_c + 1.0 }), at(Extra::Bend { knot_c: knot_c - 1.0 }), 1.0, 5.0),
+        Extra::Bend { knot_c } => (
+            at(Extra::Bend {
+                knot_c: knot_c + 1.0,
+            }),
+            at(Extra::Bend {
+                knot_c: knot_c - 1.0,
+            }),
+            1.0,
+            5.0,
+        ),
         _ => return true,
     };
     let curv = (up + down - 2.0 * f.chi2) / (h * h);

@@ -18,7 +18,7 @@ use std::path::Path;
 pub const RANGE_MARGIN_C: f64 = 1.0;
 
 /// Polynomial fits work in `dT / POLY_SCALE_C` for conditioning.
-const POLY_SCALE_C: f64 = 50.0;
+pub const POLY_SCALE_C: f64 = 50.0;
 
 /// The shape of a temperature model.
 #[derive(Debug, Clone, PartialEq)]

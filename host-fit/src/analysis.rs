@@ -241,7 +241,7 @@ pub fn table(rows: &[SummaryRow]) -> String {
             .map(|r| r.max_abs_dg_mg)
     };
     let mut s = String::from(
-        "max |dg| in the verification positions PP1..PP6, mg (reduction vs T0 constants)\n",
+        "max |dg| in the verification positions PP1..PP6, mg (in brackets: how many times smaller than with the T0 constants)\n",
     );
     s.push_str(&format!("{:<14} {:<6}", "model", "method"));
     for t in &temps {
@@ -253,7 +253,8 @@ pub fn table(rows: &[SummaryRow]) -> String {
         for t in &temps {
             let v = get(m, me, *t).unwrap_or(f64::NAN);
             let cell = match get("t0-constants", "none", *t) {
-                Some(u) if me != "none" && v > 0.0 => format!("{v:.3} ({:.1}x)", u / v),
+                Some(u) if me != "none" && v > 0.0 && u >= v => format!("{v:.3} ({:.1}x)", u / v),
+                Some(u) if me != "none" && u > 0.0 => format!("{v:.3} ({:.1}x worse)", v / u),
                 _ => format!("{v:.3}"),
             };
             s.push_str(&format!(" {cell:>16}"));

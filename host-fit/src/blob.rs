@@ -317,8 +317,9 @@ impl Inspection {
             self.format_version,
             self.serial
         );
+        // the header's values are f32: two decimals say what they mean, not their rounding
         s.push_str(&format!(
-            "T0 {} C, valid {}..{} C, {}, update step {} C, model {}\n",
+            "T0 {:.2} C, valid {:.2}..{:.2} C, {}, update step {:.2} C, model {}\n",
             self.t0_c,
             self.t_min_c,
             self.t_max_c,
@@ -330,6 +331,9 @@ impl Inspection {
             self.update_step_c,
             self.model
         ));
+        s.push_str(
+            "table (K in the recording's output unit per g, U0 in that unit; a polynomial's row dT^k per C^k):\n",
+        );
         s.push_str(&format!(
             "{:>10} {}\n",
             "",

@@ -7,6 +7,12 @@ use std::path::Path;
 
 /// Refuse early (before any work) when `path` exists and `force` is off.
 pub fn check_writable(path: &Path, force: bool) -> Result<()> {
+    if path.is_dir() {
+        return Err(HostError::in_file(
+            path,
+            "is a folder: give the path of a file to write in it (e.g. this folder/unit.blob)",
+        ));
+    }
     if !force && path.exists() {
         return Err(HostError::in_file(
             path,

@@ -40,13 +40,28 @@ fn case_lines(outcomes: &[Outcome]) -> String {
     s
 }
 
+/// A column head for an effect id, distinct for every id.
+fn short_name(id: &str) -> &str {
+    match id {
+        "temp_curvature" => "curv",
+        "thermal_lag" => "lag",
+        "temp_rate" => "rate",
+        "hysteresis" => "hyst",
+        "nonlinearity_k2" => "k2",
+        "scale_asymmetry" => "asym",
+        "fixture_error" => "fixt",
+        "warmup_drift" => "warm",
+        other => other,
+    }
+}
+
 /// Concealed single effect (rows) against the effects named (columns).
 fn confusion(outcomes: &[Outcome]) -> String {
     let cols: Vec<&str> = std::iter::once("none").chain(EFFECTS).collect();
-    let mut s = String::from("\nconfusion (concealed single effect -> effects named, counts):\n");
+    let mut s = String::from("\nconfusion (concealed single effect -> effects named, counts; curv = temp_curvature, lag = thermal_lag, rate = temp_rate, hyst = hysteresis, k2 = nonlinearity_k2, asym = scale_asymmetry, fixt = fixture_error, warm = warmup_drift):\n");
     s.push_str(&format!("{:<16}", ""));
     for c in &cols {
-        s.push_str(&format!("{:>6}", &c[..c.len().min(5)]));
+        s.push_str(&format!("{:>6}", short_name(c)));
     }
     s.push('\n');
     for row in std::iter::once("clean").chain(EFFECTS) {

@@ -61,6 +61,8 @@ pub(super) fn temp_fit(a: TempFitArgs, out: &mut dyn Write) -> Result<()> {
 #[derive(Serialize)]
 struct Identified<'a> {
     unit: &'a str,
+    /// The outputs' unit: K is in it per g, U0 in it.
+    output_unit: &'a str,
     /// None when no dwell has two samples (a dwell-averaged recording).
     noise_sigma: Option<[f64; 3]>,
     stops: Vec<IdentifiedStop<'a>>,
@@ -103,6 +105,7 @@ pub(super) fn identify(a: IdentifyArgs, out: &mut dyn Write, err: &mut dyn Write
     if a.json {
         let j = Identified {
             unit: &rec.unit,
+            output_unit: &rec.output_unit,
             noise_sigma: (nz.dof > 0).then_some(nz.sigma),
             stops: st
                 .iter()
@@ -127,8 +130,42 @@ pub(super) fn identify(a: IdentifyArgs, out: &mut dyn Write, err: &mut dyn Write
             "no dwell has two samples: the noise is not known, and the standard errors below are for unit noise (relative only)".to_string()
         };
         w(out, format!("unit {}  {noise_line}", rec.unit))?;
-        w(out, table.trim_end())
+        w(out, identified_text(&st, &rec.output_unit))
     }
+}
+
+/// The stops' coefficients as a table for a terminal: one row per coefficient with its
+/// unit, one column per stop, each value with its 1-sigma.
+fn identified_text(st: &[StopCoeffs], unit: &str) -> String {
+    let mut s = format!(
+        "coefficients at each stop (value +- 1 sigma; K in {unit}/g, U0 in {unit}):\n{:<5} {:<8}",
+        "", "unit"
+    );
+    for x in st {
+        s.push_str(&format!(" {:>23}", format!("{:.2} C", x.temp_c)));
+    }
+    for (c, name) in COEFF_NAMES.iter().enumerate() {
+        let u = if c < 9 {
+            format!("{unit}/g")
+        } else {
+            unit.to_string()
+        };
+        s.push_str(&format!("\n{name:<5} {u:<8}"));
+        for x in st {
+            s.push_str(&format!(
+                " {:>23}",
+                format!("{:.8} +- {:.1e}", x.coeffs[c], x.stderr[c])
+            ));
+        }
+    }
+    s.push_str(&format!(
+        "\npositions: {}\n(`--csv FILE` writes the table in the format of paper-tables.csv)",
+        st.iter()
+            .map(|x| format!("{:.2} C: {}", x.temp_c, x.positions.join(" ")))
+            .collect::<Vec<_>>()
+            .join("; ")
+    ));
+    s
 }
 
 /// `fit --json`.

@@ -90,16 +90,27 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
     w(
         out,
         format!(
-            "{:<8} {:>8} {:>16} {:>12}",
-            "position", "temp_c", "dg_uncomp_mg", "dg_mg"
+            "dg = |a| - 1 g of every verification dwell (formula (13)), uncompensated (T0 constants) and compensated sample by sample by firmware-core (method {})\n{:<8} {:>9} {:>20} {:>17} {:>8} {:>8}",
+            a.method, "position", "temp, C", "uncompensated, mg", "compensated, mg", "samples", "flagged"
         ),
     )?;
+    let mut flagged = 0;
     for d in &v.dwells {
+        flagged += usize::from(d.flagged > 0);
         w(
             out,
             format!(
-                "{:<8} {:>8.2} {:>16.4} {:>12.4}",
-                d.position, d.temp_c, d.dg_mg_uncompensated, d.dg_mg
+                "{:<8} {:>9.2} {:>20.4} {:>17.4} {:>8} {:>8}",
+                d.position, d.temp_c, d.dg_mg_uncompensated, d.dg_mg, d.samples, d.flagged
+            ),
+        )?;
+    }
+    if flagged > 0 {
+        w(
+            out,
+            format!(
+                "{flagged} dwells have flagged samples: the firmware's status said the temperature was outside the blob's valid range {:.2}..{:.2} C (extrapolated), or an input was not finite",
+                b.calibration.t_min_c, b.calibration.t_max_c
             ),
         )?;
     }

@@ -54,6 +54,9 @@ pub(super) fn load(
     for wn in &warns {
         let _ = writeln!(err, "warning: {wn}");
     }
+    for n in &rec.notes {
+        let _ = writeln!(err, "note: {n}");
+    }
     Ok(rec)
 }
 

@@ -72,6 +72,8 @@ pub struct Recording {
     pub dwells: Vec<Dwell>,
     /// Warnings (unknown columns/metadata, short dwells, drifting dwells).
     pub warnings: Vec<String>,
+    /// Notes on expected features of the data (dwells resting through ramps).
+    pub notes: Vec<String>,
 }
 
 /// Dwells shorter than this are warned about.
@@ -80,6 +82,9 @@ pub const MIN_DWELL_SAMPLES: usize = 3;
 pub const MAX_NAMED_SHORT_DWELLS: usize = 3;
 /// A dwell whose temperature moves more than this (C) is warned about.
 pub const MAX_DWELL_DRIFT_C: f64 = 0.5;
+/// A dwell whose temperature moves this much (C) rests through a ramp: expected, noted
+/// once for all such dwells.
+pub const RAMP_SPAN_C: f64 = 2.0;
 
 const KNOWN_META: [&str; 5] = ["unit", "t0_c", "g_local", "format", "output_unit"];
 const REQUIRED: [&str; 6] = ["t_s", "position", "temp_c", "ux_v", "uy_v", "uz_v"];
@@ -103,6 +108,7 @@ impl Recording {
             rows: Vec::new(),
             dwells: Vec::new(),
             warnings: Vec::new(),
+            notes: Vec::new(),
         };
         let mut reader = BufReader::new(reader);
         let mut buf = Vec::new();
@@ -206,6 +212,7 @@ impl Recording {
 
     fn build_dwells(&mut self) {
         let mut short: Vec<String> = Vec::new();
+        let mut ramps: Vec<(String, f64)> = Vec::new();
         let mut i = 0;
         while i < self.rows.len() {
             let Some(pos) = self.rows.get(i).and_then(|r| r.position) else {
@@ -246,7 +253,9 @@ impl Recording {
                     d.len()
                 ));
             }
-            if d.temp_span_c > MAX_DWELL_DRIFT_C {
+            if d.temp_span_c >= RAMP_SPAN_C {
+                ramps.push((name.clone(), d.temp_span_c));
+            } else if d.temp_span_c > MAX_DWELL_DRIFT_C {
                 self.warnings.push(format!(
                     "{}:{first}-{last}: temperature drifts {:.2} C within the dwell in {name} (> {MAX_DWELL_DRIFT_C} C): not in thermal equilibrium, left out of static fits",
                     self.path.display(),
@@ -256,6 +265,40 @@ impl Recording {
             self.dwells.push(d);
         }
         self.summarise_short(short);
+        self.summarise_ramps(&ramps);
+    }
+
+    /// Dwells that rest through a temperature ramp are expected data (a unit resting on
+    /// the tilter while the chamber moves): one note for all of them, not a warning each.
+    fn summarise_ramps(&mut self, ramps: &[(String, f64)]) {
+        if ramps.is_empty() {
+            return;
+        }
+        let mut names: Vec<String> = Vec::new();
+        for (n, _) in ramps {
+            let count = ramps.iter().filter(|(m, _)| m == n).count();
+            let label = if count > 1 {
+                format!("{n} x{count}")
+            } else {
+                n.clone()
+            };
+            if !names.contains(&label) {
+                names.push(label);
+            }
+        }
+        let (lo, hi) = ramps
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(l, h), (_, s)| {
+                (l.min(*s), h.max(*s))
+            });
+        self.notes.push(format!(
+            "{}: {} dwells rest through temperature ramps ({}; {lo:.1} to {hi:.1} C each): expected; \
+             used as windows at their own temperatures, and left out of static fits where the \
+             temperature moves",
+            self.path.display(),
+            ramps.len(),
+            names.join(", ")
+        ));
     }
 
     /// A few short dwells are named one by one; many (a dwell-averaged recording, one row

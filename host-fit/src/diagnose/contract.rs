@@ -272,12 +272,13 @@ impl Contract {
     pub fn text(&self) -> String {
         let b = &self.baseline;
         let mut s = format!(
-            "floor (window means, {}): {:.3e} {}\nbaseline {}: residual {:.3e} ({:.1}x the floor), max |dg| {:.3} mg\n",
-            if self.floor.measured { "measured in the dwells" } else { "the baseline's scatter: not measurable" },
+            "floor (window means, {}): {:.3e} {}\nbaseline {}: residual {:.3e} {} ({:.1}x the floor), max |dg| {:.3} mg\n",
+            if self.floor.measured { "measured in the dwells" } else { "the scatter the most general static model leaves: not measurable" },
             self.noise_rms,
             self.output_unit,
             b.temperature_model,
             b.residual_rms,
+            self.output_unit,
             b.residual_rms_over_noise,
             b.max_abs_dg_mg
         );
@@ -306,7 +307,8 @@ impl Contract {
             ));
             for (k, v) in &x.parameters {
                 let u = x.uncertainties.get(k).copied().unwrap_or(f64::NAN);
-                s.push_str(&format!("    {k} = {v:.4e} +- {u:.1e}\n"));
+                let unit = x.units.get(k).map(String::as_str).unwrap_or("");
+                s.push_str(&format!("    {k} = {v:.4e} +- {u:.1e} {unit}\n"));
             }
             s.push_str(&format!("    {}\n", x.evidence));
         }
@@ -337,8 +339,20 @@ impl Contract {
         }
         let f = &self.final_model;
         s.push_str(&format!(
-            "final: residual {:.3e} ({:.1}x the floor), max |dg| {:.3} mg; held-out chi2 {:.0} -> {:.0}\nverdict: {}",
-            f.residual_rms, f.residual_rms_over_noise, f.max_abs_dg_mg, f.heldout_chi2_before, f.heldout_chi2_after, self.verdict
+            "final: residual {:.3e} {} ({:.1}x the floor), max |dg| {:.3} mg; held-out chi2 (floor units) {:.0} -> {:.0}\nverdict: {} ({})",
+            f.residual_rms,
+            self.output_unit,
+            f.residual_rms_over_noise,
+            f.max_abs_dg_mg,
+            f.heldout_chi2_before,
+            f.heldout_chi2_after,
+            self.verdict,
+            match self.verdict {
+                "none" => "nothing beyond the floor: the model fits to the noise",
+                "explained" => "the findings bring the residual to the floor",
+                "partly_explained" => "the findings explain part; what is left is located above",
+                _ => "above the floor, and nothing in the catalogue explains it; located above",
+            }
         ));
         s
     }
@@ -346,7 +360,7 @@ impl Contract {
 
 fn hotspot_line(x: &Hotspot) -> String {
     format!(
-        "  {:<12} {:<24} axis {}  {:.1}x  ({:.0}% of the sum of squares, mean {:.3e}, {} windows)\n",
+        "  {:<12} {:<24} axis {}  {:.1}x  ({:.0}% of the sum of squares, mean {:.3e} output units, {} windows)\n",
         x.group,
         x.value,
         x.axis,

@@ -25,6 +25,8 @@ pub struct Finding {
     pub parameters: BTreeMap<String, f64>,
     /// 1-sigma uncertainties, scaled by the final dispersion.
     pub uncertainties: BTreeMap<String, f64>,
+    /// Each parameter's unit (`V` standing for the recording's output unit).
+    pub units: BTreeMap<String, String>,
     /// Quasi-BIC change of the final model against the final model without it.
     pub delta_bic: f64,
     /// Share of the chi-square above the floor (of the model without it) it explains.
@@ -226,7 +228,13 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
         uncertainties.insert(k, s);
     }
     let j = judge(data, reduced, full, e);
+    let ou = &data.rec.output_unit;
+    let units = parameters
+        .keys()
+        .map(|k| (k.clone(), unit_of(k, ou)))
+        .collect();
     Some(Finding {
+        units,
         effect: extra.id().into(),
         form: extra.form(),
         axes,
@@ -244,6 +252,26 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
             _ => None,
         },
     })
+}
+
+/// The unit of a finding's parameter, `ou` being the recording's output unit.
+fn unit_of(name: &str, ou: &str) -> String {
+    let prefix = name.split('_').next().unwrap_or("");
+    match prefix {
+        "r" => format!("{ou} per C/s"),
+        "h" | "d" => ou.to_string(),
+        "hk" => format!("{ou}/g"),
+        "k2" => format!("{ou}/g^2"),
+        "delta" => "relative".into(),
+        "bend" if name.starts_with("bend_u0") => format!("{ou}/C"),
+        "bend" => format!("{ou}/g/C"),
+        "angle1" | "angle2" => "rad".into(),
+        "tau" | "tau2" | "rate" => "s".into(),
+        "threshold" | "knot" => "C".into(),
+        "initial" => "+1 heated, -1 cooled".into(),
+        "breakpoints" => "count".into(),
+        _ => String::new(),
+    }
 }
 
 /// Whether extra `e` shows the same signature on both halves of the data (even and odd

@@ -111,23 +111,38 @@ impl ModelDescription {
 
     /// As text: the model, then per interval or per coefficient its terms.
     pub fn text(&self, basis: &Basis) -> String {
-        let num = |v: f64| serde_json::to_string(&v).unwrap_or_default();
-        let mut s = format!("model {}  T0 {} C\n", basis.describe(), self.t0_c);
+        // a name's unit per C (relative K terms are per unit of K; the table's outputs are
+        // taken to be in volts, as the paper's)
+        let unit = |k: &str, per: &str| {
+            if k.starts_with("alpha") || k.starts_with("u0") {
+                format!("V/{per}")
+            } else if k.starts_with("beta") || k.starts_with("gamma") {
+                format!("1/{per}")
+            } else {
+                format!("V/g/{per}")
+            }
+        };
+        let mut s = format!(
+            "model {}  T0 {} C (the table's outputs taken in V: K in V/g, offsets in V)\n",
+            basis.describe(),
+            self.t0_c
+        );
         for i in self.intervals.iter().flatten() {
             s.push_str(&format!(
-                "interval {} .. {} C:\n",
-                num(i.from_c),
-                num(i.to_c)
+                "interval {:.2} .. {:.2} C, slopes:\n",
+                i.from_c, i.to_c
             ));
             for (k, v) in &i.coefficients {
-                s.push_str(&format!("  {k:<10} {v:>14.6e}\n"));
+                s.push_str(&format!("  {k:<10} {v:>14.6e} {}\n", unit(k, "C")));
             }
         }
         for (k, v) in self.coefficients.iter().flatten() {
-            s.push_str(&format!(
-                "  {k:<10} {}\n",
-                serde_json::to_string(v).unwrap_or_default()
-            ));
+            let terms: Vec<String> = v
+                .iter()
+                .enumerate()
+                .map(|(p, t)| format!("{t:.6e} {}", unit(k, &format!("C^{}", p + 1))))
+                .collect();
+            s.push_str(&format!("  {k:<10} dT^1.. : {}\n", terms.join(", ")));
         }
         s.trim_end().to_string()
     }

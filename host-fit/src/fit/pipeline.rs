@@ -92,7 +92,7 @@ pub fn identify_stops(rec: &Recording) -> Result<Vec<StopCoeffs>> {
     if st.is_empty() {
         return Err(HostError::in_file(
             &rec.path,
-            "no static calibration dwells (temperature steady within 0.5 C) in the fit positions",
+            "no static calibration dwells (a calibration position held within 0.5 C): this is not a production test with stops; a recording without them (a soak, a field recording) is diagnosed with `host-fit diagnose REC --report R.html`",
         ));
     }
     st.iter().map(|s| identify_stop(rec, s, &nz)).collect()

@@ -226,11 +226,16 @@ fn batch_with_the_diagnosis_takes_the_diagnosed_blob() {
     let row = r.records().next().unwrap().unwrap();
     let model = &row[header.iter().position(|h| h == "model").unwrap()];
     assert!(model.starts_with("diagnosed"), "{row:?}");
-    // the blob is the diagnosis's: a pwl table over the data's temperatures
-    let (code, out_i, _) = cli(&["inspect", out.join("u1.blob").to_str().unwrap(), "--json"]);
-    assert_eq!(code, 0);
-    let j: serde_json::Value = serde_json::from_str(&out_i).unwrap();
-    assert_eq!(j["model"], "pwl", "{out_i}");
+    // the blob is the diagnosis's: byte for byte what `diagnose --out` writes
+    let own = root.join("diagnosed.blob");
+    let (code, _, err) = cli(&[
+        "diagnose",
+        units.join("u1.csv").to_str().unwrap(),
+        "--out",
+        own.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(std::fs::read(out.join("u1.blob")).unwrap(), std::fs::read(&own).unwrap());
     let u: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("u1.json")).unwrap()).unwrap();
     assert!(

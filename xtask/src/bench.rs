@@ -45,6 +45,73 @@ fn fmt_ns(ns: f64) -> String {
     }
 }
 
+/// The best of three wall-clock times (s) of one `host-fit` run, or None if it fails.
+fn best_of_three(bin: &Path, args: &[String]) -> Option<f64> {
+    (0..3)
+        .map(|_| {
+            let t = std::time::Instant::now();
+            let ok = Command::new(bin)
+                .args(args)
+                .output()
+                .map(|o| o.status.success())
+                .unwrap_or(false);
+            ok.then(|| t.elapsed().as_secs_f64())
+        })
+        .collect::<Option<Vec<f64>>>()
+        .map(|v| v.into_iter().fold(f64::INFINITY, f64::min))
+}
+
+/// The diagnosis of a 10k-row production recording (the in-flight example's unit on a
+/// three-stop profile) and of the 11k-row real wrist recording, end to end through the
+/// release binary (single-threaded), against the targets of 2 s and 10 s.
+fn diagnosis_times(bin: &Path, root: &Path, steps: &mut crate::Steps) -> String {
+    let dir = root.join("target/bench");
+    let _ = std::fs::create_dir_all(&dir);
+    let cfg = dir.join("production-10k.toml");
+    let _ = std::fs::write(
+        &cfg,
+        "[schedule]\npositions = [\"TP1\",\"TP2\",\"TP3\",\"TP4\",\"TP5\",\"TP6\",\"PP1\",\"PP2\",\"PP3\",\"PP4\",\"PP5\",\"PP6\"]\n[[schedule.stops]]\ntemp_c = 20.0\nsoak_s = 1200.0\n[[schedule.stops]]\ntemp_c = -20.0\nsoak_s = 1200.0\n[[schedule.stops]]\ntemp_c = 10.0\nsoak_s = 1200.0\n[effects.nonlinearity_k2]\nvalue = [2e-4, 0.0, -1e-4]\n[effects.temp_rate]\nvalue = [0.03, 0.0, 0.0]\n[effects.warmup_drift]\nd_v = [0.0, 0.0, 4e-4]\ntau_s = 1500.0\n",
+    );
+    let rec = dir.join("production-10k.csv");
+    let s = |p: &Path| p.display().to_string();
+    let _ = Command::new(bin)
+        .args(["simulate", &s(&cfg), "--out", &s(&rec), "--force"])
+        .output();
+    let rows = std::fs::read_to_string(&rec).map(|t| t.lines().count()).unwrap_or(0);
+    let wrist = root.join("../shared/real/ggir-wrist");
+    let cases = [
+        (
+            format!("{rows}-row production recording (K2, rate, warm-up)"),
+            vec!["diagnose".to_string(), s(&rec), "--json".into()],
+            2.0,
+        ),
+        (
+            "11k-row real wrist recording, every orientation unknown".to_string(),
+            vec![
+                "diagnose".to_string(),
+                s(&wrist.join("recording.csv")),
+                "--positions".into(),
+                s(&wrist.join("positions.csv")),
+                "--unknown-orientations".into(),
+                "--json".into(),
+            ],
+            10.0,
+        ),
+    ];
+    let mut md = String::from("\n### Diagnosis, end to end (release binary, one thread, best of 3)\n\n| recording | time | target |\n|---|---|---|\n");
+    for (name, args, target) in cases {
+        eprintln!("\n==> timing the diagnosis of the {name}");
+        match best_of_three(bin, &args) {
+            Some(t) => {
+                md.push_str(&format!("| {name} | {t:.2} s | < {target} s |\n"));
+                steps.passed.push(format!("diagnose the {name}"));
+            }
+            None => steps.failed.push(format!("diagnose the {name}")),
+        }
+    }
+    md
+}
+
 /// Run the benchmarks.
 pub fn bench(steps: &mut crate::Steps) {
     let root = crate::root();
@@ -107,6 +174,7 @@ pub fn bench(steps: &mut crate::Steps) {
             String::new()
         }
     };
+    let diag = diagnosis_times(&bin, &root, steps);
     let res = results(&root.join("target/criterion"));
     let get = |k: &str| res.iter().find(|r| r.0 == k).map(|r| r.1);
     let mut md = String::from("## Benchmarks (`cargo xtask bench`, this machine: 2 cores)\n\n### firmware-core on the host (x86-64, f32)\n\n| benchmark | time |\n|---|---|\n");
@@ -137,6 +205,7 @@ pub fn bench(steps: &mut crate::Steps) {
         ));
     }
     md.push_str(&format!("\n### Batch\n\n`host-fit batch` of 1000 simulated units of the paper's profile (22 k rows each), `--jobs 2`, every unit's model chosen by cross-validation and judged against the acceptance specification: **{batch_s:.1} s** (target < 60 s).\n\n`{verdicts}`\n"));
+    md.push_str(&diag);
     let dir = root.join("target/bench");
     let _ = std::fs::create_dir_all(&dir);
     let _ = std::fs::write(dir.join("summary.md"), &md);

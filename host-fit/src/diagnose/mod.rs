@@ -14,6 +14,7 @@ pub mod contract;
 pub mod design;
 pub mod effects;
 pub mod findings;
+pub mod flash;
 pub mod floor;
 pub mod location;
 pub mod metrics;
@@ -292,7 +293,7 @@ pub fn diagnose(rec: &Recording) -> Result<Diagnosis> {
         Vec::new()
     };
     let quality = quality::notes(rec, &floor, &data.obs, &data.events, n_temps);
-    let flashed = calibration::flashable(&data, &final_fit);
+    let flashed = flash::flashable(&data, &final_fit);
     Ok(Diagnosis {
         noise_rms: metrics::floor_rms(&data),
         table: final_table(&data, &flashed),

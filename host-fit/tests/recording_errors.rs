@@ -283,6 +283,32 @@ fn warnings_name_the_lines() {
 }
 
 #[test]
+fn many_drifting_dwells_are_one_warning_naming_the_worst() {
+    let mut text = format!("{HEAD}{}", good_rows(0));
+    // five drifting dwells (0.6 .. 1.0 C), separated by transit rows
+    for d in 0..5 {
+        for k in 0..4 {
+            text.push_str(&format!(
+                "{},TP2,{:.3},0.005,0.5441,-0.0031\n",
+                100 + 10 * d + k,
+                21.0 + (0.6 + 0.1 * d as f64) / 3.0 * k as f64
+            ));
+        }
+        text.push_str(&format!("{},-,20.0,0,0,0\n", 104 + 10 * d));
+    }
+    let p = write("drifts.csv", &text);
+    let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("drift")).collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(
+        lines[0].contains("5 dwells drift more than 0.5 C")
+            && lines[0].contains("worst: TP2 at lines 40-43: 1.00 C"),
+        "{err}"
+    );
+}
+
+#[test]
 fn not_enough_positions_says_which() {
     let text: String = format!("{HEAD}{}", good_rows(0))
         .lines()

@@ -22,6 +22,34 @@ pub fn cli(args: &[&str]) -> (i32, String, String) {
     )
 }
 
+/// `host-fit diagnose --json` of `../shared/real/NAME/recording.csv`; `{dir}` in the extra
+/// arguments is that recording's folder.
+pub fn real_diagnosis(name: &str, extra: &[&str]) -> serde_json::Value {
+    let rec = repo().join(format!("../shared/real/{name}/recording.csv"));
+    assert!(
+        rec.exists(),
+        "the shared real recording is missing: {}",
+        rec.display()
+    );
+    let mut args = vec![
+        "diagnose".to_string(),
+        rec.display().to_string(),
+        "--json".into(),
+    ];
+    args.extend(extra.iter().map(|s| {
+        s.replace(
+            "{dir}",
+            &repo()
+                .join(format!("../shared/real/{name}"))
+                .display()
+                .to_string(),
+        )
+    }));
+    let (code, out, err) = cli(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 0, "{err}");
+    serde_json::from_str(&out).unwrap()
+}
+
 /// The output of a unit with coefficients `c` (canonical order) in position `a`.
 pub fn forward(c: &[f64; 12], a: [f64; 3]) -> [f64; 3] {
     let k = [[c[0], c[3], c[4]], [c[5], c[1], c[6]], [c[7], c[8], c[2]]];
@@ -381,6 +409,76 @@ pub mod figures {
         ]);
         assert_eq!(code, 0, "{err}");
         out.trim_end().to_string()
+    }
+
+    /// `host-fit diagnose --json` of the three real recordings, one line each: verdict,
+    /// findings (and whether each reproduced on both halves), ambiguities, residual over
+    /// the floor, max |dg| and the held-out chi-square, before and after.
+    pub fn real_recordings() -> (Vec<serde_json::Value>, String) {
+        let runs = [
+            ("cats-tag", vec!["--positions", "{dir}/positions.csv"]),
+            (
+                "ggir-wrist",
+                vec!["--positions", "{dir}/positions.csv", "--unknown-orientations"],
+            ),
+            ("imucal-ferraris", vec![]),
+        ];
+        let mut s = String::from(
+            "recording         verdict            residual/floor   max |dg| mg     held-out chi2 (floor units)\n",
+        );
+        let mut all = Vec::new();
+        for (name, extra) in runs {
+            let j = crate::real_diagnosis(name, &extra);
+            let (b, f) = (&j["baseline"], &j["final"]);
+            let num = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+            s.push_str(&format!(
+                "{:<17} {:<18} {:>6.1} -> {:<6.1} {:>5.2} -> {:<5.2} {:>10.0} -> {:.0}\n",
+                name,
+                j["verdict"].as_str().unwrap_or("?"),
+                num(b, "residual_rms_over_noise"),
+                num(f, "residual_rms_over_noise"),
+                num(b, "max_abs_dg_mg"),
+                num(f, "max_abs_dg_mg"),
+                num(f, "heldout_chi2_before"),
+                num(f, "heldout_chi2_after"),
+            ));
+            for x in j["findings"].as_array().into_iter().flatten() {
+                s.push_str(&format!(
+                    "    finding: {} on {} ({})\n",
+                    x["effect"].as_str().unwrap_or("?"),
+                    x["axes"]
+                        .as_array()
+                        .into_iter()
+                        .flatten()
+                        .filter_map(|a| a.as_str())
+                        .collect::<Vec<_>>()
+                        .join(","),
+                    if x["reproduced"] == true {
+                        "reproduced on both halves"
+                    } else {
+                        "not reproduced on both halves"
+                    }
+                ));
+            }
+            for x in j["ambiguous"].as_array().into_iter().flatten() {
+                s.push_str(&format!(
+                    "    ambiguous: {} (needs {})\n",
+                    x["candidates"]
+                        .as_array()
+                        .into_iter()
+                        .flatten()
+                        .filter_map(|a| a.as_str())
+                        .collect::<Vec<_>>()
+                        .join(" or "),
+                    x["needed"].as_str().unwrap_or("?")
+                ));
+            }
+            for q in j["quality"].as_array().into_iter().flatten() {
+                s.push_str(&format!("    data: {}\n", q["kind"].as_str().unwrap_or("?")));
+            }
+            all.push(j);
+        }
+        (all, s.trim_end().to_string())
     }
 
     /// `host-fit blind --long`: the summary after the per-case lines.

@@ -7,7 +7,7 @@ use host_fit::data::recording::Recording;
 use host_fit::diagnose::diagnose;
 use host_fit::simulate::{simulate, SimConfig};
 use serde_json::Value;
-use tests::{cli, repo};
+use tests::{cli, real_diagnosis as real, repo};
 
 fn recording(cfg: &SimConfig) -> Recording {
     let sim = simulate(cfg, |_| {}).unwrap();
@@ -262,32 +262,6 @@ fn dwell_means_and_one_temperature_are_diagnosed_within_what_they_tell() {
             c.text()
         );
     }
-}
-
-fn real(name: &str, extra: &[&str]) -> Value {
-    let rec = repo().join(format!("../shared/real/{name}/recording.csv"));
-    assert!(
-        rec.exists(),
-        "the shared real recording is missing: {}",
-        rec.display()
-    );
-    let mut args = vec![
-        "diagnose".to_string(),
-        rec.display().to_string(),
-        "--json".into(),
-    ];
-    args.extend(extra.iter().map(|s| {
-        s.replace(
-            "{dir}",
-            &repo()
-                .join(format!("../shared/real/{name}"))
-                .display()
-                .to_string(),
-        )
-    }));
-    let (code, out, err) = cli(&args.iter().map(String::as_str).collect::<Vec<_>>());
-    assert_eq!(code, 0, "{err}");
-    serde_json::from_str(&out).unwrap()
 }
 
 /// What makes a diagnosis of real data credible: the worst |dg| is not made worse, the

@@ -1,7 +1,8 @@
 //! The README's quoted figures are the ones the commands produce today: every block
 //! marked `<!-- figure: ID -->` in README.md is compared, line by line, with the output
 //! of the command that produces it (`tests::figures`). A change of behaviour that moves
-//! a figure fails here until the README says the new one.
+//! a figure fails here until the README says the new one (`UPDATE_README=1 cargo test
+//! --release -p tests --test readme` writes today's outputs into the blocks, to review).
 use tests::{figures, repo};
 
 /// The fenced block right after the marker `<!-- figure: id -->`.
@@ -18,8 +19,33 @@ fn block(readme: &str, id: &str) -> String {
     body.join("\n")
 }
 
+/// Tests run in parallel threads; the rewrite of README.md is one at a time.
+static README_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// `UPDATE_README=1`: put today's output into the block instead of failing (then review
+/// the diff of README.md and commit it: the figures are claims).
+fn rewrite(readme: &str, id: &str, want: &str) -> String {
+    let marker = format!("<!-- figure: {id} -->");
+    let at = readme.find(&marker).expect("marker present") + marker.len();
+    let open = at + readme[at..].find("```").expect("a fenced block after the marker");
+    let body = open + readme[open..].find('\n').expect("a line after the fence") + 1;
+    let close = body
+        + readme[body..]
+            .find("\n```\n")
+            .map(|i| i + 1)
+            .expect("the fenced block is closed");
+    format!("{}{}\n{}", &readme[..body], want.trim_end(), &readme[close..])
+}
+
 fn same(id: &str, want: &str) {
-    let readme = std::fs::read_to_string(repo().join("README.md")).unwrap();
+    let path = repo().join("README.md");
+    if std::env::var_os("UPDATE_README").is_some() {
+        let _guard = README_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+        let readme = std::fs::read_to_string(&path).unwrap();
+        std::fs::write(&path, rewrite(&readme, id, want)).unwrap();
+        return;
+    }
+    let readme = std::fs::read_to_string(&path).unwrap();
     let have = block(&readme, id);
     let norm = |s: &str| {
         s.lines()
@@ -57,6 +83,11 @@ fn cats_tag_diagnosis() {
 }
 
 #[test]
+fn real_recordings_diagnosed() {
+    same("real-recordings", &figures::real_recordings().1);
+}
+
+#[test]
 fn blind_long_suite() {
     same("blind-long", &figures::blind_long());
 }
@@ -86,4 +117,21 @@ fn the_check_can_fail() {
     let readme = "x\n<!-- figure: t -->\n```text\na  \nb\n```\n<!-- figure: e -->\n```\n```\n";
     assert_eq!(block(readme, "t"), "a  \nb");
     assert_eq!(block(readme, "e"), "");
+}
+
+#[test]
+fn rewriting_a_block_with_its_own_text_changes_nothing_else() {
+    let readme = std::fs::read_to_string(repo().join("README.md")).unwrap();
+    let ids: Vec<&str> = readme
+        .split("<!-- figure: ")
+        .skip(1)
+        .filter_map(|s| s.split(" -->").next())
+        .collect();
+    assert!(ids.len() >= 9, "figure markers found: {ids:?}");
+    for id in ids {
+        assert_eq!(rewrite(&readme, id, &block(&readme, id)), readme, "block {id}");
+        let changed = rewrite(&readme, id, "x");
+        assert_eq!(block(&changed, id), "x");
+        assert_eq!(changed.len(), readme.len() - block(&readme, id).len() + 1);
+    }
 }

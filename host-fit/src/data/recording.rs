@@ -78,7 +78,7 @@ pub struct Recording {
 
 /// Dwells shorter than this are warned about.
 pub const MIN_DWELL_SAMPLES: usize = 3;
-/// More short dwells than this are summarised in one warning.
+/// More short (or drifting) dwells than this are summarised in one warning.
 pub const MAX_NAMED_SHORT_DWELLS: usize = 3;
 /// A dwell whose temperature moves more than this (C) is warned about.
 pub const MAX_DWELL_DRIFT_C: f64 = 0.5;
@@ -213,6 +213,7 @@ impl Recording {
     fn build_dwells(&mut self) {
         let mut short: Vec<String> = Vec::new();
         let mut ramps: Vec<(String, f64)> = Vec::new();
+        let mut drifts: Vec<(String, String, f64)> = Vec::new();
         let mut i = 0;
         while i < self.rows.len() {
             let Some(pos) = self.rows.get(i).and_then(|r| r.position) else {
@@ -256,16 +257,39 @@ impl Recording {
             if d.temp_span_c >= RAMP_SPAN_C {
                 ramps.push((name.clone(), d.temp_span_c));
             } else if d.temp_span_c > MAX_DWELL_DRIFT_C {
-                self.warnings.push(format!(
-                    "{}:{first}-{last}: temperature drifts {:.2} C within the dwell in {name} (> {MAX_DWELL_DRIFT_C} C): not in thermal equilibrium, left out of static fits",
-                    self.path.display(),
-                    d.temp_span_c
+                drifts.push((
+                    format!(
+                        "{}:{first}-{last}: temperature drifts {:.2} C within the dwell in {name} (> {MAX_DWELL_DRIFT_C} C): not in thermal equilibrium, left out of static fits",
+                        self.path.display(),
+                        d.temp_span_c
+                    ),
+                    format!("{name} at lines {first}-{last}: {:.2} C", d.temp_span_c),
+                    d.temp_span_c,
                 ));
             }
             self.dwells.push(d);
         }
         self.summarise_short(short);
+        self.summarise_drifts(drifts);
         self.summarise_ramps(&ramps);
+    }
+
+    /// A few drifting dwells are named one by one; many are one warning naming the worst
+    /// (each is still left out of the static fits).
+    fn summarise_drifts(&mut self, mut drifts: Vec<(String, String, f64)>) {
+        if drifts.len() <= MAX_NAMED_SHORT_DWELLS {
+            self.warnings.extend(drifts.into_iter().map(|d| d.0));
+            return;
+        }
+        drifts.sort_by(|a, b| b.2.total_cmp(&a.2));
+        let worst: Vec<&str> = drifts.iter().take(3).map(|d| d.1.as_str()).collect();
+        self.warnings.push(format!(
+            "{}: {} dwells drift more than {MAX_DWELL_DRIFT_C} C in temperature (worst: {}): not in \
+             thermal equilibrium, left out of static fits",
+            self.path.display(),
+            drifts.len(),
+            worst.join("; ")
+        ));
     }
 
     /// Dwells that rest through a temperature ramp are expected data (a unit resting on

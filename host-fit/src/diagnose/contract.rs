@@ -289,7 +289,7 @@ impl Contract {
             s.push_str("where the baseline residual exceeds the floor (RMS in floor units):\n");
         }
         for x in self.located.iter().take(8) {
-            s.push_str(&hotspot_line(x));
+            s.push_str(&hotspot_line(x, &self.output_unit));
         }
         for n in &self.not_identifiable {
             s.push_str(&format!("not identifiable: {n}\n"));
@@ -325,7 +325,7 @@ impl Contract {
                 u.residual_rms_over_noise
             ));
             for x in u.located.iter().take(6) {
-                s.push_str(&hotspot_line(x));
+                s.push_str(&hotspot_line(x, &self.output_unit));
             }
         }
         let fl = &self.flashed;
@@ -358,9 +358,9 @@ impl Contract {
     }
 }
 
-fn hotspot_line(x: &Hotspot) -> String {
+fn hotspot_line(x: &Hotspot, unit: &str) -> String {
     format!(
-        "  {:<12} {:<24} axis {}  {:.1}x  ({:.0}% of the sum of squares, mean {:.3e} output units, {} windows)\n",
+        "  {:<12} {:<24} axis {}  {:.1}x  ({:.0}% of the sum of squares, mean {:.3e} {unit}, {} windows)\n",
         x.group,
         x.value,
         x.axis,

@@ -75,8 +75,13 @@ fn groups(data: &Data) -> Vec<(String, String, Vec<usize>)> {
     groups
 }
 
+/// The least share of the sum of squares a located group carries.
+const MIN_SHARE: f64 = 0.01;
+
 /// Every group where `z` (per observation and axis, floor units) has an RMS above
-/// `min_rms`, worst first; `raw` gives the means in output units.
+/// `min_rms` and at least 1% of the sum of squares, worst first; `raw` gives the means in
+/// output units. (A group of two windows can be extreme and still not be where the
+/// mismatch is.)
 pub fn locate(data: &Data, z: &[[f64; 3]], raw: &[[f64; 3]], min_rms: f64) -> Vec<Hotspot> {
     let total: f64 = z
         .iter()
@@ -89,7 +94,7 @@ pub fn locate(data: &Data, z: &[[f64; 3]], raw: &[[f64; 3]], min_rms: f64) -> Ve
         for i in 0..3 {
             let ss: f64 = idx.iter().map(|&r| z[r][i] * z[r][i]).sum();
             let rms = (ss / idx.len() as f64).sqrt();
-            if rms > min_rms {
+            if rms > min_rms && ss / total >= MIN_SHARE {
                 out.push(Hotspot {
                     group: g.clone(),
                     value: v.clone(),

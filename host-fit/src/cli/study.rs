@@ -43,7 +43,7 @@ pub(super) fn report(a: ReportArgs, out: &mut dyn Write, err: &mut dyn Write) ->
     let rec = oriented(load(&a.input, None, err)?, err)?;
     let oc = analyse(rec, None)?;
     let t = format!("{}{}", table(&oc.rows), crate::analysis::verdicts(&oc));
-    let html = crate::report::demo::demo_report(&oc, &t)?;
+    let html = crate::report::demo::demo_report(&oc)?;
     write_atomic(&a.out, html.as_bytes(), a.force)?;
     w(out, t)?;
     w(out, format!("report: {}", a.out.display()))

@@ -246,7 +246,15 @@ fn dg_plot(oc: &DemoOutcome, names: &[String], ti: usize, t: f64) -> Plot {
         y_label: "dg, mg".into(),
         x_names: names.to_vec(),
         series,
-        bands: vec![accept_band(&oc.spec, lim, fit)],
+        bands: vec![if fit {
+            accept_band(&oc.spec, lim, true)
+        } else {
+            let b = accept_band(&oc.spec, lim, false);
+            Band {
+                label: format!("{}: edges off scale, every point inside", b.label),
+                ..b
+            }
+        }],
         zero_line: true,
         width: 460,
         height: 270,

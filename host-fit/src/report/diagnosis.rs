@@ -160,7 +160,13 @@ pub fn diagnosis_report(rec: &Recording, d: &Diagnosis) -> Result<String> {
         .all(|(a, b)| a == b);
     let (time, by_temp, by_pos) = if same {
         let [t, te, p] = plots_of(rec, d, &fr, "", &d.baseline);
-        (vec![t, temp], vec![te], vec![p])
+        // alone, they take the page's width
+        let wide = |p: Plot| Plot {
+            wide: true,
+            width: 1300,
+            ..p
+        };
+        (vec![t, temp], vec![wide(te)], vec![wide(p)])
     } else {
         let [bt, btemp, bpos] = plots_of(rec, d, &fr, "before", &d.baseline);
         let [at, atemp, apos] = plots_of(rec, d, &fr, "after", &d.final_fit);

@@ -287,7 +287,9 @@ pub fn padded_y(vals: impl Iterator<Item = f64>) -> (f64, f64) {
 fn ranges(p: &Plot) -> ((f64, f64), (f64, f64)) {
     let pts = || p.series.iter().flat_map(|s| s.points.iter());
     let x = if !p.x_names.is_empty() {
-        (-0.5, p.x_names.len() as f64 - 0.5)
+        // a margin so that the outermost categories' markers stay whole
+        let m = 0.01 * p.x_names.len() as f64;
+        (-0.5 - m, p.x_names.len() as f64 - 0.5 + m)
     } else if let Some(r) = p.x_range {
         r
     } else {

@@ -79,7 +79,6 @@ pub fn svg(p: &Prepared) -> String {
         series(p, i, s, &mut o);
     }
     o.push_str("</g>");
-    band_labels(p, &mut o);
     let _ = write!(
         o,
         r#"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="{AXIS}" stroke-width="1"/>"#,
@@ -199,30 +198,6 @@ fn band(p: &Prepared, i: usize, b: &Band, o: &mut String) {
         }
     }
     o.push_str("</g>");
-}
-
-/// A labelled band whose edges are both off scale shades the whole plot: a label inside
-/// says so (the legend names every band).
-fn band_labels(p: &Prepared, o: &mut String) {
-    let off = |v: f64| !v.is_finite() || v <= p.y.lo || v >= p.y.hi;
-    for b in p.plot.bands.iter().filter(|b| !b.label.is_empty()) {
-        if !(off(b.lo) && off(b.hi) && b.lo <= p.y.lo && b.hi >= p.y.hi) {
-            continue;
-        }
-        let text = format!("{}: edges off scale", b.label);
-        // smaller type where the plot is narrow, so that it stays inside the frame
-        let room = p.size.0 - RIGHT - LEFT - 10.0;
-        let size = (11.0 * room / text_px(&text, 11.0)).min(11.0);
-        let _ = write!(
-            o,
-            r##"<text class="band-label" x="{}" y="{}" font-size="{}" text-anchor="end" fill="{}" stroke="#FFFFFF" stroke-width="3" paint-order="stroke">{}</text>"##,
-            f(p.size.0 - RIGHT - 5.0),
-            f(p.y.p1 + 13.0),
-            f(size),
-            b.color.hex(),
-            esc(&text)
-        );
-    }
 }
 
 /// One marker's path: it starts at the marker's centre (`M x y`), so a reader of the SVG

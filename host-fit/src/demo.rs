@@ -1,7 +1,7 @@
 //! The main job: the paper's experiment on the digital twin, compared by
 //! [`crate::analysis`], written to a folder (recording, truth, blobs, summary, report).
 use crate::acceptance::{Acceptance, Spec};
-use crate::analysis::{analyse, table, DemoOutcome, SummaryRow};
+use crate::analysis::{analyse, DemoOutcome, SummaryRow};
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::error::{HostError, Result};
@@ -114,7 +114,7 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<DemoOutcome> {
             .collect(),
     };
     write_json(&dir.join("summary.json"), &summary, force)?;
-    let report = crate::report::demo::demo_report(&oc, &table(&oc.rows))?;
+    let report = crate::report::demo::demo_report(&oc)?;
     write_atomic(&dir.join("report.html"), report.as_bytes(), force)?;
     Ok(oc)
 }

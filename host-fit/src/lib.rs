@@ -10,7 +10,7 @@
 //!
 //! | layer | modules | what |
 //! |---|---|---|
-//! | 0 | `error`, `rng`, `output` | foundations: errors, random numbers, atomic writes, JSON/CSV |
+//! | 0 | `error`, `rng`, `output`, `progress` | foundations: errors, random numbers, atomic writes, JSON/CSV, progress of long work |
 //! | 1 | `data` | recordings, positions with their roles, coefficient tables |
 //! | 2 | `fit`, `simulate` | identification, one least-squares solver, temperature models, the pipeline; the digital twin |
 //! | 3 | `blob`, `verify`, `vectors`, `acceptance` | blobs built and read, formula (13) through firmware-core, firmware test vectors, pass/fail against a specification |
@@ -22,6 +22,7 @@
 
 pub mod error;
 pub mod output;
+pub mod progress;
 pub mod rng;
 
 pub mod data;

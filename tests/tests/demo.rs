@@ -3,6 +3,8 @@
 use serde_json::Value;
 use tests::cli;
 
+mod reports;
+
 fn rows(summary: &Value) -> Vec<(String, String, f64, f64)> {
     summary["rows"]
         .as_array()
@@ -167,140 +169,81 @@ fn a_unit_outside_every_fitted_family_is_not_claimed_within_acceptance() {
     }
 }
 
-fn points(s: &str) -> Vec<(f64, f64)> {
-    s.split_whitespace()
-        .map(|p| {
-            let (x, y) = p.split_once(',').unwrap();
-            (x.parse().unwrap(), y.parse().unwrap())
-        })
-        .collect()
-}
-
-/// Least squares `px = a + b v`; returns (b, max residual).
-fn affine(pairs: &[(f64, f64)]) -> (f64, f64) {
-    let n = pairs.len() as f64;
-    let (mv, mp) = (
-        pairs.iter().map(|p| p.0).sum::<f64>() / n,
-        pairs.iter().map(|p| p.1).sum::<f64>() / n,
-    );
-    let sxx: f64 = pairs.iter().map(|p| (p.0 - mv).powi(2)).sum();
-    let sxy: f64 = pairs.iter().map(|p| (p.0 - mv) * (p.1 - mp)).sum();
-    let b = sxy / sxx;
-    let a = mp - b * mv;
-    (
-        b,
-        pairs
-            .iter()
-            .map(|p| (p.1 - a - b * p.0).abs())
-            .fold(0.0, f64::max),
-    )
-}
-
+/// The demo report's plots draw their data (`reports::check_plots`), and the numbers
+/// they show are summary.json's: the worst |dg| per temperature of every model, method
+/// and the T0 constants, and the maxima of the per-position plots.
 fn check_report(html: &str, rows: &[(String, String, f64, f64)]) {
-    let doc = roxmltree::Document::parse_with_options(
-        html,
-        roxmltree::ParsingOptions {
-            allow_dtd: true,
-            ..Default::default()
-        },
-    )
-    .expect("the report is well-formed");
-    let figures: Vec<_> = doc
-        .descendants()
-        .filter(|n| n.has_tag_name("figure"))
-        .collect();
-    assert!(figures.len() >= 5 + 12 + 2, "{} figures", figures.len());
-    let mut checked_dg = 0;
-    for fig in figures {
-        let id = fig.attribute("id").unwrap();
-        let data: Value = serde_json::from_str(
-            fig.descendants()
-                .find(|n| n.has_tag_name("script"))
-                .unwrap()
-                .text()
-                .unwrap(),
-        )
-        .unwrap();
-        let polylines: Vec<_> = fig
-            .descendants()
-            .filter(|n| n.has_tag_name("polyline") && n.attribute("stroke-width") == Some("2"))
-            .collect();
-        let (mut xs, mut ys) = (Vec::new(), Vec::new());
-        for s in data["series"].as_array().unwrap() {
-            let color = s["color"].as_str().unwrap();
-            let pts: Vec<(f64, f64)> = s["points"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|p| (p[0].as_f64().unwrap(), p[1].as_f64().unwrap()))
-                .collect();
-            if s["markers"].as_bool().unwrap() {
-                let circles = fig
-                    .descendants()
-                    .filter(|n| n.has_tag_name("circle") && n.attribute("fill") == Some(color))
-                    .count();
-                assert_eq!(circles, pts.len(), "{id}: markers of {}", s["name"]);
-                continue;
+    let figures = reports::check_plots(html);
+    assert!(figures.len() >= 2 + 5 + 24 + 2, "{} figures", figures.len());
+    let series = |d: &serde_json::Value| d["series"].as_array().unwrap().clone();
+    let model_method = |name: &str| match name.rsplit_once(" method ") {
+        Some((m, k)) => (m.to_string(), k.to_string()),
+        None => ("t0-constants".to_string(), "none".to_string()),
+    };
+    let max_abs = |s: &serde_json::Value| {
+        s["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p[1].as_f64().unwrap().abs())
+            .fold(0.0, f64::max)
+    };
+    let (mut dg, mut summary, mut uncompensated) = (0, 0, 0);
+    for f in &figures {
+        let title = f.data["title"].as_str().unwrap();
+        if f.id == "max-dg" {
+            // every point of every series is summary.json's figure at its temperature
+            let mut n = 0;
+            for s in series(&f.data) {
+                let (model, method) = model_method(s["name"].as_str().unwrap());
+                for p in s["points"].as_array().unwrap() {
+                    let (t, v) = (p[0].as_f64().unwrap(), p[1].as_f64().unwrap());
+                    assert!(
+                        (v - at(rows, &model, &method, t)).abs() < 1e-9,
+                        "{model} {method} {t}"
+                    );
+                    n += 1;
+                }
             }
-            let line = polylines
-                .iter()
-                .find(|p| p.attribute("stroke") == Some(color))
-                .unwrap_or_else(|| panic!("{id}: no line for {}", s["name"]));
-            let px = points(line.attribute("points").unwrap());
-            assert_eq!(
-                px.len(),
-                pts.len(),
-                "{id}: {} has {} points drawn, {} in data",
-                s["name"],
-                px.len(),
-                pts.len()
-            );
-            for (v, p) in pts.iter().zip(&px) {
-                xs.push((v.0, p.0));
-                ys.push((v.1, p.1));
+            assert_eq!(n, rows.len(), "every summary row plotted");
+            summary += 1;
+        } else if f.id == "dg-uncompensated" {
+            for s in series(&f.data) {
+                let t: f64 = s["name"]
+                    .as_str()
+                    .unwrap()
+                    .trim_end_matches(" C")
+                    .parse()
+                    .unwrap();
+                assert!(
+                    (max_abs(&s) - at(rows, "t0-constants", "none", t)).abs() < 1e-9,
+                    "{t}"
+                );
             }
-        }
-        if xs.len() > 2 {
-            let (bx, rx) = affine(&xs);
-            let (by, ry) = affine(&ys);
-            assert!(
-                bx > 0.0 && rx <= 1.0,
-                "{id}: x pixels do not follow the data (residual {rx})"
-            );
-            assert!(
-                by < 0.0 && ry <= 1.0,
-                "{id}: y pixels do not follow the data (residual {ry})"
-            );
-        }
-        if id.starts_with("dg-") {
-            // the plotted compensated dg agrees with summary.json's maximum
-            let title = data["title"].as_str().unwrap();
+            uncompensated += 1;
+        } else if f.id.starts_with("dg-") {
             let t: f64 = title
-                .trim_start_matches("dg at ")
+                .trim_start_matches("dg after compensation at ")
                 .trim_end_matches(" C")
                 .parse()
                 .unwrap();
-            for s in data["series"].as_array().unwrap() {
-                let name = s["name"].as_str().unwrap();
-                let max = s["points"]
-                    .as_array()
-                    .unwrap()
-                    .iter()
-                    .map(|p| p[1].as_f64().unwrap().abs())
-                    .fold(0.0, f64::max);
-                let (model, method) = match name.rsplit_once(" method ") {
-                    Some((m, k)) => (m.to_string(), k.to_string()),
-                    None => ("t0-constants".to_string(), "none".to_string()),
-                };
+            assert_eq!(
+                f.data["x_names"],
+                serde_json::json!(["PP1", "PP2", "PP3", "PP4", "PP5", "PP6"])
+            );
+            for s in series(&f.data) {
+                let (model, method) = model_method(s["name"].as_str().unwrap());
+                assert_ne!(method, "none", "{}: uncompensated in its own panel", f.id);
                 assert!(
-                    (max - at(rows, &model, &method, t)).abs() < 1e-9,
-                    "{id} {name}"
+                    (max_abs(&s) - at(rows, &model, &method, t)).abs() < 1e-9,
+                    "{} {model} {method}",
+                    f.id
                 );
             }
-            checked_dg += 1;
+            dg += 1;
         }
     }
-    assert_eq!(checked_dg, 5);
+    assert_eq!((dg, summary, uncompensated), (5, 1, 1));
 }
 
 #[test]
@@ -324,18 +267,12 @@ fn report_command_on_any_recording() {
         "no -40/+70 stops: no paper model\n{out}"
     );
     let text = std::fs::read_to_string(&html).unwrap();
-    let doc = roxmltree::Document::parse_with_options(
-        &text,
-        roxmltree::ParsingOptions {
-            allow_dtd: true,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    let dg = doc
-        .descendants()
-        .filter(|n| {
-            n.has_tag_name("figure") && n.attribute("id").is_some_and(|i| i.starts_with("dg-"))
+    let figures = reports::check_plots(&text);
+    let dg = figures
+        .iter()
+        .filter(|f| {
+            f.id.strip_prefix("dg-")
+                .is_some_and(|t| t.parse::<usize>().is_ok())
         })
         .count();
     assert_eq!(

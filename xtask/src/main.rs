@@ -1,5 +1,6 @@
-//! Project tasks: `cargo xtask test | demo`. Each task runs every step, collects the
-//! failures and exits non-zero at the end if any step failed.
+//! Project tasks: `cargo xtask test | demo | blind | bench | fuzz | cross | embedded`
+//! (`cargo xtask --help` lists them). Each task runs every step, collects the failures
+//! and exits non-zero at the end if any step failed.
 mod bench;
 mod embedded;
 mod fuzz;
@@ -131,6 +132,11 @@ fn test() -> ExitCode {
             ],
         ),
     );
+    // the reports' browser test needs Chromium: it fails (not skips) without it
+    if let Err(e) = setup::chromium() {
+        eprintln!("xtask: {e}");
+        s.failed.push("install chromium".into());
+    }
     s.run(
         "tests (workspace)",
         args(&mut c, &["test", "--workspace", "--release"]),
@@ -148,19 +154,48 @@ fn test() -> ExitCode {
     s.finish()
 }
 
-fn demo(rest: &[String]) -> ExitCode {
+/// `--out DIR` made absolute against the directory `cargo xtask` was run from: host-fit
+/// runs in the repository root, where a relative DIR would land otherwise.
+fn absolute_out(rest: &[String], cwd: &Path) -> Vec<String> {
+    let abs = |d: &str| {
+        let p = Path::new(d);
+        if p.is_absolute() {
+            d.to_string()
+        } else {
+            cwd.join(p).to_string_lossy().into_owned()
+        }
+    };
+    let mut out = Vec::new();
+    let mut words = rest.iter();
+    while let Some(w) = words.next() {
+        if w == "--out" {
+            out.push(w.clone());
+            if let Some(d) = words.next() {
+                out.push(abs(d));
+            }
+        } else if let Some(d) = w.strip_prefix("--out=") {
+            out.push(format!("--out={}", abs(d)));
+        } else {
+            out.push(w.clone());
+        }
+    }
+    out
+}
+
+/// `cargo run --release -p host-fit -- ARGS` in the repository root, cargo's own build
+/// progress shown (the first build takes a minute or two).
+fn host_fit(args: &[String]) -> Command {
     let mut c = cargo();
-    c.args([
-        "run",
-        "--quiet",
-        "--release",
-        "-p",
-        "host-fit",
-        "--",
-        "demo",
-    ])
-    .args(rest);
-    match c.status() {
+    c.args(["run", "--release", "-p", "host-fit", "--"])
+        .args(args);
+    c
+}
+
+fn demo(rest: &[String]) -> ExitCode {
+    let cwd = std::env::current_dir().unwrap_or_else(|_| root());
+    let mut args = vec!["demo".to_string()];
+    args.extend(absolute_out(rest, &cwd));
+    match host_fit(&args).status() {
         Ok(s) if s.success() => ExitCode::SUCCESS,
         _ => ExitCode::FAILURE,
     }
@@ -212,24 +247,62 @@ fn main() -> ExitCode {
         }
         Some("bench") => task(bench::bench),
         Some("blind") => task(|s| {
-            let mut c = cargo();
-            c.args([
-                "run",
-                "--quiet",
-                "--release",
-                "-p",
-                "host-fit",
-                "--",
-                "blind",
-                "--long",
-            ]);
+            let c = host_fit(&["blind".to_string(), "--long".to_string()]);
             s.run("blind tests of the diagnosis (long suite)", c);
         }),
         Some("cross") => task(embedded::cross),
         Some("embedded") => task(embedded::embedded),
-        _ => {
-            eprintln!("usage: cargo xtask <test | demo [args] | blind | bench | fuzz [--seconds N] [TARGET..] | cross | embedded>");
+        Some("-h" | "--help" | "help") | None => {
+            println!("{USAGE}");
+            ExitCode::SUCCESS
+        }
+        Some(other) => {
+            eprintln!("xtask: unknown command `{other}`\n\n{USAGE}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// What `cargo xtask --help` prints.
+const USAGE: &str = "usage: cargo xtask <command>
+
+commands:
+  test                      fmt, clippy, no_std build, all tests (headless Chromium included),
+                            thumb cross builds, the QEMU proof, a fuzz smoke run per target;
+                            installs what it needs when missing (apt as root)
+  demo [--out DIR] [--seed N] [--force]
+                            the paper's experiment on the digital twin -> demo-out/ (or DIR,
+                            relative to where you run it): recording, blobs, summary.json,
+                            report.html
+  blind                     the long blind suite of the diagnosis (about 2 minutes)
+  bench                     criterion benchmarks and a batch of 1000 simulated units
+                            -> target/bench/summary.md
+  fuzz [--seconds N] [TARGET..]
+                            cargo-fuzz targets (default all, 60 s each)
+  cross                     firmware-core built for thumbv7em-none-eabihf
+  embedded                  the firmware test under QEMU (bit-exact against the host)
+  help, -h, --help          this text";
+
+#[cfg(test)]
+mod tests {
+    use super::absolute_out;
+    use std::path::Path;
+
+    #[test]
+    fn a_relative_out_is_taken_from_where_xtask_was_run() {
+        let a = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let cwd = Path::new("/home/u/repo/sub");
+        assert_eq!(
+            absolute_out(&a(&["--out", "mydir", "--seed", "2"]), cwd),
+            a(&["--out", "/home/u/repo/sub/mydir", "--seed", "2"])
+        );
+        assert_eq!(
+            absolute_out(&a(&["--force", "--out=x/y"]), cwd),
+            a(&["--force", "--out=/home/u/repo/sub/x/y"])
+        );
+        assert_eq!(
+            absolute_out(&a(&["--out", "/tmp/d"]), cwd),
+            a(&["--out", "/tmp/d"])
+        );
     }
 }

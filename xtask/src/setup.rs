@@ -1,6 +1,7 @@
 //! What the full test needs beyond the Rust toolchain, installed when missing: QEMU 10
 //! from bookworm-backports, LLVM's nm/size, gcc, the Arm GNU toolchain (Debian's
-//! gcc-arm-none-eabi, for the C harness), cargo-fuzz. Installing with apt needs
+//! gcc-arm-none-eabi, for the C harness), Debian's Chromium (the reports' browser
+//! test), cargo-fuzz. Installing with apt needs
 //! root (CI runs as root); otherwise the message says what to install.
 use std::process::Command;
 
@@ -107,6 +108,39 @@ pub fn arm_gcc() -> Result<(), String> {
             "-qq",
             "--no-install-recommends",
             "gcc-arm-none-eabi",
+        ])
+    };
+    // the package lists of a fresh machine may be missing or stale
+    install().or_else(|_| {
+        apt_update()?;
+        install()
+    })
+}
+
+/// Where the reports' browser test (`tests/tests/reports_in_a_browser.rs`) looks for
+/// Chromium.
+pub const CHROMIUM: &str = "/usr/bin/chromium";
+
+/// Debian's chromium (headless, for the reports' browser test) and the DejaVu fonts its
+/// text is measured in.
+pub fn chromium() -> Result<(), String> {
+    if std::path::Path::new(CHROMIUM).exists() {
+        return Ok(());
+    }
+    if !is_root() {
+        return Err(format!(
+            "{CHROMIUM} is missing: apt-get install chromium fonts-dejavu-core (as root)"
+        ));
+    }
+    eprintln!("xtask: installing Debian's chromium (the reports' browser test)");
+    let install = || {
+        apt(&[
+            "install",
+            "-y",
+            "-qq",
+            "--no-install-recommends",
+            "chromium",
+            "fonts-dejavu-core",
         ])
     };
     // the package lists of a fresh machine may be missing or stale

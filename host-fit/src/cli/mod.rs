@@ -56,7 +56,7 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<Ou
         Command::FwVectors(a) => done(check::fw_vectors(a, out)),
         Command::Diagnose(a) => done(study::diagnose(a, out, err)),
         Command::Report(a) => done(study::report(a, out, err)),
-        Command::Blind(a) => done(study::blind(a, out)),
+        Command::Blind(a) => done(study::blind(a, out, err)),
         Command::Batch(a) => production::batch(a, out, err),
         Command::Simulate(a) => done(production::simulate(a, out)),
         Command::Demo(a) => done(production::demo(a, out)),

@@ -6,6 +6,7 @@ use crate::blob::build_blob;
 use crate::diagnose::contract::BlobNote;
 use crate::error::Result;
 use crate::output::{check_writable, json, write_atomic};
+use crate::progress::with_progress;
 use std::io::Write;
 
 pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
@@ -42,13 +43,13 @@ pub(super) fn report(a: ReportArgs, out: &mut dyn Write, err: &mut dyn Write) ->
     let rec = oriented(load(&a.input, None, err)?, err)?;
     let oc = analyse(rec, None)?;
     let t = format!("{}{}", table(&oc.rows), crate::analysis::verdicts(&oc));
-    let html = crate::report::demo::demo_report(&oc, &t)?;
+    let html = crate::report::demo::demo_report(&oc)?;
     write_atomic(&a.out, html.as_bytes(), a.force)?;
     w(out, t)?;
     w(out, format!("report: {}", a.out.display()))
 }
 
-pub(super) fn blind(a: BlindArgs, out: &mut dyn Write) -> Result<()> {
+pub(super) fn blind(a: BlindArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     use rayon::prelude::*;
     // every case is independent and deterministic: run them on all cores
     let mut cases = crate::blind::suite(a.long);
@@ -62,6 +63,16 @@ pub(super) fn blind(a: BlindArgs, out: &mut dyn Write) -> Result<()> {
             w(out, crate::blind::diagnosis_text(c))?;
         }
     }
-    let outcomes: Vec<_> = cases.par_iter().map(crate::blind::run).collect();
+    // the long suite takes minutes: its progress on stderr
+    let outcomes: Vec<_> = with_progress("blind suite", "cases", cases.len(), err, |tick| {
+        cases
+            .par_iter()
+            .map(|c| {
+                let o = crate::blind::run(c);
+                tick();
+                o
+            })
+            .collect()
+    });
     w(out, crate::blind::report(&outcomes))
 }

@@ -1,6 +1,9 @@
 //! The engineer's reports: self-contained HTML pages with SVG plots, for the demo (or
 //! any recording) and for a diagnosis.
+pub mod axis;
 pub mod demo;
 pub mod diagnosis;
 pub mod page;
 pub mod plot;
+pub mod svg;
+pub mod trace;

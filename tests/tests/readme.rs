@@ -29,12 +29,18 @@ fn rewrite(readme: &str, id: &str, want: &str) -> String {
     let at = readme.find(&marker).expect("marker present") + marker.len();
     let open = at + readme[at..].find("```").expect("a fenced block after the marker");
     let body = open + readme[open..].find('\n').expect("a line after the fence") + 1;
-    let close = body
-        + readme[body..]
+    // An empty block closes on the line right after its fence.
+    let close = if readme[body..].starts_with("```") {
+        body
+    } else {
+        body + readme[body..]
             .find("\n```\n")
             .map(|i| i + 1)
-            .expect("the fenced block is closed");
-    format!("{}{}\n{}", &readme[..body], want.trim_end(), &readme[close..])
+            .expect("the fenced block is closed")
+    };
+    let want = want.trim_end();
+    let sep = if want.is_empty() { "" } else { "\n" };
+    format!("{}{want}{sep}{}", &readme[..body], &readme[close..])
 }
 
 fn same(id: &str, want: &str) {
@@ -123,15 +129,20 @@ fn the_check_can_fail() {
 fn rewriting_a_block_with_its_own_text_changes_nothing_else() {
     let readme = std::fs::read_to_string(repo().join("README.md")).unwrap();
     let ids: Vec<&str> = readme
-        .split("<!-- figure: ")
-        .skip(1)
-        .filter_map(|s| s.split(" -->").next())
+        .lines()
+        .filter_map(|l| l.strip_prefix("<!-- figure: ")?.strip_suffix(" -->"))
         .collect();
     assert!(ids.len() >= 9, "figure markers found: {ids:?}");
     for id in ids {
         assert_eq!(rewrite(&readme, id, &block(&readme, id)), readme, "block {id}");
         let changed = rewrite(&readme, id, "x");
         assert_eq!(block(&changed, id), "x");
-        assert_eq!(changed.len(), readme.len() - block(&readme, id).len() + 1);
+        assert_eq!(rewrite(&changed, id, &block(&readme, id)), readme, "block {id} back");
     }
+    // An empty block must not swallow the block after it.
+    let two = "<!-- figure: a -->\n```text\n```\n\n<!-- figure: b -->\n```text\nB\n```\n";
+    let filled = rewrite(two, "a", "A");
+    assert_eq!(block(&filled, "a"), "A");
+    assert_eq!(block(&filled, "b"), "B");
+    assert_eq!(rewrite(two, "a", ""), two);
 }

@@ -419,7 +419,11 @@ pub mod figures {
             ("cats-tag", vec!["--positions", "{dir}/positions.csv"]),
             (
                 "ggir-wrist",
-                vec!["--positions", "{dir}/positions.csv", "--unknown-orientations"],
+                vec![
+                    "--positions",
+                    "{dir}/positions.csv",
+                    "--unknown-orientations",
+                ],
             ),
             ("imucal-ferraris", vec![]),
         ];
@@ -474,7 +478,10 @@ pub mod figures {
                 ));
             }
             for q in j["quality"].as_array().into_iter().flatten() {
-                s.push_str(&format!("    data: {}\n", q["kind"].as_str().unwrap_or("?")));
+                s.push_str(&format!(
+                    "    data: {}\n",
+                    q["kind"].as_str().unwrap_or("?")
+                ));
             }
             all.push(j);
         }

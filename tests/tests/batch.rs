@@ -235,7 +235,10 @@ fn batch_with_the_diagnosis_takes_the_diagnosed_blob() {
         own.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{err}");
-    assert_eq!(std::fs::read(out.join("u1.blob")).unwrap(), std::fs::read(&own).unwrap());
+    assert_eq!(
+        std::fs::read(out.join("u1.blob")).unwrap(),
+        std::fs::read(&own).unwrap()
+    );
     let u: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("u1.json")).unwrap()).unwrap();
     assert!(

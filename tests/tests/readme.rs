@@ -27,7 +27,10 @@ static README_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
 fn rewrite(readme: &str, id: &str, want: &str) -> String {
     let marker = format!("<!-- figure: {id} -->");
     let at = readme.find(&marker).expect("marker present") + marker.len();
-    let open = at + readme[at..].find("```").expect("a fenced block after the marker");
+    let open = at
+        + readme[at..]
+            .find("```")
+            .expect("a fenced block after the marker");
     let body = open + readme[open..].find('\n').expect("a line after the fence") + 1;
     // An empty block closes on the line right after its fence.
     let close = if readme[body..].starts_with("```") {
@@ -134,10 +137,18 @@ fn rewriting_a_block_with_its_own_text_changes_nothing_else() {
         .collect();
     assert!(ids.len() >= 9, "figure markers found: {ids:?}");
     for id in ids {
-        assert_eq!(rewrite(&readme, id, &block(&readme, id)), readme, "block {id}");
+        assert_eq!(
+            rewrite(&readme, id, &block(&readme, id)),
+            readme,
+            "block {id}"
+        );
         let changed = rewrite(&readme, id, "x");
         assert_eq!(block(&changed, id), "x");
-        assert_eq!(rewrite(&changed, id, &block(&readme, id)), readme, "block {id} back");
+        assert_eq!(
+            rewrite(&changed, id, &block(&readme, id)),
+            readme,
+            "block {id} back"
+        );
     }
     // An empty block must not swallow the block after it.
     let two = "<!-- figure: a -->\n```text\n```\n\n<!-- figure: b -->\n```text\nB\n```\n";

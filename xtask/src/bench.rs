@@ -77,7 +77,9 @@ fn diagnosis_times(bin: &Path, root: &Path, steps: &mut crate::Steps) -> String 
     let _ = Command::new(bin)
         .args(["simulate", &s(&cfg), "--out", &s(&rec), "--force"])
         .output();
-    let rows = std::fs::read_to_string(&rec).map(|t| t.lines().count()).unwrap_or(0);
+    let rows = std::fs::read_to_string(&rec)
+        .map(|t| t.lines().count())
+        .unwrap_or(0);
     let wrist = root.join("../shared/real/ggir-wrist");
     let cases = [
         (

@@ -340,6 +340,18 @@ mod tests {
     use super::*;
 
     #[test]
+    fn whitespace_only_fields_are_empty_and_the_vector_stays_nan() {
+        // found by the fuzzer: vertical tabs trim to empty fields
+        let text = "name,fx,fy,fz\nZ_0,1,0,1\nIXISme,,\x0b, \x0b, 0.,090";
+        let (p, _) = Positions::parse(Path::new("p.csv"), text).unwrap();
+        let i = p.index("IXISme").unwrap();
+        assert!(!p.is_known(i) && p.vector(i).iter().all(|v| v.is_nan()));
+        let z = p.index("Z_0").unwrap();
+        let n: f64 = p.vector(z).iter().map(|v| v * v).sum();
+        assert!((n - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
     fn an_empty_vector_is_a_pose_of_unknown_orientation() {
         let text = "name,fx,fy,fz,role\nW1,,,\nW2,0,0,2,verification\nTP1,,,,\n";
         let (p, _) = Positions::parse(Path::new("p.csv"), text).unwrap();

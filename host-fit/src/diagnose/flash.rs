@@ -53,4 +53,3 @@ pub fn flashable(data: &Data, f: &Fit) -> Fit {
     }
     data.fit(&spec, None, true).unwrap_or_else(|| f.clone())
 }
-

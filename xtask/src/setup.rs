@@ -152,6 +152,16 @@ pub fn chromium() -> Result<(), String> {
 
 /// cargo-fuzz for the nightly toolchain (from crates.io).
 pub fn cargo_fuzz() -> Result<(), String> {
+    if !ok(Command::new("cargo").args(["+nightly", "--version"])) {
+        eprintln!("xtask: installing the nightly toolchain (rustup, minimal profile) for fuzzing");
+        let st = Command::new("rustup")
+            .args(["toolchain", "install", "nightly", "--profile", "minimal"])
+            .status()
+            .map_err(|e| format!("rustup: {e}"))?;
+        if !st.success() {
+            return Err("rustup toolchain install nightly failed".into());
+        }
+    }
     if ok(Command::new("cargo").args(["+nightly", "fuzz", "--version"])) {
         return Ok(());
     }

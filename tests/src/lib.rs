@@ -22,6 +22,15 @@ pub fn cli(args: &[&str]) -> (i32, String, String) {
     )
 }
 
+/// `host-fit ARGS` that must succeed (exit 0, else the test fails with its stderr), its
+/// stdout parsed as JSON.
+pub fn cli_json(args: &[&str]) -> serde_json::Value {
+    let (code, out, err) = cli(args);
+    assert_eq!(code, 0, "host-fit {}: {err}", args.join(" "));
+    serde_json::from_str(&out)
+        .unwrap_or_else(|e| panic!("host-fit {}: not JSON ({e}): {out}", args.join(" ")))
+}
+
 /// `host-fit diagnose --json` of `../shared/real/NAME/recording.csv`; `{dir}` in the extra
 /// arguments is that recording's folder.
 pub fn real_diagnosis(name: &str, extra: &[&str]) -> serde_json::Value {
@@ -278,7 +287,7 @@ pub mod twins {
 /// The figures the README quotes, each produced by the command or test it names; the
 /// README test (`tests/readme.rs`) holds the README's blocks to them.
 pub mod figures {
-    use super::{cli, repo};
+    use super::{cli, cli_json, repo};
 
     /// `host-fit demo --seed 1`: the table it prints.
     pub fn demo_table() -> String {
@@ -297,7 +306,7 @@ pub mod figures {
     /// largest relative difference over the 24 coefficients, and the line quoting it.
     pub fn golden_table3() -> (f64, String) {
         let tables = repo().join("testdata/paper/paper-tables.csv");
-        let (code, out, err) = cli(&[
+        let j = cli_json(&[
             "temp-fit",
             tables.to_str().unwrap(),
             "--model",
@@ -305,8 +314,6 @@ pub mod figures {
             "--relative",
             "--json",
         ]);
-        assert_eq!(code, 0, "{err}");
-        let j: serde_json::Value = serde_json::from_str(&out).unwrap();
         let iv = j["intervals"].as_array().unwrap();
         let text = std::fs::read_to_string(repo().join("testdata/paper/paper-table3.csv")).unwrap();
         let mut worst: f64 = 0.0;
@@ -352,7 +359,7 @@ pub mod figures {
         let p = dir.join("rec.csv");
         std::fs::write(&p, &sim.csv).unwrap();
         let blob_path = dir.join("unit.blob");
-        let (code, out, err) = cli(&[
+        let j = cli_json(&[
             "diagnose",
             p.to_str().unwrap(),
             "--out",
@@ -360,8 +367,6 @@ pub mod figures {
             "--json",
             "--force",
         ]);
-        assert_eq!(code, 0, "{err}");
-        let j: serde_json::Value = serde_json::from_str(&out).unwrap();
         for e in &case.effects {
             assert!(
                 j["findings"]
@@ -369,7 +374,7 @@ pub mod figures {
                     .unwrap()
                     .iter()
                     .any(|f| f["effect"] == *e),
-                "{e} not found: {out}"
+                "{e} not found: {j}"
             );
         }
         assert_eq!(j["blob"]["physics"], true);
@@ -669,7 +674,7 @@ pub mod figures {
         std::fs::write(&p, pos).unwrap();
         let (rec, pos) = (real.join("recording.csv"), p.to_str().unwrap().to_string());
         let blob = dir.join("ggir.blob");
-        let (code, out, err) = cli(&[
+        let j = cli_json(&[
             "fit",
             rec.to_str().unwrap(),
             "--positions",
@@ -678,8 +683,6 @@ pub mod figures {
             blob.to_str().unwrap(),
             "--json",
         ]);
-        assert_eq!(code, 0, "{err}");
-        let j: serde_json::Value = serde_json::from_str(&out).unwrap();
         let (code, out, err) = cli(&[
             "verify",
             rec.to_str().unwrap(),

@@ -1,5 +1,5 @@
 //! The whole chain through the CLI: recording -> fit -> blob -> inspect -> verify.
-use tests::{cli, synthetic_csv, PAPER_T0, TP};
+use tests::{cli, cli_json, synthetic_csv, PAPER_T0, TP};
 
 fn pp() -> Vec<(&'static str, [f64; 3])> {
     let (s, c) = 25f64.to_radians().sin_cos();
@@ -48,9 +48,7 @@ fn fit_inspect_verify_and_never_overwrite() {
     let _ = std::fs::remove_file(&blob);
     let (r, b) = (rec.to_str().unwrap(), blob.to_str().unwrap());
 
-    let (code, out, err) = cli(&["fit", r, "--model", "pwl", "--out", b, "--json"]);
-    assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let j = cli_json(&["fit", r, "--model", "pwl", "--out", b, "--json"]);
     assert_eq!(j["route"], "static");
     assert_eq!(j["unit"], "SYN-1");
     assert!(j["f32_departure_g"].as_f64().unwrap() <= 2e-6);
@@ -62,19 +60,15 @@ fn fit_inspect_verify_and_never_overwrite() {
     assert!(err.contains("--force"), "{err}");
     assert_eq!(std::fs::read(&blob).unwrap(), bytes);
 
-    let (code, out, err) = cli(&["inspect", b, "--json"]);
-    assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let j = cli_json(&["inspect", b, "--json"]);
     assert_eq!(j["serial"], "SYN-1");
     assert_eq!(j["model"], "pwl");
     assert_eq!(j["rows"].as_array().unwrap().len(), 3);
 
     for method in ["1", "2"] {
-        let (code, out, err) = cli(&["verify", r, "--blob", b, "--method", method, "--json"]);
-        assert_eq!(code, 0, "{err}");
-        let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+        let j = cli_json(&["verify", r, "--blob", b, "--method", method, "--json"]);
         let temps = j["max_by_temperature"].as_array().unwrap();
-        assert_eq!(temps.len(), 2, "{out}");
+        assert_eq!(temps.len(), 2, "{j}");
         for t in temps {
             let unc = t["max_abs_dg_mg_uncompensated"].as_f64().unwrap();
             let comp = t["max_abs_dg_mg"].as_f64().unwrap();

@@ -1,10 +1,10 @@
 //! Golden test: the paper's Tables 1-2 -> Table 3 through `host-fit temp-fit`.
-use tests::{cli, repo};
+use tests::{cli, cli_json, repo};
 
 #[test]
 fn temp_fit_reproduces_table3_within_1e_3_relative() {
     let tables = repo().join("testdata/paper/paper-tables.csv");
-    let (code, out, err) = cli(&[
+    let j = cli_json(&[
         "temp-fit",
         tables.to_str().unwrap(),
         "--model",
@@ -12,8 +12,6 @@ fn temp_fit_reproduces_table3_within_1e_3_relative() {
         "--relative",
         "--json",
     ]);
-    assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(j["model"], "pwl");
     assert_eq!(j["t0_c"], 20.0);
     let iv = j["intervals"].as_array().unwrap();
@@ -31,7 +29,7 @@ fn temp_fit_reproduces_table3_within_1e_3_relative() {
 #[test]
 fn poly_order_2_through_three_temperatures_interpolates_the_table() {
     let tables = repo().join("testdata/paper/paper-tables.csv");
-    let (code, out, err) = cli(&[
+    let j = cli_json(&[
         "temp-fit",
         tables.to_str().unwrap(),
         "--model",
@@ -40,8 +38,6 @@ fn poly_order_2_through_three_temperatures_interpolates_the_table() {
         "2",
         "--json",
     ]);
-    assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
     // Cramer's solution of (11): c(T) = c(T0) + a1 dT + a2 dT^2 passes through all rows.
     let text = std::fs::read_to_string(&tables).unwrap();
     for line in text

@@ -1,7 +1,7 @@
 //! Production calibration end to end: the data-chosen model against the plain
 //! least-squares fit on twins it was not tuned to, the predicted error's coverage,
 //! acceptance and its exit codes, unknown orientations, dwell-averaged recordings.
-use tests::figures;
+use tests::{cli_json, figures};
 
 #[test]
 fn default_fit_is_never_worse_than_the_plain_least_squares_cubic() {
@@ -210,14 +210,12 @@ fn options_that_do_not_apply_are_errors() {
         assert!(err.contains(says), "{args:?}: {err}");
         assert!(!b.exists(), "{args:?} wrote a blob");
     }
-    let (code, out, err) = cli(&["fit", s(&rec), "--out", s(&b), "--order", "2", "--json"]);
-    assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let j = cli_json(&["fit", s(&rec), "--out", s(&b), "--order", "2", "--json"]);
     assert_eq!(j["model"], "poly2");
     assert_eq!(j["chosen_by"]["chosen"], "poly4");
     // a family alone: the data choose its order (or breakpoints) within it
     for (family, prefix) in [("poly", "poly"), ("pwl", "pwl[")] {
-        let (code, out, err) = cli(&[
+        let j = cli_json(&[
             "fit",
             s(&rec),
             "--out",
@@ -227,8 +225,6 @@ fn options_that_do_not_apply_are_errors() {
             family,
             "--json",
         ]);
-        assert_eq!(code, 0, "{err}");
-        let j: serde_json::Value = serde_json::from_str(&out).unwrap();
         assert!(
             j["model"].as_str().unwrap().starts_with(prefix),
             "{}",
@@ -253,12 +249,9 @@ fn options_that_do_not_apply_are_errors() {
 /// temperature over the valid range, and what the equilibrium rule left out.
 #[test]
 fn the_default_fit_states_its_choice_and_its_predicted_error() {
-    use tests::cli;
     let (dir, rec) = paper_recording("states", 13);
     let b = dir.join("u.blob");
-    let (code, out, err) = cli(&["fit", s(&rec), "--out", s(&b), "--json"]);
-    assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let j = cli_json(&["fit", s(&rec), "--out", s(&b), "--json"]);
     let sel = &j["chosen_by"];
     assert!(sel["reason"]
         .as_str()
@@ -294,7 +287,7 @@ fn the_default_fit_states_its_choice_and_its_predicted_error() {
     // the cache's lag, stated apart, scales with the step
     let lag = p["cache_lag_max_mg"].as_f64().unwrap();
     assert!(lag > 0.001 && lag < 0.1, "{lag}");
-    let (code, out, err) = cli(&[
+    let j2 = cli_json(&[
         "fit",
         s(&rec),
         "--out",
@@ -304,8 +297,6 @@ fn the_default_fit_states_its_choice_and_its_predicted_error() {
         "--update-step",
         "0.2",
     ]);
-    assert_eq!(code, 0, "{err}");
-    let j2: serde_json::Value = serde_json::from_str(&out).unwrap();
     let lag2 = j2["predicted_error"]["cache_lag_max_mg"].as_f64().unwrap();
     assert!((lag2 / lag - 2.0).abs() < 1e-9, "{lag} {lag2}");
     let ex = &j["excluded_not_in_equilibrium"];
@@ -430,9 +421,7 @@ fn inspect_shows_every_in_flight_term() {
         warmup_decay: (-dt / 3600.0f32).exp(),
     });
     let p = write(&b, "physics.blob");
-    let (code, out, err) = cli(&["inspect", s(&p), "--json"]);
-    assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let j = cli_json(&["inspect", s(&p), "--json"]);
     let ph = &j["physics"];
     let close = |v: &serde_json::Value, want: f64, rel: f64| {
         let g = v.as_f64().unwrap();
@@ -521,7 +510,7 @@ fn known_and_unknown_poses_mix_in_one_recording() {
     }
     std::fs::write(&positions, &p).unwrap();
     let b = dir.join("u.blob");
-    let (code, out, err) = cli(&[
+    let j = cli_json(&[
         "fit",
         s(&rec),
         "--positions",
@@ -530,8 +519,6 @@ fn known_and_unknown_poses_mix_in_one_recording() {
         s(&b),
         "--json",
     ]);
-    assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
     let o = &j["orientations"];
     assert_eq!(o["estimated"], 14, "{o}");
     assert!(o["frame"].is_null(), "the known poses fix the frame: {o}");
@@ -620,9 +607,7 @@ fn dwell_averaged_recordings_work_and_say_where_their_noise_comes_from() {
         let (code, out, err) = cli(&["fit", s(r), "--out", s(b), "--json", "--update-step", "0"]);
         assert_eq!(code, 0, "{err}");
         let j: serde_json::Value = serde_json::from_str(&out).unwrap();
-        let (code, vout, verr) = cli(&["verify", s(r), "--blob", s(b), "--json"]);
-        assert_eq!(code, 0, "{verr}");
-        let v: serde_json::Value = serde_json::from_str(&vout).unwrap();
+        let v = cli_json(&["verify", s(r), "--blob", s(b), "--json"]);
         let w = v["dwells"]
             .as_array()
             .unwrap()

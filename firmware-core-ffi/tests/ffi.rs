@@ -8,28 +8,15 @@
     clippy::indexing_slicing,
     clippy::multiple_unsafe_ops_per_block
 )]
-use firmware_core::blob::{example_blob, BlobView, MAX_BLOB_LEN};
+use firmware_core::blob::{example_blob, example_physics, BlobView, MAX_BLOB_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
-use firmware_core::temperature::Physics;
 use firmware_core_ffi::*;
 use std::mem::MaybeUninit;
 
 fn blob_bytes(physics: bool) -> &'static [u8] {
     let mut b = example_blob();
     if physics {
-        b.calibration.physics = Some(Physics {
-            sample_period_s: 1.0,
-            lag_alpha: 0.01,
-            rate: [0.02, 0.0, -0.01],
-            rate_alpha: 0.03,
-            hysteresis: [1e-4, 0.0, 0.0],
-            hysteresis_threshold_c: 0.5,
-            hysteresis_initial: 1.0,
-            k2: [1e-4, 0.0, 0.0],
-            asymmetry: [0.0, 1e-4, 0.0],
-            warmup: [2e-4, 0.0, 0.0],
-            warmup_decay: 0.999,
-        });
+        b.calibration.physics = Some(example_physics());
     }
     let mut buf = vec![0u8; MAX_BLOB_LEN];
     let n = b.encode(&mut buf).unwrap();

@@ -3,30 +3,14 @@
 #![allow(missing_docs)]
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use firmware_core::blob::{example_blob, example_blob_bytes, Blob};
+use firmware_core::blob::{example_blob, example_blob_bytes, example_physics, Blob};
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
-use firmware_core::temperature::{Calibration, Physics, TempModel};
-
-fn physics() -> Physics<f32> {
-    Physics {
-        sample_period_s: 1.0,
-        lag_alpha: 0.01,
-        rate: [0.02, 0.0, -0.01],
-        rate_alpha: 0.03,
-        hysteresis: [1e-4, 0.0, 0.0],
-        hysteresis_threshold_c: 0.5,
-        hysteresis_initial: 1.0,
-        k2: [1e-4, 0.0, 0.0],
-        asymmetry: [0.0, 1e-4, 0.0],
-        warmup: [2e-4, 0.0, 0.0],
-        warmup_decay: 0.999,
-    }
-}
+use firmware_core::temperature::{Calibration, TempModel};
 
 fn per_sample(c: &mut Criterion) {
     let blob = example_blob();
     let mut with_phys = blob.calibration.clone();
-    with_phys.physics = Some(physics());
+    with_phys.physics = Some(example_physics());
     let u = [0.0045f32, -0.0044, -0.5521];
     let mut g = c.benchmark_group("sample");
     for (name, cal, m) in [

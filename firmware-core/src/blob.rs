@@ -582,6 +582,24 @@ pub fn example_blob() -> Blob {
     }
 }
 
+/// In-flight terms of every kind, each of a plausible size: the physics half of the
+/// examples, benchmarks and tests (set it as `calibration.physics` of [`example_blob`]).
+pub fn example_physics() -> Physics<f32> {
+    Physics {
+        sample_period_s: 1.0,
+        lag_alpha: 0.01,
+        rate: [0.02, 0.0, -0.01],
+        rate_alpha: 0.03,
+        hysteresis: [1e-4, 0.0, 0.0],
+        hysteresis_threshold_c: 0.5,
+        hysteresis_initial: 1.0,
+        k2: [1e-4, 0.0, 0.0],
+        asymmetry: [0.0, 1e-4, 0.0],
+        warmup: [2e-4, 0.0, 0.0],
+        warmup_decay: 0.999,
+    }
+}
+
 /// [`example_blob`] encoded.
 pub fn example_blob_bytes() -> heapless::Vec<u8, MAX_BLOB_LEN> {
     let mut buf = [0u8; MAX_BLOB_LEN];

@@ -3,26 +3,10 @@
 //! non-finite acceleration without a flag; blobs round-trip and every bit flip is caught.
 mod common;
 
-use firmware_core::blob::{Blob, BlobView, MAX_BLOB_LEN};
+use firmware_core::blob::{example_physics, Blob, BlobView, MAX_BLOB_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, Method, Status};
-use firmware_core::temperature::{Calibration, Physics, TempModel};
+use firmware_core::temperature::{Calibration, TempModel};
 use proptest::prelude::*;
-
-fn physics() -> Physics<f32> {
-    Physics {
-        sample_period_s: 1.0,
-        lag_alpha: 0.01,
-        rate: [0.02, 0.0, -0.01],
-        rate_alpha: 0.03,
-        hysteresis: [1e-4, 0.0, 0.0],
-        hysteresis_threshold_c: 0.5,
-        hysteresis_initial: 1.0,
-        k2: [1e-4, 0.0, 0.0],
-        asymmetry: [0.0, 1e-4, 0.0],
-        warmup: [2e-4, 0.0, 0.0],
-        warmup_decay: 0.999,
-    }
-}
 
 /// Any f32: normal values of every size, subnormals, zeros, infinities and NaNs.
 fn any_f32() -> impl Strategy<Value = f32> {
@@ -52,7 +36,7 @@ proptest! {
         seq in prop::collection::vec((prop::array::uniform3(any_f32()), any_f32()), 1..40)) {
         let mut cal: Calibration<f32> = cal;
         if phys {
-            cal.physics = Some(physics());
+            cal.physics = Some(example_physics());
             if !cfg!(feature = "physics") {
                 // never compensated without its terms
                 prop_assert_eq!(
@@ -91,7 +75,7 @@ proptest! {
             cal.model = TempModel::Poly { terms: [t0, [1e-5; 12], [-2e-7; 12]].into_iter().collect() };
         }
         if with_phys {
-            cal.physics = Some(physics());
+            cal.physics = Some(example_physics());
         }
         let mut serial = heapless::String::new();
         serial.push_str("UNIT-7").unwrap();
@@ -119,7 +103,7 @@ proptest! {
         }
         cal.update_step_c = 0.25;
         if with_phys && cfg!(feature = "physics") {
-            cal.physics = Some(physics());
+            cal.physics = Some(example_physics());
         }
         let blob = Blob { serial: heapless::String::new(), calibration: cal };
         let mut buf = [0u8; MAX_BLOB_LEN];

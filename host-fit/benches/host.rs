@@ -7,22 +7,13 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::Recording;
 use host_fit::fit::pipeline::{fit_recording, ModelChoice, ModelKind, Route};
-use host_fit::simulate::{simulate, Stop};
+use host_fit::simulate::simulate;
 use std::path::Path;
 
 fn recording(stops: usize) -> String {
     let mut cfg = host_fit::blind::cases::profile(false);
     let temps = [20.0, -20.0, 10.0, 40.0, 10.0, 30.0, 0.0, 35.0, 15.0];
-    let pos = cfg.schedule.positions.clone();
-    cfg.schedule.stops = temps[..stops]
-        .iter()
-        .map(|t| Stop {
-            temp_c: *t,
-            soak_s: 1200.0,
-            ramp_c_per_min: 1.0,
-            positions: Some(pos.clone()),
-        })
-        .collect();
+    cfg.schedule.stops = host_fit::blind::cases::stops(&temps[..stops], &cfg.schedule.positions);
     simulate(&cfg, |_| {}).unwrap().csv
 }
 

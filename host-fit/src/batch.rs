@@ -13,6 +13,7 @@ use crate::error::{HostError, Result};
 use crate::fit::pipeline::{fit_chosen, ModelKind, ModelRequest};
 use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
+use crate::fit::temperature::span;
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::verify::{verify, TempMax};
 use firmware_core::compensate::Method;
@@ -294,13 +295,14 @@ pub fn lot(results: &mut [UnitResult]) -> Vec<LotCoefficient> {
                 far += 1;
             }
         }
+        let (min, max) = span(&vals);
         out.push(LotCoefficient {
             coefficient: name,
             units: vals.len(),
             median: med,
             robust_sigma: sigma,
-            min: vals.iter().copied().fold(f64::INFINITY, f64::min),
-            max: vals.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            min,
+            max,
             far,
         });
     }

@@ -287,6 +287,16 @@ pub mod twins {
 /// The figures the README quotes, each produced by the command or test it names; the
 /// README test (`tests/readme.rs`) holds the README's blocks to them.
 pub mod figures {
+    /// A JSON array of strings as one string.
+    fn joined(v: &serde_json::Value, sep: &str) -> String {
+        v.as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|a| a.as_str())
+            .collect::<Vec<_>>()
+            .join(sep)
+    }
+
     use super::{cli, cli_json, repo};
 
     /// `host-fit demo --seed 1`: the table it prints.
@@ -455,13 +465,7 @@ pub mod figures {
                 s.push_str(&format!(
                     "    finding: {} on {} ({})\n",
                     x["effect"].as_str().unwrap_or("?"),
-                    x["axes"]
-                        .as_array()
-                        .into_iter()
-                        .flatten()
-                        .filter_map(|a| a.as_str())
-                        .collect::<Vec<_>>()
-                        .join(","),
+                    joined(&x["axes"], ","),
                     if x["reproduced"] == true {
                         "reproduced on both halves"
                     } else {
@@ -472,13 +476,7 @@ pub mod figures {
             for x in j["ambiguous"].as_array().into_iter().flatten() {
                 s.push_str(&format!(
                     "    ambiguous: {} (needs {})\n",
-                    x["candidates"]
-                        .as_array()
-                        .into_iter()
-                        .flatten()
-                        .filter_map(|a| a.as_str())
-                        .collect::<Vec<_>>()
-                        .join(" or "),
+                    joined(&x["candidates"], " or "),
                     x["needed"].as_str().unwrap_or("?")
                 ));
             }

@@ -84,17 +84,23 @@ pub fn profile(tp_only: bool) -> SimConfig {
     } else {
         c.schedule.positions.clone()
     };
-    c.schedule.positions = pos.clone();
-    c.schedule.stops = [20.0, -20.0, 10.0, 40.0, 10.0]
+    c.schedule.stops = stops(&[20.0, -20.0, 10.0, 40.0, 10.0], &pos);
+    c.schedule.positions = pos;
+    c
+}
+
+/// The profile's stops at `temps`: every position in `positions`, 1 C/min ramps, 20 min
+/// soaks.
+pub fn stops(temps: &[f64], positions: &[String]) -> Vec<Stop> {
+    temps
         .iter()
         .map(|t| Stop {
             temp_c: *t,
             soak_s: 1200.0,
             ramp_c_per_min: 1.0,
-            positions: Some(pos.clone()),
+            positions: Some(positions.to_vec()),
         })
-        .collect();
-    c
+        .collect()
 }
 
 /// Per-axis sizes: one or two axes, random signs, 0.7..1.3 of `size` times `scale`.

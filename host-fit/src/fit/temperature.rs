@@ -336,8 +336,7 @@ pub fn fit_joint_frame(
         axis_chi2.push((s.wrss, obs.len().saturating_sub(free)));
         axis_cov.push(s.cov);
     }
-    let lo = temps.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = temps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (lo, hi) = span(&temps);
     Ok(ModelFit {
         basis: basis.clone(),
         t0_c: t0,
@@ -520,8 +519,7 @@ pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> 
             .collect();
         chi2 += s.wrss;
     }
-    let lo = temps.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = temps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (lo, hi) = span(&temps);
     Ok(ModelFit {
         basis: basis.clone(),
         t0_c: t0,
@@ -535,4 +533,11 @@ pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> 
         axis_cov: Vec::new(),
         axis_chi2: Vec::new(),
     })
+}
+
+/// The smallest and largest of `v` (infinite, reversed, when `v` is empty).
+pub fn span(v: &[f64]) -> (f64, f64) {
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (lo, hi)
 }

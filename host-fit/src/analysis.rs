@@ -100,7 +100,7 @@ type Fits = (Vec<(String, &'static str, ModelFit)>, Selection);
 
 fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Fits> {
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
-    let (obs, _) = static_observations(rec, &cal, 0.25);
+    let (obs, _) = static_observations(rec, &cal);
     let nz = noise(rec);
     let chosen = fit_chosen(
         rec,

@@ -9,6 +9,7 @@ use crate::blob::build_blob;
 use crate::data::positions::{Positions, Role};
 use crate::data::recording::Recording;
 use crate::diagnose::contract::Contract;
+use crate::diagnose::EffectId;
 use crate::error::{HostError, Result};
 use crate::fit::pipeline::{fit_chosen, ModelKind, ModelRequest};
 use crate::fit::predict::coefficient_sigma;
@@ -46,7 +47,7 @@ pub struct UnitResult {
     /// ... compensated with method 1 by the unit's blob.
     pub max_dg_after_mg: Option<f64>,
     /// Diagnosis findings (with `--diagnose`).
-    pub findings: Vec<String>,
+    pub findings: Vec<EffectId>,
     /// The 12 coefficients at T0 (for the lot statistics).
     pub at_t0: Option<[f64; 12]>,
     /// Their 1-sigma from the unit's fit (zeros when unknown).
@@ -112,9 +113,10 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     r.model = oc.fit.basis.describe();
     let (cal, diagnosis) = if o.diagnose {
         let d = crate::diagnose::diagnose(&rec)?;
-        r.findings = d.findings.iter().map(|f| f.effect.clone()).collect();
-        r.model = format!("diagnosed ({})", r.findings.join("+"));
-        (d.calibration(rec.t0_c)?, Some(d.contract(&rec)))
+        r.findings = d.findings.iter().map(|f| f.effect).collect();
+        let names: Vec<&str> = r.findings.iter().map(|e| e.as_str()).collect();
+        r.model = format!("diagnosed ({})", names.join("+"));
+        (d.calibration(rec.t0_c)?, Some(d.contract()))
     } else {
         (oc.fit.calibration(0.1, false), None)
     };
@@ -226,7 +228,11 @@ pub fn summary_csv(results: &[UnitResult]) -> Result<String> {
                     .map(|(c, z)| format!("{c} z={z:.1}"))
                     .collect::<Vec<_>>()
                     .join(";"),
-                r.findings.join(";"),
+                r.findings
+                    .iter()
+                    .map(|e| e.as_str())
+                    .collect::<Vec<_>>()
+                    .join(";"),
             ]
         }),
     )

@@ -358,10 +358,15 @@ pub mod figures {
         use firmware_core::compensate::Method;
         use host_fit::data::positions::Positions;
         use host_fit::data::recording::Recording;
+        use host_fit::diagnose::EffectId;
         let dir = std::env::temp_dir().join(format!("hf-phys-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let case = host_fit::blind::Case::catalogue(
-            vec!["nonlinearity_k2", "temp_rate", "warmup_drift"],
+            vec![
+                EffectId::NonlinearityK2,
+                EffectId::TempRate,
+                EffectId::WarmupDrift,
+            ],
             3.0,
             5,
         );
@@ -383,7 +388,7 @@ pub mod figures {
                     .as_array()
                     .unwrap()
                     .iter()
-                    .any(|f| f["effect"] == *e),
+                    .any(|f| f["effect"] == e.as_str()),
                 "{e} not found: {j}"
             );
         }

@@ -308,7 +308,8 @@ fn the_demo_report_in_a_browser() {
 #[test]
 fn a_diagnosis_report_with_findings_in_a_browser() {
     let dir = tempdir("diagnosis");
-    let case = host_fit::blind::Case::catalogue(vec!["temp_rate"], 1.0, 3);
+    let case =
+        host_fit::blind::Case::catalogue(vec![host_fit::diagnose::EffectId::TempRate], 1.0, 3);
     let sim = host_fit::simulate::simulate(&host_fit::blind::configure(&case), |_| {}).unwrap();
     let rec = dir.join("rec.csv");
     std::fs::write(&rec, sim.csv).unwrap();

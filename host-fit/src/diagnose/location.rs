@@ -1,6 +1,6 @@
 //! Where a residual (or an effect's contribution) stands out from the floor: grouped by
 //! position, temperature, time, temperature rate and heating/cooling direction, per axis.
-use crate::diagnose::design::Data;
+use crate::diagnose::data::Data;
 use crate::fit::temperature::temperature_clusters;
 use firmware_core::model::AXES;
 use serde::Serialize;
@@ -56,32 +56,32 @@ fn groups(data: &Data) -> Vec<(String, String, Vec<usize>)> {
         let bin = (((o.t_s - t_lo) / span) * 8.0).floor().min(7.0);
         let h = |b: f64| (t_lo + b * span / 8.0) / 3600.0;
         add("time", format!("{:.1}-{:.1} h", h(bin), h(bin + 1.0)), r);
-        let rate = data.rate[r];
-        let rate_group = if rate > 0.002 {
-            "heating >0.002 C/s"
-        } else if rate < -0.002 {
-            "cooling >0.002 C/s"
+        let (rate, steady) = (data.rate[r], data.rules.steady_rate_c_per_s);
+        let rate_group = if rate > steady {
+            format!("heating >{steady} C/s")
+        } else if rate < -steady {
+            format!("cooling >{steady} C/s")
         } else {
-            "steady"
+            "steady".to_string()
         };
-        add("dT/dt", rate_group.to_string(), r);
-        let dir = match data.dir[r] {
-            d if d > 0.5 => "after heating",
-            d if d < -0.5 => "after cooling",
-            _ => "before the first change",
+        add("dT/dt", rate_group, r);
+        let (d, m) = (data.dir[r], data.rules.direction_majority);
+        let dir = if d > m {
+            "after heating"
+        } else if d < -m {
+            "after cooling"
+        } else {
+            "before the first change"
         };
         add("direction", dir.to_string(), r);
     }
     groups
 }
 
-/// The least share of the sum of squares a located group carries.
-const MIN_SHARE: f64 = 0.01;
-
 /// Every group where `z` (per observation and axis, floor units) has an RMS above
-/// `min_rms` and at least 1% of the sum of squares, worst first; `raw` gives the means in
-/// output units. (A group of two windows can be extreme and still not be where the
-/// mismatch is.)
+/// `min_rms` and at least [`crate::diagnose::rules::Rules::located_share`] of the sum of
+/// squares, worst first; `raw` gives the means in output units. (A group of two windows
+/// can be extreme and still not be where the mismatch is.)
 pub fn locate(data: &Data, z: &[[f64; 3]], raw: &[[f64; 3]], min_rms: f64) -> Vec<Hotspot> {
     let total: f64 = z
         .iter()
@@ -94,7 +94,7 @@ pub fn locate(data: &Data, z: &[[f64; 3]], raw: &[[f64; 3]], min_rms: f64) -> Ve
         for i in 0..3 {
             let ss: f64 = idx.iter().map(|&r| z[r][i] * z[r][i]).sum();
             let rms = (ss / idx.len() as f64).sqrt();
-            if rms > min_rms && ss / total >= MIN_SHARE {
+            if rms > min_rms && ss / total >= data.rules.located_share {
                 out.push(Hotspot {
                     group: g.clone(),
                     value: v.clone(),

@@ -70,14 +70,6 @@ pub fn provisional_basis(temps: &[f64]) -> Basis {
     }
 }
 
-/// Estimate the unknown poses of `rec` with the provisional model.
-pub fn estimate(rec: &Recording) -> Result<Orientation> {
-    let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
-    let (obs, _) = static_observations(rec, &cal, 0.25);
-    let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
-    estimate_with(rec, &provisional_basis(&temps))
-}
-
 /// Whether `rec` has a position of unknown orientation with dwells.
 pub fn has_unknown(rec: &Recording) -> bool {
     rec.dwells
@@ -153,7 +145,7 @@ fn unit(v: Vector3<f64>) -> Option<[f64; 3]> {
 /// Estimate the unknown poses of `rec` with the temperature model `basis`.
 pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
-    let (mut obs, _) = static_observations(rec, &cal, 0.25);
+    let (mut obs, _) = static_observations(rec, &cal);
     let nz = noise(rec);
     let mut poses: Vec<usize> = obs
         .iter()
@@ -249,12 +241,10 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
             .zip(&best_dirs)
             .map(|(a, b)| (Vector3::from(*a) - Vector3::from(*b)).norm())
             .fold(0.0, f64::max);
-        if std::env::var_os("HOSTFIT_DEBUG").is_some() {
-            eprintln!(
-                "orientation {iterations}: chi2 {} stretch {stretch} moved {moved:e}",
-                best.chi2
-            );
-        }
+        log::debug!(
+            "orientation {iterations}: chi2 {} stretch {stretch} moved {moved:e}",
+            best.chi2
+        );
         dirs = best_dirs;
         fit = best;
         if moved < CONVERGED_RAD || iterations >= MAX_ITERATIONS {

@@ -8,7 +8,7 @@ use crate::data::positions::Role;
 use crate::data::recording::Recording;
 use crate::data::table::TableRow;
 use crate::error::{HostError, Result};
-use crate::fit::equilibrium::{static_observations, Excluded};
+use crate::fit::equilibrium::{static_observations, Excluded, WINDOW_SPAN_C};
 use crate::fit::identify::{identify_stop, observations, stops, Obs, StopCoeffs};
 use crate::fit::noise::{noise, Noise};
 use crate::fit::orientation::{estimate_with, has_unknown, provisional_basis, Orientation};
@@ -196,7 +196,7 @@ fn free_frame(o: Option<&Orientation>) -> bool {
 
 fn static_calibration(rec: &Recording) -> (Vec<Obs>, Excluded) {
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
-    static_observations(rec, &cal, 0.25)
+    static_observations(rec, &cal)
 }
 
 fn require_known(rec: &Recording, obs: &[Obs]) -> Result<()> {
@@ -307,7 +307,7 @@ fn fit_windows(rec: &Recording, choice: &ModelChoice, route: Route) -> Result<Fi
         let (obs, excluded) = match route {
             Route::Joint => {
                 let cal = |p: usize| r.positions.has_role(p, Role::Calibration);
-                (observations(r, &cal, 0.25), Excluded::default())
+                (observations(r, &cal, WINDOW_SPAN_C), Excluded::default())
             }
             _ => static_calibration(r),
         };

@@ -20,6 +20,12 @@ pub const RANGE_MARGIN_C: f64 = 1.0;
 /// Polynomial fits work in `dT / POLY_SCALE_C` for conditioning.
 pub const POLY_SCALE_C: f64 = 50.0;
 
+/// The firmware recomputes its cached matrices after the temperature moves by this much
+/// (the blob's default, `fit --update-step`): the lag it adds to |dg| stays an order of
+/// magnitude below the acceptance limit near T0 (0.03 mg against 0.3 mg on the paper's
+/// unit), and the MCU inverts K(T) ten times per degree instead of every sample.
+pub const UPDATE_STEP_C: f64 = 0.1;
+
 /// The shape of a temperature model.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Basis {

@@ -13,7 +13,9 @@ use crate::fit::identify::StopCoeffs;
 use crate::fit::noise::noise;
 use crate::fit::pipeline::{fit_chosen, identify_stops, stop_temperatures, ModelRequest};
 use crate::fit::select::Selection;
-use crate::fit::temperature::{fit_joint, fit_table, Basis, ModelFit};
+use crate::fit::temperature::{
+    fit_joint, fit_table, Basis, Frame, ModelFit, Setting, UPDATE_STEP_C,
+};
 use crate::simulate::TrueUnit;
 use crate::verify::{verify, Verification};
 use firmware_core::compensate::{ErrorModel, Method};
@@ -36,7 +38,7 @@ pub struct SummaryRow {
 pub struct DemoModel {
     /// Name in the summary.
     pub name: String,
-    /// File name of its blob (`paper-pwl2.blob`, `poly.blob`, `pwl-all.blob`).
+    /// File name of its blob (`paper-pwl2.blob`, `chosen.blob`, `pwl-all.blob`).
     pub file: &'static str,
     /// The fit.
     pub fit: ModelFit,
@@ -102,26 +104,22 @@ fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Fits> {
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
     let (obs, _) = static_observations(rec, &cal);
     let nz = noise(rec);
-    let chosen = fit_chosen(
-        rec,
-        &ModelRequest {
-            kind: None,
-            order: None,
-            breakpoints: None,
-        },
-    )?;
+    let chosen = fit_chosen(rec, &ModelRequest::default())?;
     let selection = chosen
         .selection
         .clone()
         .ok_or_else(|| HostError::msg("internal: no selection"))?;
     let pwl_all = fit_joint(
         &obs,
-        &nz,
         &Basis::Pwl {
             breakpoints: stop_temperatures(stops),
         },
-        rec.t0_c,
-        &rec.path,
+        &Setting {
+            noise: &nz,
+            t0_c: rec.t0_c,
+            frame: Frame::Given,
+            path: &rec.path,
+        },
     )?;
     let mut out = Vec::new();
     if let Ok(p) = paper_pwl2(stops, rec.t0_c) {
@@ -146,7 +144,7 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
     let spec = Spec::default();
     let (list, selection) = fits(&rec, &stops)?;
     for (name, file, fit) in list {
-        let cal = fit.calibration(0.1, false);
+        let cal = fit.calibration(UPDATE_STEP_C, false);
         let (blob, bytes, _) = build_blob(&serial, &cal)?;
         let run = |m: Method| -> Result<Verification> {
             verify(&rec, &blob, m, &check).ok_or_else(|| HostError::msg("singular K(T0)"))

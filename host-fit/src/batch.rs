@@ -14,7 +14,7 @@ use crate::error::{HostError, Result};
 use crate::fit::pipeline::{fit_chosen, ModelKind, ModelRequest};
 use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
-use crate::fit::temperature::span;
+use crate::fit::temperature::{span, UPDATE_STEP_C};
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::verify::{verify, TempMax};
 use firmware_core::compensate::Method;
@@ -48,9 +48,10 @@ pub struct UnitResult {
     pub max_dg_after_mg: Option<f64>,
     /// Diagnosis findings (with `--diagnose`).
     pub findings: Vec<EffectId>,
-    /// The 12 coefficients at T0 (for the lot statistics).
+    /// The 12 coefficients at T0 of the unit's blob (for the lot statistics).
     pub at_t0: Option<[f64; 12]>,
-    /// Their 1-sigma from the unit's fit (zeros when unknown).
+    /// Their 1-sigma from the model the blob carries (the chosen fit's, or with
+    /// `--diagnose` the diagnosed model's; zeros when unknown).
     pub at_t0_sigma: [f64; 12],
     /// The coefficients far from the lot, with their robust z-scores.
     pub outlier: Vec<(&'static str, f64)>,
@@ -111,17 +112,19 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         },
     )?;
     r.model = oc.fit.basis.describe();
+    // the blob's model, and its own uncertainty for the lot's statistics
     let (cal, diagnosis) = if o.diagnose {
         let d = crate::diagnose::diagnose(&rec)?;
         r.findings = d.findings.iter().map(|f| f.effect).collect();
         let names: Vec<&str> = r.findings.iter().map(|e| e.as_str()).collect();
         r.model = format!("diagnosed ({})", names.join("+"));
+        r.at_t0_sigma = d.coefficient_sigma(rec.t0_c);
         (d.calibration(rec.t0_c)?, Some(d.contract()))
     } else {
-        (oc.fit.calibration(0.1, false), None)
+        r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
+        (oc.fit.calibration(UPDATE_STEP_C, false), None)
     };
     r.at_t0 = Some(cal.at_t0());
-    r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
     let (blob, bytes, dep) = build_blob(&r.unit, &cal)?;
     write_atomic(&out.join(format!("{stem}.blob")), &bytes, o.force)?;
     let check = |p: usize| rec.positions.has_role(p, Role::Verification);
@@ -133,8 +136,8 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     };
     r.max_dg_before_mg = worst(&|t| t.max_abs_dg_mg_uncompensated);
     r.max_dg_after_mg = worst(&|t| t.max_abs_dg_mg);
-    let acc = judge(&v, &o.spec, cal.t0_c, (cal.t_min_c, cal.t_max_c))
-        .map_err(|e| HostError::in_file(path, e.message))?;
+    let acc =
+        judge(&v, &o.spec, cal.t0_c, (cal.t_min_c, cal.t_max_c)).map_err(|e| e.within(path))?;
     r.acceptance = acc.acceptance.name();
     r.reason = acc.reason.clone();
     let j = UnitJson {

@@ -601,11 +601,7 @@ pub mod figures {
         let mut rows = Vec::new();
         for (name, cfg) in super::twins::all() {
             let (_, rec) = super::twins::recording(name, &cfg);
-            let req = ModelRequest {
-                kind: None,
-                order: None,
-                breakpoints: None,
-            };
+            let req = ModelRequest::default();
             let oc = fit_chosen(&rec, &req).unwrap();
             // no cache step: the firmware then evaluates the model at every sample's
             // temperature, and the comparison is of the model alone

@@ -14,7 +14,7 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
     let t = std::time::Instant::now();
     let o = BatchOptions {
         jobs: a.jobs,
-        model: a.model,
+        model: a.model.map(Into::into),
         spec: Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?,
         diagnose: a.diagnose,
         force: a.force,

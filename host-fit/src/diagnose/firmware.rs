@@ -237,8 +237,8 @@ fn flashable(data: &Data, f: &Fit) -> Fit {
 }
 
 /// The grid of the blob's table over `(tmin, tmax)`: up to `max_points`, one per `step_c`;
-/// each bend of `knots` moved onto the nearest interior point (so the table carries it
-/// sharp).
+/// each bend of `knots` moved onto the nearest interior point no other bend took (so the
+/// table carries every bend sharp).
 pub fn table_grid(
     (tmin, tmax): (f64, f64),
     step_c: f64,
@@ -251,12 +251,16 @@ pub fn table_grid(
     let mut grid: Vec<f64> = (0..nb)
         .map(|k| tmin + (tmax - tmin) * k as f64 / (nb - 1) as f64)
         .collect();
+    let mut taken = vec![false; nb];
     for knot_c in knots {
-        if let Some(g) = grid[1..nb - 1]
-            .iter_mut()
-            .min_by(|a, b| (**a - knot_c).abs().total_cmp(&(**b - knot_c).abs()))
-        {
-            *g = *knot_c;
+        let nearest = (1..nb - 1).filter(|&i| !taken[i]).min_by(|&a, &b| {
+            (grid[a] - knot_c)
+                .abs()
+                .total_cmp(&(grid[b] - knot_c).abs())
+        });
+        if let Some(i) = nearest {
+            grid[i] = *knot_c;
+            taken[i] = true;
         }
     }
     grid.sort_by(f64::total_cmp);
@@ -289,4 +293,31 @@ fn table(data: &Data, f: &Fit) -> Vec<(f64, [f64; 12])> {
         .zip(data.coefficients_at(f, &grid))
         .map(|(t, (k, u0))| (*t, firmware_core::model::Coeffs { k, u0 }.to_array()))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_table_grid_spans_the_range_one_point_per_step_at_most_the_limit() {
+        let g = table_grid((-20.0, 40.0), 2.0, 16, &[]);
+        assert_eq!(g.len(), 16);
+        assert_eq!((g[0], g[15]), (-20.0, 40.0));
+        assert_eq!(table_grid((20.0, 21.0), 2.0, 16, &[]), vec![20.0, 21.0]);
+    }
+
+    /// Two bends near one grid point each get a point of their own: the table carries
+    /// both sharp (the second must not move the point the first took).
+    #[test]
+    fn two_nearby_bends_do_not_move_the_same_grid_point() {
+        let knots = [9.0, 9.5];
+        let g = table_grid((-20.0, 40.0), 2.0, 16, &knots);
+        for k in knots {
+            assert!(g.contains(&k), "bend at {k} C is not on the grid {g:?}");
+        }
+        assert_eq!(g.len(), 16, "{g:?}");
+        assert!(g.windows(2).all(|w| w[0] < w[1]), "{g:?}");
+        assert_eq!((g[0], g[15]), (-20.0, 40.0), "the ends stay");
+    }
 }

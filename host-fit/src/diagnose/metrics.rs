@@ -4,6 +4,7 @@
 //! parameter's standard error, an effect's contribution, and the judgement of a larger
 //! model against a smaller one by the acceptance rules of [`Rules`].
 use crate::diagnose::data::Data;
+use crate::diagnose::design::static_at;
 use crate::diagnose::fit::Fit;
 use crate::diagnose::profile;
 #[cfg(doc)]
@@ -94,6 +95,42 @@ pub fn sigma(f: &Fit, j: usize, phi: f64) -> f64 {
         .unwrap_or(f64::INFINITY);
     let hac = f.hac.as_ref().map(|v| v[j]).unwrap_or(0.0);
     formal.max(hac)
+}
+
+/// The 1-sigma of the 12 coefficients (canonical order) of `f` at temperature `t`: each
+/// is linear in the parameters, `g^T x`; its variance the covariance's `g^T C g` scaled
+/// by the dispersion, or where larger the Newey-West bound `sum |g_j| sigma_j` (exact
+/// when one parameter carries the coefficient, as a polynomial's at T0). Zeros when `f`
+/// carries no covariance.
+pub fn coefficient_sigma(data: &Data, f: &Fit, t: f64) -> [f64; 12] {
+    let Some(cov) = &f.cov else {
+        return [0.0; 12];
+    };
+    let phi = dispersion(data, f);
+    let p = f.x.len();
+    // the coefficients are linear in x: their gradient is their value at unit vectors
+    let unit: Vec<[f64; 12]> = (0..p)
+        .map(|c| {
+            let e = nalgebra::DVector::from_fn(p, |i, _| if i == c { 1.0 } else { 0.0 });
+            let (k, u0) = static_at(&f.spec, &f.labels, &e, data.t0, [t; 3]);
+            firmware_core::model::Coeffs { k, u0 }.to_array()
+        })
+        .collect();
+    std::array::from_fn(|slot| {
+        let g: Vec<f64> = unit.iter().map(|u| u[slot]).collect();
+        let formal: f64 = (0..p)
+            .flat_map(|a| (0..p).map(move |b| (a, b)))
+            .map(|(a, b)| g[a] * cov[(a, b)] * g[b])
+            .sum::<f64>()
+            .max(0.0)
+            * phi;
+        let hac: f64 = f
+            .hac
+            .as_ref()
+            .map(|h| g.iter().zip(h).map(|(g, s)| g.abs() * s).sum())
+            .unwrap_or(0.0);
+        formal.sqrt().max(hac)
+    })
 }
 
 /// An effect's contribution to the model, per residual row in floor units: the joint

@@ -92,6 +92,12 @@ impl Diagnosis<'_> {
     pub fn calibration(&self, t0: f64) -> Result<Calibration<f64>> {
         self.flashed.calibration(t0)
     }
+
+    /// The 1-sigma of the flashed model's 12 coefficients at temperature `t` (see
+    /// [`metrics::coefficient_sigma`]).
+    pub fn coefficient_sigma(&self, t: f64) -> [f64; 12] {
+        metrics::coefficient_sigma(&self.data, &self.flashed.fit, t)
+    }
 }
 
 /// Run the diagnosis with the default [`Rules`].

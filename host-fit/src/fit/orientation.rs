@@ -21,7 +21,7 @@ use crate::fit::equilibrium::static_observations;
 use crate::fit::identify::Obs;
 use crate::fit::lsq::weighted_lsq;
 use crate::fit::noise::{noise, Noise};
-use crate::fit::temperature::{fit_joint, fit_joint_frame, temperature_clusters, Basis, ModelFit};
+use crate::fit::temperature::{fit_joint, temperature_clusters, Basis, Frame, ModelFit, Setting};
 use firmware_core::model::{invert, Coeffs};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use serde::Serialize;
@@ -159,9 +159,27 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
         .filter(|o| rec.positions.is_known(o.position))
         .cloned()
         .collect();
-    let free_frame = known_directions(&known) < 2;
-    let start = match fit_joint(&known, &nz, basis, rec.t0_c, &rec.path) {
-        Ok(f) if !free_frame => read_poses(&f, &obs, &nz, &poses)
+    let frame = if known_directions(&known) < 2 {
+        Frame::LowerTriangular
+    } else {
+        Frame::Given
+    };
+    let setting = Setting {
+        noise: &nz,
+        t0_c: rec.t0_c,
+        frame,
+        path: &rec.path,
+    };
+    let known_fit = fit_joint(
+        &known,
+        basis,
+        &Setting {
+            frame: Frame::Given,
+            ..setting
+        },
+    );
+    let start = match known_fit {
+        Ok(f) if frame == Frame::Given => read_poses(&f, &obs, &nz, &poses)
             .iter()
             .map(|(h, r, _)| h.try_inverse().and_then(|hi| unit(hi * r)))
             .collect::<Option<Vec<_>>>(),
@@ -202,7 +220,7 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
                 o.estimated = true;
             }
         }
-        fit_joint_frame(obs, &nz, basis, rec.t0_c, &rec.path, free_frame)
+        fit_joint(obs, basis, &setting)
     };
     let mut fit = fit_at(&mut obs, &dirs)?;
     let mut iterations = 0;
@@ -258,7 +276,7 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
         poses: &poses,
         dirs: &dirs,
         iterations,
-        free_frame,
+        frame,
     };
     finish(rec, &nz, &done, fit)
 }
@@ -269,7 +287,7 @@ struct Alternated<'a> {
     poses: &'a [usize],
     dirs: &'a [[f64; 3]],
     iterations: usize,
-    free_frame: bool,
+    frame: Frame,
 }
 
 /// How many non-parallel directions the known poses have (0, 1 or 2 = enough).
@@ -312,7 +330,7 @@ fn finish(
         poses,
         dirs,
         iterations,
-        free_frame,
+        frame,
     } = *done;
     let mut positions = rec.positions.clone();
     let scale = (0..3).map(|i| fit.axis_scale(i, nz.dof > 0)).sum::<f64>() / 3.0;
@@ -339,7 +357,7 @@ fn finish(
     Ok(Orientation {
         positions,
         poses: out,
-        frame: free_frame.then(|| {
+        frame: (frame == Frame::LowerTriangular).then(|| {
             "no pose of known orientation: frame fixed by convention, K(T0) lower triangular with a positive diagonal (a rotation or reflection of the whole unit is not observable from gravity)".to_string()
         }),
         iterations,

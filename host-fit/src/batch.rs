@@ -29,6 +29,44 @@ use std::path::{Path, PathBuf};
 /// robust standard deviations (1.4826 MAD) from the lot's median.
 pub const OUTLIER_Z: f64 = 3.5;
 
+/// How a unit of the batch ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum UnitStatus {
+    /// Fitted, and its blob passed acceptance.
+    Pass,
+    /// Fitted, and its blob failed acceptance.
+    Fail,
+    /// Could not be processed (the reason says why).
+    Error,
+}
+
+impl UnitStatus {
+    /// `pass`, `fail` or `error`, as the summary writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            UnitStatus::Pass => "pass",
+            UnitStatus::Fail => "fail",
+            UnitStatus::Error => "error",
+        }
+    }
+}
+
+impl From<Verdict> for UnitStatus {
+    fn from(v: Verdict) -> Self {
+        match v {
+            Verdict::Pass => UnitStatus::Pass,
+            Verdict::Fail => UnitStatus::Fail,
+        }
+    }
+}
+
+impl std::fmt::Display for UnitStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// One unit's line of the summary.
 #[derive(Debug, Clone)]
 pub struct UnitResult {
@@ -36,8 +74,8 @@ pub struct UnitResult {
     pub file: PathBuf,
     /// Unit serial (from the metadata), or the file stem.
     pub unit: String,
-    /// `pass`, `fail` or `error`.
-    pub acceptance: &'static str,
+    /// Pass, fail or error.
+    pub acceptance: UnitStatus,
     /// Why (the acceptance's reason, or the error).
     pub reason: String,
     /// The model in the blob.
@@ -138,7 +176,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     r.max_dg_after_mg = worst(&|t| t.max_abs_dg_mg);
     let acc =
         judge(&v, &o.spec, cal.t0_c, (cal.t_min_c, cal.t_max_c)).map_err(|e| e.within(path))?;
-    r.acceptance = acc.acceptance.name();
+    r.acceptance = acc.acceptance.into();
     r.reason = acc.reason.clone();
     let j = UnitJson {
         unit: &r.unit,
@@ -168,7 +206,7 @@ fn one(path: &Path, out: &Path, o: &BatchOptions) -> UnitResult {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default(),
-        acceptance: "error",
+        acceptance: UnitStatus::Error,
         reason: String::new(),
         model: String::new(),
         max_dg_before_mg: None,
@@ -179,7 +217,7 @@ fn one(path: &Path, out: &Path, o: &BatchOptions) -> UnitResult {
         outlier: Vec::new(),
     };
     if let Err(e) = fit_unit(path, out, o, &mut r) {
-        r.acceptance = "error";
+        r.acceptance = UnitStatus::Error;
         r.reason = e.to_string();
     }
     r
@@ -221,7 +259,7 @@ pub fn summary_csv(results: &[UnitResult]) -> Result<String> {
             [
                 r.unit.clone(),
                 r.file.display().to_string(),
-                r.acceptance.to_string(),
+                r.acceptance.name().to_string(),
                 r.reason.clone(),
                 r.model.clone(),
                 opt(r.max_dg_before_mg),
@@ -355,9 +393,7 @@ pub struct BatchOutcome {
 impl BatchOutcome {
     /// Whether every unit passed.
     pub fn all_pass(&self) -> bool {
-        self.units
-            .iter()
-            .all(|u| u.acceptance == Verdict::Pass.name())
+        self.units.iter().all(|u| u.acceptance == UnitStatus::Pass)
     }
 }
 

@@ -1,5 +1,6 @@
 //! The main job: its outputs agree with each other, the report's plots hold the data they
 //! claim, and a unit outside every fitted family is reported as such.
+use host_fit::analysis::Compensation;
 use serde_json::Value;
 use tests::cli;
 
@@ -147,7 +148,7 @@ fn a_unit_outside_every_fitted_family_is_not_claimed_within_acceptance() {
     let at_t = |t: f64| -> Vec<&host_fit::analysis::SummaryRow> {
         oc.rows
             .iter()
-            .filter(|r| r.method != "none" && (r.temp_c - t).abs() < 2.0)
+            .filter(|r| r.method != Compensation::None && (r.temp_c - t).abs() < 2.0)
             .collect()
     };
     println!("{}", host_fit::analysis::table(&oc.rows));
@@ -158,7 +159,7 @@ fn a_unit_outside_every_fitted_family_is_not_claimed_within_acceptance() {
             r.max_abs_dg_mg > 0.3,
             "{} method {} claims {:.3} mg at {} C, inside a 1.6 mg bump",
             r.model,
-            r.method,
+            r.method.name(),
             r.max_abs_dg_mg,
             r.temp_c
         );

@@ -78,17 +78,17 @@ fn linear_parameters(full: &Fit, e: usize, phi: f64) -> Vec<(String, f64, f64)> 
         .filter(|(_, l)| l.extra() == Some(e))
         .map(|(j, l)| {
             let (v, s) = (full.x[j], sigma(full, j, phi));
-            match *l {
-                Param::Effect {
-                    term: Term::Asymmetry,
-                    axis,
-                    ..
-                } => {
-                    // c_i = K_ii delta_i: reported as delta_i, relative
-                    let kii = full.k_at.first().map(|k| k[axis][axis]).unwrap_or(1.0);
-                    (format!("delta_{}", AXES[axis]), v / kii, s / kii.abs())
-                }
-                _ => (l.to_string(), v, s),
+            if let Param::Effect {
+                term: Term::Asymmetry,
+                axis,
+                ..
+            } = *l
+            {
+                // c_i = K_ii delta_i: reported as delta_i, relative
+                let kii = full.k_at.first().map(|k| k[axis][axis]).unwrap_or(1.0);
+                (format!("delta_{}", AXES[axis]), v / kii, s / kii.abs())
+            } else {
+                (l.to_string(), v, s)
             }
         })
         .collect()

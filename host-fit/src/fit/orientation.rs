@@ -178,31 +178,13 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
             ..setting
         },
     );
+    // the known poses fix the frame: their model reads the others
     let start = match known_fit {
         Ok(f) if frame == Frame::Given => read_poses(&f, &obs, &nz, &poses)
             .iter()
             .map(|(h, r, _)| h.try_inverse().and_then(|hi| unit(hi * r)))
             .collect::<Option<Vec<_>>>(),
-        _ => ellipsoid(&obs).map(|(n, c)| {
-            // K = N^-1 is upper triangular; turn the start into the lower frame
-            let q = n
-                .try_inverse()
-                .map(|k| lower_frame(&k))
-                .unwrap_or_else(Matrix3::identity);
-            let n = q.transpose() * n;
-            poses
-                .iter()
-                .map(|p| {
-                    let (s, k) = obs
-                        .iter()
-                        .filter(|o| o.position == *p)
-                        .fold((Vector3::zeros(), 0.0), |(s, k), o| {
-                            (s + Vector3::from(o.u) * o.n as f64, k + o.n as f64)
-                        });
-                    unit(n * (s / k - c)).unwrap_or([0.0, 0.0, 1.0])
-                })
-                .collect()
-        }),
+        _ => ellipsoid_start(&obs, &poses),
     };
     let mut dirs = start.ok_or_else(|| {
         HostError::in_file(
@@ -279,6 +261,31 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
         frame,
     };
     finish(rec, &nz, &done, fit)
+}
+
+/// The directions the alternation starts from when no known pose fixes the frame: read
+/// through the ellipsoid of the poses' mean readings, turned into the lower frame.
+fn ellipsoid_start(obs: &[Obs], poses: &[usize]) -> Option<Vec<[f64; 3]>> {
+    ellipsoid(obs).map(|(n, c)| {
+        // K = N^-1 is upper triangular; turn the start into the lower frame
+        let q = n
+            .try_inverse()
+            .map(|k| lower_frame(&k))
+            .unwrap_or_else(Matrix3::identity);
+        let n = q.transpose() * n;
+        poses
+            .iter()
+            .map(|p| {
+                let (s, k) = obs
+                    .iter()
+                    .filter(|o| o.position == *p)
+                    .fold((Vector3::zeros(), 0.0), |(s, k), o| {
+                        (s + Vector3::from(o.u) * o.n as f64, k + o.n as f64)
+                    });
+                unit(n * (s / k - c)).unwrap_or([0.0, 0.0, 1.0])
+            })
+            .collect()
+    })
 }
 
 /// Where the alternation ended.

@@ -35,8 +35,8 @@ fn at(rows: &[(String, String, f64, f64)], model: &str, method: &str, t: f64) ->
 /// those numbers.
 #[test]
 fn demo_outputs_agree_with_each_other_and_the_report_holds_its_data() {
-    let dir = std::env::temp_dir().join(format!("hf-demo-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("demo");
     let d = dir.to_str().unwrap();
     let (code, out, err) = cli(&["demo", "--out", d]);
     assert_eq!(code, 0, "{err}");
@@ -107,7 +107,6 @@ fn demo_outputs_agree_with_each_other_and_the_report_holds_its_data() {
         &std::fs::read_to_string(dir.join("report.html")).unwrap(),
         &r,
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A unit whose truth lies outside every fitted family is not claimed to be within
@@ -249,8 +248,8 @@ fn check_report(html: &str, rows: &[(String, String, f64, f64)]) {
 
 #[test]
 fn report_command_on_any_recording() {
-    let dir = std::env::temp_dir().join(format!("hf-report-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let case = host_fit::blind::Case::catalogue(vec![], 1.0, 2);
     let sim = host_fit::simulate::simulate(&host_fit::blind::configure(&case), |_| {}).unwrap();
     let rec = dir.join("rec.csv");
@@ -288,5 +287,4 @@ fn report_command_on_any_recording() {
     ]);
     assert_eq!(code, 1);
     assert!(err.contains("--force"));
-    std::fs::remove_dir_all(&dir).unwrap();
 }

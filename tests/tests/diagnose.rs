@@ -59,8 +59,8 @@ fn blind_suite_by_class() {
 
 #[test]
 fn json_contract_on_a_clean_and_an_effect_recording() {
-    let dir = std::env::temp_dir().join(format!("hf-diag-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     for (name, effects) in [("clean", vec![]), ("rate", vec![EffectId::TempRate])] {
         let cfg = host_fit::blind::configure(&Case::catalogue(effects, 1.0, 3));
         let sim = simulate(&cfg, |_| {}).unwrap();
@@ -140,7 +140,6 @@ fn json_contract_on_a_clean_and_an_effect_recording() {
             );
         }
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A sudden bias shift mid-test is not in the catalogue: no catalogue name, the verdict
@@ -354,6 +353,7 @@ fn real_hand_tumble_at_one_temperature() {
 fn extended_model_in_the_blob_compensates_better_in_firmware() {
     let (a, b, line) = tests::figures::physics_blob();
     println!("{line}");
+    tests::readme::same("physics-blob", &line);
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let worst = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
     assert!(worst(&a) <= 0.05, "{line}");

@@ -2,12 +2,13 @@
 //! catalogue, the flashed model in firmware, the input forms users have, and the real
 //! recordings of ../shared/real.
 use host_fit::blind::forms::{Form, Outside};
-use host_fit::blind::{report, run, suite, Case, Class};
+use host_fit::blind::{report, run, run_with, suite, Case, Class};
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::Recording;
 use host_fit::diagnose::contract::Verdict;
+use host_fit::diagnose::location::Grouping;
 use host_fit::diagnose::quality::NoteKind;
-use host_fit::diagnose::{diagnose, EffectId};
+use host_fit::diagnose::{diagnose, EffectId, Rules};
 use host_fit::simulate::{simulate, SimConfig};
 use serde_json::Value;
 use tests::{cli, real_diagnosis as real, repo};
@@ -55,6 +56,24 @@ fn blind_suite_by_class() {
     // the TP-only recording cannot separate K2 from scale asymmetry: reported, not guessed
     let tp = outcomes.iter().find(|o| o.case.tp_only).unwrap();
     assert!(tp.found.is_empty() && !tp.ambiguous.is_empty(), "{text}");
+}
+
+/// The rules are the diagnosis's, and the blind suite can vary them: a case found under
+/// the default rules is not found when the acceptance margin is out of reach, and the
+/// residual it leaves is then called unexplained.
+#[test]
+fn the_blind_suite_varies_the_rules() {
+    let case = Case::catalogue(vec![EffectId::NonlinearityK2], 1.0, 1);
+    let found = run_with(&case, Rules::default());
+    assert_eq!(found.found, [EffectId::NonlinearityK2], "{}", found.note);
+    assert_eq!(found.verdict, Some(Verdict::Explained));
+    let strict = Rules {
+        q_margin: f64::INFINITY,
+        ..Rules::default()
+    };
+    let missed = run_with(&case, strict);
+    assert!(missed.named().is_empty(), "{:?}", missed.named());
+    assert_eq!(missed.verdict, Some(Verdict::Unexplained));
 }
 
 #[test]
@@ -167,7 +186,7 @@ fn an_effect_outside_the_catalogue_is_unexplained_and_located() {
     let spans: Vec<(f64, f64, f64)> = d
         .unexplained
         .iter()
-        .filter(|h| h.group == "time" && h.axis == ax)
+        .filter(|h| h.group == Grouping::Time && h.axis == ax)
         .map(|h| {
             let (a, b) = h.value.trim_end_matches(" h").split_once('-').unwrap();
             (

@@ -6,7 +6,7 @@ use crate::diagnose::data::Data;
 use crate::diagnose::design::Spec;
 use crate::diagnose::effects::{EffectId, Extra};
 use crate::diagnose::fit::{Depth, Fit};
-use crate::diagnose::location::locate;
+use crate::diagnose::location::{locate, Grouping};
 use crate::diagnose::metrics::{contribution, dispersion, judge, max_dg, residual_rms, sigma};
 use crate::diagnose::params::{Param, Term};
 use firmware_core::model::AXES;
@@ -309,7 +309,7 @@ fn evidence(data: &Data, full: &Fit, reduced: &Fit, extra: &Extra) -> String {
     let spots = locate(data, &z, &raw, 0.0);
     let top: Vec<String> = spots
         .iter()
-        .filter(|h| h.group != "direction" || matches!(extra, Extra::Hysteresis { .. }))
+        .filter(|h| h.group != Grouping::Direction || matches!(extra, Extra::Hysteresis { .. }))
         .take(2)
         .map(|h| {
             format!(

@@ -3,7 +3,7 @@
 //! `host-fit diagnose` uses; the blind suite varies them (`blind::run_with`) to show what
 //! each rule buys.
 use crate::fit::equilibrium::WINDOW_SPAN_C;
-use firmware_core::temperature::MAX_BREAKPOINTS;
+use firmware_core::temperature::{MAX_BREAKPOINTS, MAX_POLY_ORDER};
 
 /// The diagnosis's rules. Units are in the field names (C, s, C/s); "floor units" are
 /// residuals divided by the measured floor's sigma.
@@ -81,9 +81,9 @@ pub struct Rules {
     /// At most this many breakpoints, in a curvature basis and in the blob's table: the
     /// firmware's table size.
     pub max_breakpoints: usize,
-    /// The blob's table of the diagnosed model has one point per this many C: the
-    /// firmware interpolates linearly between, and a smooth model's chord error over 2 C
-    /// is below the floor.
+    /// The blob's table of the diagnosed model has one point per this many C (at most
+    /// [`Rules::max_breakpoints`]): the firmware interpolates linearly between them, so
+    /// closer points follow a curved model more closely.
     pub table_step_c: f64,
 
     // --- acceptance of an effect (all in the dispersion of the larger model) ---
@@ -93,8 +93,9 @@ pub struct Rules {
     /// Two candidates within this much quasi-BIC explain the data equally well: odds of
     /// e^3 (20:1) or less between them is no reason to name one.
     pub ambiguity_margin: f64,
-    /// Per round, this many of the best-ranked candidates are fitted in full and judged
-    /// (the rest rank too low to be accepted before them).
+    /// Per round, at most this many of the best-ranked candidates are fitted in full and
+    /// judged (each full fit refits every held-out chunk); one ranked lower stays open
+    /// for a later round.
     pub judged_per_round: usize,
     /// A candidate must explain at least this share of the chi-square above the floor:
     /// a small improvement of a model far from the data is not a finding.
@@ -103,8 +104,8 @@ pub struct Rules {
     /// significant after the dispersion and the HAC errors, across several tries.
     pub z_significant: f64,
     /// The held-out chunks must improve by more than this per added parameter (floor
-    /// units): a parameter fitted to noise makes held-out data worse, not better, so two
-    /// is a margin no noise parameter reaches by chance often.
+    /// units, in the larger model's dispersion): a parameter that only fits noise makes
+    /// held-out data worse by about one, so a gain of two is improvement, not luck.
     pub heldout_gain: f64,
     /// A chunk is an extrapolation, not a test, when its held-out chi-square is more than
     /// this many times its in-sample one (plus one per row): the rest of the data does
@@ -124,8 +125,9 @@ pub struct Rules {
     /// ... the final residual must be at most this fraction of the residual without it
     /// (RMS), or at the floor: an effect that only dents a misfit does not explain it.
     pub adequate_ratio: f64,
-    /// A residual RMS at or below this (floor units) is at the floor: the floor's own
-    /// estimate scatters by tens of percent between recordings.
+    /// A residual RMS at or below this (floor units) is at the floor: room for the floor's
+    /// own uncertainty (a robust estimate from the steady stretches) and for windows
+    /// whose noise is less white than the floor's model of it.
     pub at_floor_rms: f64,
     /// On each half of the recording (alternate chunks) the effect's amplitude must lie
     /// within this range of the joint fit's, [`Rules::z_significant`] sigmas from zero,
@@ -143,8 +145,8 @@ pub struct Rules {
     /// A window mean scattering this many times what white noise predicts is noted as
     /// time-correlated noise.
     pub colour_note: f64,
-    /// The sensor and the chamber are compared over steady spans this long: longer than
-    /// the case's thermal time constant ...
+    /// The sensor and the chamber are compared over steady spans this long (ten minutes
+    /// at a steady temperature: both have settled) ...
     pub chamber_hold_s: f64,
     /// ... where both stay within this much temperature.
     pub chamber_steady_c: f64,
@@ -174,7 +176,7 @@ impl Default for Rules {
             handling_s: 120.0,
             gap_factor: 10.0,
             gap_min_s: 60.0,
-            max_order: 5,
+            max_order: MAX_POLY_ORDER,
             grid_ratio: 1.7,
             warmup_max_fraction: 0.5,
             curvature_step_c: 4.0,

@@ -15,7 +15,8 @@ pub struct ChoiceRow {
     pub model: String,
     /// Its worst |dg|.
     pub default: f64,
-    /// A verification dwell's own noise (1 sigma of |dg|) by the default fit's JSON.
+    /// The in-dwell noise of a verification dwell's mean, in g (1 sigma, the noisiest
+    /// axis), by the default fit's JSON.
     pub dwell_noise_mg: f64,
     /// The static cubic's worst |dg|.
     pub static_cubic: f64,
@@ -31,7 +32,8 @@ pub struct FitVerified {
     pub model: String,
     /// The worst verification |dg|, mg.
     pub worst_mg: f64,
-    /// The fit's predicted noise of one verification dwell (1 sigma of |dg|), mg.
+    /// The in-dwell noise of a verification dwell's mean (1 sigma, the noisiest axis: its
+    /// per-sample noise over its scale factor and the root of the dwell's samples), mg.
     pub dwell_noise_mg: f64,
 }
 
@@ -52,12 +54,22 @@ pub fn fit_verify(dir: &Path, rec: &Path, args: &[&str]) -> FitVerified {
         .iter()
         .map(|d| d["dg_mg"].as_f64().unwrap().abs())
         .fold(0.0, f64::max);
+    let samples = j["predicted_error"]["dwell_samples"]
+        .as_f64()
+        .unwrap_or(f64::NAN);
+    let dwell_noise_mg = ["kxx", "kyy", "kzz"]
+        .iter()
+        .enumerate()
+        .map(|(i, k)| {
+            let sigma_v = j["noise_sigma"][i].as_f64().unwrap();
+            let k_v_per_g = j["temperature_model"]["at_t0"][k].as_f64().unwrap().abs();
+            sigma_v / k_v_per_g / samples.sqrt() * 1e3
+        })
+        .fold(0.0, f64::max);
     FitVerified {
         model: j["model"].as_str().unwrap().to_string(),
         worst_mg: worst,
-        dwell_noise_mg: j["predicted_error"]["dwell_noise_1sigma_mg"]
-            .as_f64()
-            .unwrap_or(f64::NAN),
+        dwell_noise_mg,
     }
 }
 

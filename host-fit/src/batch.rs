@@ -69,6 +69,9 @@ pub struct BatchOptions {
     pub diagnose: bool,
     /// Overwrite outputs of an earlier run.
     pub force: bool,
+    /// The positions every recording is read with (built in, or a lab's own file with
+    /// its roles).
+    pub positions: Positions,
 }
 
 /// The per-unit JSON.
@@ -97,7 +100,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let rec = Recording::read(path, Positions::default())?;
+    let rec = Recording::read(path, o.positions.clone())?;
     if !rec.unit.is_empty() {
         r.unit = rec.unit.clone();
     }
@@ -111,10 +114,13 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     )?;
     r.model = oc.fit.basis.describe();
     let (cal, diagnosis) = if o.diagnose {
-        let d = crate::diagnose::diagnose(&rec)?;
+        // the diagnosis needs every pose's vector: estimate those of unknown orientation
+        let est = crate::fit::pipeline::with_orientations(&rec, None)?.0;
+        let oriented = est.as_ref().unwrap_or(&rec);
+        let d = crate::diagnose::diagnose(oriented)?;
         r.findings = d.findings.iter().map(|f| f.effect.clone()).collect();
         r.model = format!("diagnosed ({})", r.findings.join("+"));
-        (d.calibration(rec.t0_c)?, Some(d.contract(&rec)))
+        (d.calibration(rec.t0_c)?, Some(d.contract(oriented)))
     } else {
         (oc.fit.calibration(0.1, false), None)
     };

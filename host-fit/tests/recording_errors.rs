@@ -225,7 +225,8 @@ fn positions_file_zero_vector_and_bad_number() {
 
 #[test]
 fn positions_file_normalises_with_a_warning_and_adds_names() {
-    let pos = write("pos-warn.csv", "name,fx,fy,fz\nSIDE,2,0,0\n");
+    // within 1% of unit length: rounding, normalised (beyond: refused, tests/lab_data.rs)
+    let pos = write("pos-warn.csv", "name,fx,fy,fz\nSIDE,1.008,0,0\n");
     let rec = write(
         "rec-side.csv",
         &format!("{HEAD}{}100,SIDE,20,0.1,0.2,0.3\n", good_rows(0)),

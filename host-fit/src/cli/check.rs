@@ -28,7 +28,7 @@ struct Verified<'a> {
 pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let spec = Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?;
     let (b, _) = read_blob(&a.blob)?;
-    let rec = load(&a.input, a.positions_for_check.as_deref(), err)?;
+    let rec = load(&a.input, err)?;
     let unit = serial(&rec);
     if b.serial.as_str() != unit {
         if !a.force {

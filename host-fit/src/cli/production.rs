@@ -12,12 +12,17 @@ use std::io::Write;
 
 pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let t = std::time::Instant::now();
+    let (positions, warns) = super::common::positions(&a.positions)?;
+    for wn in &warns {
+        let _ = writeln!(err, "warning: {wn}");
+    }
     let o = BatchOptions {
         jobs: a.jobs,
         model: a.model,
         spec: Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?,
         diagnose: a.diagnose,
         force: a.force,
+        positions,
     };
     let res = crate::batch::run(&a.dir, &a.out, &o)?;
     let count = |s: &str| res.units.iter().filter(|r| r.acceptance == s).count();

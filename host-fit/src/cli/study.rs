@@ -13,7 +13,7 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
     for p in a.report.iter().chain(a.out.iter()) {
         check_writable(p, a.force)?;
     }
-    let rec = oriented(load(&a.input, None, err)?, err)?;
+    let rec = oriented(load(&a.input, err)?, err)?;
     let d = crate::diagnose::diagnose(&rec)?;
     let mut c = d.contract(&rec);
     if let Some(b) = &a.out {
@@ -40,7 +40,7 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
 
 pub(super) fn report(a: ReportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     check_writable(&a.out, a.force)?;
-    let rec = oriented(load(&a.input, None, err)?, err)?;
+    let rec = oriented(load(&a.input, err)?, err)?;
     let oc = analyse(rec, None)?;
     let t = format!("{}{}", table(&oc.rows), crate::analysis::verdicts(&oc));
     let html = crate::report::demo::demo_report(&oc)?;

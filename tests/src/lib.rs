@@ -4,6 +4,8 @@ use host_fit::rng::Rng;
 use std::fmt::Write;
 use std::path::PathBuf;
 
+pub mod lab;
+
 /// The repository root.
 pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")

@@ -184,6 +184,10 @@ pub struct ReportArgs {
     /// The HTML file to write.
     #[arg(long)]
     pub out: PathBuf,
+    /// The twin's truth, for a simulated recording (`simulate --truth`, or a demo's
+    /// truth.json): drawn in the coefficient plots, and the departures taken from it.
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
     /// Overwrite an existing file.
     #[arg(long)]
     pub force: bool,

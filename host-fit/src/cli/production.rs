@@ -123,7 +123,10 @@ pub(super) fn demo(a: DemoArgs, out: &mut dyn Write) -> Result<()> {
         out,
         format!(
             "{}{}",
-            crate::analysis::table(&oc.rows),
+            crate::analysis::table(
+                &oc.rows,
+                &crate::analysis::verification_names(&oc.recording)
+            ),
             crate::analysis::verdicts(&oc)
         ),
     )?;

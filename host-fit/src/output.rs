@@ -131,7 +131,7 @@ mod tests {
         let e = write_atomic(&p, b"x", false).unwrap_err();
         let text = e.to_string();
         assert!(
-            text.contains("nodir` does not exist") && !text.contains(".tmp"),
+            text.contains("nodir` does not exist") && !text.contains(".u.blob."),
             "{text}"
         );
         std::fs::write(dir.path().join("file"), b"").unwrap();

@@ -242,9 +242,60 @@ fn summary_rows(model: &str, method: Compensation, v: &Verification) -> Vec<Summ
         .collect()
 }
 
-/// The summary table as text: max |dg| (mg) per temperature, and the reduction
-/// against the uncompensated case.
-pub fn table(rows: &[SummaryRow]) -> String {
+/// The verification positions that have dwells in `rec`, in the positions' order (the
+/// built-ins, then a positions file's).
+pub fn verification_names(rec: &Recording) -> Vec<String> {
+    let used: std::collections::BTreeSet<usize> = rec.dwells.iter().map(|d| d.position).collect();
+    used.iter()
+        .filter(|p| rec.positions.has_role(**p, Role::Verification))
+        .map(|p| rec.positions.name(*p).to_string())
+        .collect()
+}
+
+/// Position names for a heading: runs of consecutive numbers with one prefix shortened
+/// (`PP1..PP6`, `V1..V4`), the rest listed; a long list ends with its count.
+pub fn names_text(names: &[String]) -> String {
+    let split = |n: &str| {
+        let digits = n.len() - n.trim_end_matches(|c: char| c.is_ascii_digit()).len();
+        let (p, d) = n.split_at(n.len() - digits);
+        (p.to_string(), d.parse::<u64>().ok(), d.len())
+    };
+    let mut runs: Vec<Vec<&String>> = Vec::new();
+    for n in names {
+        let (p, k, w) = split(n);
+        let extends = runs.last().and_then(|r| r.last()).is_some_and(|last| {
+            let (lp, lk, lw) = split(last);
+            lp == p && lw == w && matches!((lk, k), (Some(a), Some(b)) if b == a + 1)
+        });
+        match runs.last_mut() {
+            Some(r) if extends => r.push(n),
+            _ => runs.push(vec![n]),
+        }
+    }
+    let parts: Vec<String> = runs
+        .iter()
+        .flat_map(|r| match r.as_slice() {
+            [a, .., b] if r.len() >= 3 => vec![format!("{a}..{b}")],
+            _ => r.iter().map(|n| n.to_string()).collect(),
+        })
+        .collect();
+    match parts.len() {
+        0 => "(none)".to_string(),
+        n if n > 8 => format!(
+            "{}, ... {} ({} positions)",
+            parts[..3].join(", "),
+            parts[n - 1],
+            names.len()
+        ),
+        _ => parts.join(", "),
+    }
+}
+
+/// The summary table as text: max |dg| (mg) per temperature, and in brackets the
+/// reduction against the uncompensated case; `positions` are the verification
+/// positions it is over (named in its heading). Fixed width: every column as wide as
+/// its widest entry, the values right-aligned, columns three spaces apart.
+pub fn table(rows: &[SummaryRow], positions: &[String]) -> String {
     let mut temps: Vec<f64> = rows.iter().map(|r| r.temp_c).collect();
     temps.sort_by(f64::total_cmp);
     temps.dedup();
@@ -260,27 +311,129 @@ pub fn table(rows: &[SummaryRow]) -> String {
             .find(|r| r.model == m && r.method == me && r.temp_c == t)
             .map(|r| r.max_abs_dg_mg)
     };
-    let mut s = String::from(
-        "max |dg| in the verification positions PP1..PP6, mg (in brackets: how many times smaller than with the T0 constants)\n",
-    );
-    s.push_str(&format!("{:<14} {:<6}", "model", "method"));
-    for t in &temps {
-        s.push_str(&format!(" {:>16}", format!("{t:.1} C")));
-    }
-    s.push('\n');
-    for (m, me) in &keys {
-        s.push_str(&format!("{m:<14} {:<6}", me.name()));
-        for t in &temps {
-            let v = get(m, *me, *t).unwrap_or(f64::NAN);
-            let compensated = *me != Compensation::None;
-            let cell = match get(T0_CONSTANTS, Compensation::None, *t) {
-                Some(u) if compensated && v > 0.0 && u >= v => format!("{v:.3} ({:.1}x)", u / v),
-                Some(u) if compensated && u > 0.0 => format!("{v:.3} ({:.1}x worse)", v / u),
-                _ => format!("{v:.3}"),
-            };
-            s.push_str(&format!(" {cell:>16}"));
+    // per row and temperature: the value and the bracket
+    let cells: Vec<Vec<(String, String)>> = keys
+        .iter()
+        .map(|(m, me)| {
+            temps
+                .iter()
+                .map(|t| {
+                    let v = get(m, *me, *t).unwrap_or(f64::NAN);
+                    let compensated = *me != Compensation::None;
+                    let ratio = match get(T0_CONSTANTS, Compensation::None, *t) {
+                        Some(u) if compensated && v > 0.0 && u >= v => {
+                            format!("({:.1}x)", u / v)
+                        }
+                        Some(u) if compensated && u > 0.0 => format!("({:.1}x worse)", v / u),
+                        _ => String::new(),
+                    };
+                    (format!("{v:.3}"), ratio)
+                })
+                .collect()
+        })
+        .collect();
+    let heads: Vec<String> = temps.iter().map(|t| format!("{t:.1} C")).collect();
+    let width = |it: &mut dyn Iterator<Item = usize>| it.max().unwrap_or(0);
+    let wm = width(&mut keys.iter().map(|k| k.0.len()).chain([5]));
+    let wme = width(&mut keys.iter().map(|k| k.1.name().len()).chain([6]));
+    let wv: Vec<usize> = (0..temps.len())
+        .map(|j| width(&mut cells.iter().map(|r| r[j].0.len()).chain([heads[j].len()])))
+        .collect();
+    let wr: Vec<usize> = (0..temps.len())
+        .map(|j| width(&mut cells.iter().map(|r| r[j].1.len())))
+        .collect();
+    let line = |first: &str, second: &str, cols: &mut dyn Iterator<Item = (usize, String)>| {
+        let mut l = format!("{first:<wm$}   {second:<wme$}");
+        for (j, c) in cols {
+            let (v, r) = c.split_once('\t').unwrap_or((c.as_str(), ""));
+            l.push_str(&format!("   {v:>w$}", w = wv[j]));
+            if wr[j] > 0 {
+                l.push_str(&format!(" {r:<w$}", w = wr[j]));
+            }
         }
-        s.push('\n');
+        format!("{}\n", l.trim_end())
+    };
+    let mut s = format!(
+        "max |dg| in the verification positions {}, mg (in brackets: how many times smaller than with the T0 constants)\n",
+        names_text(positions)
+    );
+    s.push_str(&line(
+        "model",
+        "method",
+        &mut heads.iter().cloned().enumerate(),
+    ));
+    for ((m, me), row) in keys.iter().zip(&cells) {
+        s.push_str(&line(
+            m,
+            me.name(),
+            &mut row.iter().map(|(v, r)| format!("{v}\t{r}")).enumerate(),
+        ));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(model: &str, method: Compensation, temp_c: f64, v: f64) -> SummaryRow {
+        SummaryRow {
+            model: model.into(),
+            method,
+            temp_c,
+            max_abs_dg_mg: v,
+        }
+    }
+
+    #[test]
+    fn the_table_keeps_its_columns_apart_whatever_the_values() {
+        let rows = [
+            row(T0_CONSTANTS, Compensation::None, -20.0, 3.11),
+            row(T0_CONSTANTS, Compensation::None, 25.0, 0.17),
+            row("chosen-poly2", Compensation::Method1, -20.0, 0.278),
+            row("chosen-poly2", Compensation::Method1, 25.0, 0.19),
+            row(
+                "a-much-longer-model-name",
+                Compensation::Method2,
+                -20.0,
+                12345.6,
+            ),
+            row(
+                "a-much-longer-model-name",
+                Compensation::Method2,
+                25.0,
+                0.001,
+            ),
+        ];
+        let names = ["F1", "V1", "V2", "V3", "X"].map(String::from);
+        let t = table(&rows, &names);
+        let lines: Vec<&str> = t.lines().collect();
+        assert!(lines[0].contains("positions F1, V1..V3, X, mg"), "{t}");
+        // the values end in the same column as their heading, every bracket starts in
+        // one column, and at least three spaces lie between two columns
+        let end = |l: &str, pat: &str| l.find(pat).map(|i| i + pat.len()).unwrap();
+        let head_end = end(lines[1], "25.0 C");
+        assert_eq!(end(lines[3], "0.190"), head_end, "{t}");
+        assert_eq!(end(lines[4], "0.001"), head_end, "{t}");
+        assert_eq!(
+            lines[3].find("(1.1x worse)"),
+            lines[4].find("(170.0x)"),
+            "{t}"
+        );
+        assert!(lines[3].contains("(11.2x)   "), "{t}");
+        assert!(lines[4].contains("(3969.6x worse)   "), "{t}");
+    }
+
+    #[test]
+    fn names_are_shortened_to_runs() {
+        let n = |v: &[&str]| names_text(&v.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+        assert_eq!(n(&["PP1", "PP2", "PP3", "PP4", "PP5", "PP6"]), "PP1..PP6");
+        assert_eq!(n(&["V1", "V2", "W7", "V3"]), "V1, V2, W7, V3");
+        assert_eq!(n(&["V01", "V02", "V03", "V10"]), "V01..V03, V10");
+        let many: Vec<String> = (1..=20).map(|k| format!("W{:04}", 10 * k)).collect();
+        assert_eq!(
+            names_text(&many),
+            "W0010, W0020, W0030, ... W0200 (20 positions)"
+        );
+    }
 }

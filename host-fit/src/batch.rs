@@ -109,6 +109,9 @@ pub struct BatchOptions {
     pub diagnose: bool,
     /// Overwrite outputs of an earlier run.
     pub force: bool,
+    /// The positions every recording is read with (built in, or a lab's own file with
+    /// its roles).
+    pub positions: Positions,
 }
 
 /// The per-unit JSON.
@@ -137,7 +140,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let rec = Recording::read(path, Positions::default())?;
+    let rec = Recording::read(path, o.positions.clone())?;
     if !rec.unit.is_empty() {
         r.unit = rec.unit.clone();
     }
@@ -152,7 +155,9 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     r.model = oc.fit.basis.describe();
     // the blob's model, and its own uncertainty for the lot's statistics
     let (cal, diagnosis) = if o.diagnose {
-        let d = crate::diagnose::diagnose(&rec)?;
+        // the diagnosis needs every pose's vector: estimate those of unknown orientation
+        let oriented = crate::fit::pipeline::with_orientations(&rec, None)?;
+        let d = crate::diagnose::diagnose(&oriented.rec)?;
         r.findings = d.findings.iter().map(|f| f.effect).collect();
         let names: Vec<&str> = r.findings.iter().map(|e| e.as_str()).collect();
         r.model = format!("diagnosed ({})", names.join("+"));

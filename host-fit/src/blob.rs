@@ -1,7 +1,7 @@
 //! From a fitted model to a flashed blob and back: f32 tables, the f32-vs-f64 check,
 //! encoding, reading a blob file, and what `inspect` shows of it.
 use crate::error::{HostError, Result};
-use firmware_core::blob::{Blob, FORMAT_VERSION, MAX_BLOB_LEN, MAX_SERIAL_LEN};
+use firmware_core::blob::{Blob, FORMAT_VERSION, MAGIC, MAX_BLOB_LEN, MAX_SERIAL_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
 use firmware_core::model::{Coeffs, COEFF_NAMES};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
@@ -115,12 +115,40 @@ pub fn blob_serial(serial: &str) -> Result<heapless::String<MAX_SERIAL_LEN>> {
     Ok(s)
 }
 
-/// Read and decode a blob file; the error names the file and why it is invalid.
+/// Read and decode a blob file; the error names the file and why it is invalid. A file
+/// without the magic bytes is "not a blob" (a recording given by mistake, say), said
+/// before any check that would call it a corrupted one.
 pub fn read_blob(path: &Path) -> Result<(Blob, Vec<u8>)> {
     let bytes = std::fs::read(path).map_err(|e| HostError::io(path, &e))?;
+    if !bytes.starts_with(&MAGIC) {
+        return Err(HostError::in_file(path, not_a_blob(&bytes)));
+    }
     let b =
         Blob::decode(&bytes).map_err(|e| HostError::in_file(path, format!("invalid blob: {e}")))?;
     Ok((b, bytes))
+}
+
+/// Why `bytes` is not a blob: the magic is missing; what the file starts with instead,
+/// as text when it is printable, else as hex.
+fn not_a_blob(bytes: &[u8]) -> String {
+    let magic = String::from_utf8_lossy(&MAGIC);
+    if bytes.is_empty() {
+        return format!("not a blob: the file is empty (a blob starts with `{magic}`)");
+    }
+    let head = &bytes[..bytes.len().min(16)];
+    let text = |b: &u8| (b' '..=b'~').contains(b) || b"\t\r\n".contains(b);
+    let shown = if head.iter().all(text) {
+        format!("`{}`", head.escape_ascii())
+    } else {
+        head.iter()
+            .map(|b| format!("{b:02x}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    format!(
+        "not a blob: it starts with {shown}{}, not with the blob's magic `{magic}` (a blob is written by `fit` or `diagnose --out`)",
+        if bytes.len() > head.len() { "..." } else { "" }
+    )
 }
 
 /// What `inspect` shows of a blob.

@@ -13,6 +13,21 @@ pub fn check_writable(path: &Path, force: bool) -> Result<()> {
             "is a folder: give the path of a file to write in it (e.g. this folder/unit.blob)",
         ));
     }
+    let dir = folder(path);
+    if !dir.is_dir() {
+        let why = if dir.exists() {
+            "is not a folder"
+        } else {
+            "does not exist"
+        };
+        return Err(HostError::in_file(
+            path,
+            format!(
+                "cannot be written: `{}` {why} (create the folder first, or give another path)",
+                dir.display()
+            ),
+        ));
+    }
     if !force && path.exists() {
         return Err(HostError::in_file(
             path,
@@ -22,26 +37,35 @@ pub fn check_writable(path: &Path, force: bool) -> Result<()> {
     Ok(())
 }
 
+/// The folder `path` is written in (`.` for a bare file name).
+fn folder(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
 /// Write `bytes` to `path` atomically: a temporary file in the same folder, synced,
 /// then moved into place. Without `force` an existing file is never replaced (even one
 /// created meanwhile: the final step is a hard link, which fails if the name exists).
-/// On any failure the temporary file is removed and nothing is left behind.
+/// On any failure the temporary file is removed and nothing is left behind. The file
+/// gets the mode a plain create would give (0666 less the user's umask, e.g. 0644), not
+/// the temporary file's private 0600: colleagues read the reports on a shared server.
 pub fn write_atomic(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
     check_writable(path, force)?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
+    let dir = folder(path);
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     let io = |e: std::io::Error| HostError::io(path, &e);
-    let mut tmp = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(io)?;
+    let prefix = format!(".{name}.");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    // the mode is given to open(2), which takes the umask off it, as for any new file
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder.tempfile_in(dir).map_err(io)?;
     tmp.write_all(bytes).map_err(io)?;
     tmp.as_file().sync_all().map_err(io)?;
     let placed = if force {
@@ -98,6 +122,21 @@ mod tests {
         assert_eq!(std::fs::read(&p).unwrap(), b"two");
         let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(left.len(), 1, "no temporary files left");
+    }
+
+    #[test]
+    fn a_missing_folder_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("nodir").join("u.blob");
+        let e = write_atomic(&p, b"x", false).unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.contains("nodir` does not exist") && !text.contains(".u.blob."),
+            "{text}"
+        );
+        std::fs::write(dir.path().join("file"), b"").unwrap();
+        let e = check_writable(&dir.path().join("file").join("u.blob"), true).unwrap_err();
+        assert!(e.to_string().contains("is not a folder"), "{e}");
     }
 
     #[test]

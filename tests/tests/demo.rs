@@ -46,7 +46,10 @@ fn demo_outputs_agree_with_each_other_and_the_report_holds_its_data() {
     let typed: Vec<host_fit::analysis::SummaryRow> =
         serde_json::from_value(summary["rows"].clone()).unwrap();
     assert!(
-        out.starts_with(&host_fit::analysis::table(&typed)),
+        out.starts_with(&host_fit::analysis::table(
+            &typed,
+            &["PP1", "PP2", "PP3", "PP4", "PP5", "PP6"].map(String::from)
+        )),
         "the printed table is not summary.json's:\n{out}"
     );
     let r = rows(&summary);
@@ -150,7 +153,13 @@ fn a_unit_outside_every_fitted_family_is_not_claimed_within_acceptance() {
             .filter(|r| r.method != Compensation::None && (r.temp_c - t).abs() < 2.0)
             .collect()
     };
-    println!("{}", host_fit::analysis::table(&oc.rows));
+    println!(
+        "{}",
+        host_fit::analysis::table(
+            &oc.rows,
+            &host_fit::analysis::verification_names(&oc.recording)
+        )
+    );
     let bump = at_t(32.5);
     assert_eq!(bump.len(), 2 * oc.models.len(), "{:?}", oc.rows);
     for r in bump {

@@ -6,14 +6,24 @@
 //! in every figure, in several colours, and white margins at the bottom and the right
 //! (nothing cut). The plots' structure and their data are checked on the page's source
 //! (`reports::check_plots`: titles, axis labels with units, a legend entry per series,
-//! markers and lines through the embedded data).
+//! markers and lines through the embedded data). The models' colours must be told apart
+//! at a glance, by people with any of the three dichromacies too: every pair of the
+//! series colours of the worst-|dg| plot at least [`MIN_DELTA_E`] apart (CIEDE2000, in
+//! normal and simulated colour vision), and each drawn on the screenshot.
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
-use tests::{cli, repo};
+use tests::{cli, lab, repo};
 
+#[path = "reports/colour.rs"]
+mod colour;
 mod reports;
+
+/// The smallest CIEDE2000 difference between two series colours of the worst-|dg| plot
+/// (the models and the uncompensated unit), in normal vision and in each simulated
+/// dichromacy: 20 is a difference seen at a glance (2 is about the least noticeable).
+const MIN_DELTA_E: f64 = 20.0;
 
 const CHROMIUM: &str = "/usr/bin/chromium";
 /// The widths the layout is checked at (a laptop, a desktop, a wide screen), px.
@@ -214,14 +224,19 @@ fn content(s: &Shot, x0: usize, y0: usize, x1: usize, y1: usize) -> (f64, usize)
     )
 }
 
-/// Everything this test asks of one report.
-fn check_in_browser(name: &str, report: &Path) {
+/// Everything this test asks of one report; the embedded data of its plots and the
+/// screenshot with where each figure lies in it.
+fn check_in_browser(
+    name: &str,
+    report: &Path,
+) -> (Vec<reports::Figure>, Shot, Vec<serde_json::Value>) {
     let html = std::fs::read_to_string(report).unwrap();
     let figures = reports::check_plots(&html);
     assert!(!figures.is_empty(), "{name}: no plots");
     let tmp = tempdir();
     let dir = tmp.path();
     let mut height = 0;
+    let mut taken = None;
     for width in WIDTHS {
         let l = layout(&html, width, dir);
         let list = |k: &str| l[k].as_array().unwrap().clone();
@@ -248,12 +263,65 @@ fn check_in_browser(name: &str, report: &Path) {
             height = l["height"].as_u64().unwrap() as u32;
             let shot = screenshot(report, height.min(30_000), dir);
             check_shot(name, &shot, &list("figures"));
+            taken = Some((shot, list("figures")));
         }
     }
     println!(
         "{name}: {} plots, {} KB, {height} px tall at {SHOT_WIDTH} px: laid out at {WIDTHS:?} px without overflow, screenshot checked",
         figures.len(),
         html.len() / 1024
+    );
+    let (shot, placed) = taken.expect("a screenshot at SHOT_WIDTH");
+    (figures, shot, placed)
+}
+
+/// The worst-|dg| plot's series colours (the models and the uncompensated unit) are
+/// at least [`MIN_DELTA_E`] apart in every colour vision, and each is on the screen in
+/// that plot.
+fn check_model_colours(
+    name: &str,
+    (figures, shot, placed): &(Vec<reports::Figure>, Shot, Vec<serde_json::Value>),
+) {
+    let fig = figures
+        .iter()
+        .find(|f| f.id == "max-dg")
+        .unwrap_or_else(|| panic!("{name}: no worst-|dg| plot"));
+    let mut colours: Vec<(String, [u8; 3])> = Vec::new();
+    for s in fig.data["series"].as_array().unwrap() {
+        let c = colour::parse_hex(s["color"].as_str().unwrap());
+        let label = s["name"].as_str().unwrap().to_string();
+        if !colours.iter().any(|x| x.1 == c) {
+            colours.push((label, c));
+        }
+    }
+    assert!(colours.len() >= 3, "{name}: {colours:?}");
+    for (i, (na, a)) in colours.iter().enumerate() {
+        for (nb, b) in &colours[i + 1..] {
+            let (d, vision) = colour::worst_difference(*a, *b);
+            assert!(
+                d >= MIN_DELTA_E,
+                "{name}: `{na}` {a:?} and `{nb}` {b:?} are {d:.1} apart in {vision} (CIEDE2000; at least {MIN_DELTA_E})"
+            );
+        }
+    }
+    let at = placed
+        .iter()
+        .find(|p| p["id"] == "max-dg")
+        .expect("the plot laid out");
+    let v = |k: &str| at[k].as_f64().unwrap().max(0.0) as usize;
+    for (label, c) in &colours {
+        let mut n = 0;
+        for y in v("top")..(v("top") + v("height")).min(shot.h) {
+            for x in v("left")..(v("left") + v("width")).min(shot.w) {
+                let p = shot.px(x, y);
+                n += usize::from((0..3).all(|k| p[k].abs_diff(c[k]) <= 6));
+            }
+        }
+        assert!(n >= 30, "{name}: `{label}` {c:?} drawn on {n} pixels");
+    }
+    println!(
+        "{name}: {} series colours in the worst-|dg| plot, every pair at least {MIN_DELTA_E} apart (CIEDE2000, normal and dichromat vision)",
+        colours.len()
     );
 }
 
@@ -295,7 +363,41 @@ fn the_demo_report_in_a_browser() {
     let dir = tmp.path();
     let (code, _, err) = cli(&["demo", "--out", dir.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
-    check_in_browser("demo report", &dir.join("report.html"));
+    let seen = check_in_browser("demo report", &dir.join("report.html"));
+    check_model_colours("demo report", &seen);
+}
+
+/// A lab's recording (its own position names, four stops, T0 = 25 C; `tests::lab`)
+/// with the twin's truth: the names in the headings, the truth as a reference line, the
+/// held-out dwells ringed, laid out as every report.
+#[test]
+fn a_lab_s_report_in_a_browser() {
+    let tmp = tempdir();
+    let dir = tmp.path();
+    let f = lab::write(dir, 1);
+    let report = dir.join("lab.html");
+    let (code, _, err) = cli(&[
+        "report",
+        f.recording.to_str().unwrap(),
+        "--positions",
+        f.positions.to_str().unwrap(),
+        "--truth",
+        f.truth.to_str().unwrap(),
+        "--out",
+        report.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let seen = check_in_browser("lab report (F1..F6, V1..V4)", &report);
+    check_model_colours("lab report", &seen);
+    let titles: Vec<&str> = seen
+        .0
+        .iter()
+        .filter_map(|f| f.data["title"].as_str())
+        .collect();
+    assert!(
+        titles.contains(&"worst |dg| over the verification positions V1..V4"),
+        "{titles:?}"
+    );
 }
 
 #[test]

@@ -120,19 +120,35 @@ pub struct AcceptArgs {
     pub accept_range_mg: f64,
 }
 
+/// The positions options, the same for every command that reads recordings.
+#[derive(Args, Debug, Clone, Default)]
+pub struct PositionArgs {
+    /// Positions file (name,fx,fy,fz[,role]; an empty vector `W1,,,` is a pose of
+    /// unknown orientation, estimated from the data).
+    #[arg(long)]
+    pub positions: Option<PathBuf>,
+    /// Positions kept out of every fit and judged (default: those whose role is
+    /// verification, PP1..PP6 unless a positions file says otherwise).
+    #[arg(long, value_delimiter = ',')]
+    pub positions_for_check: Option<Vec<String>>,
+    /// Treat every vector of the positions file as unknown (vectors that were
+    /// themselves estimated from data): estimate them.
+    #[arg(long, requires = "positions")]
+    pub unknown_orientations: bool,
+}
+
 /// A recording and its positions.
 #[derive(Args, Debug, Clone)]
 pub struct Input {
     /// The recording.
     pub recording: PathBuf,
-    /// Positions file (name,fx,fy,fz[,role]; an empty vector `W1,,,` is a pose of
-    /// unknown orientation, estimated from the data).
+    /// Its positions.
+    #[command(flatten)]
+    pub positions: PositionArgs,
+    /// Also print the notes on expected features of the data (dwells resting through
+    /// temperature ramps), which are otherwise left out.
     #[arg(long)]
-    pub positions: Option<PathBuf>,
-    /// Treat every vector of the positions file as unknown (vectors that were
-    /// themselves estimated from data): estimate them.
-    #[arg(long, requires = "positions")]
-    pub unknown_orientations: bool,
+    pub verbose: bool,
 }
 
 /// `temp-fit`.
@@ -187,10 +203,6 @@ pub struct FitArgs {
     /// The serial written into the blob (default: the recording's `unit`).
     #[arg(long)]
     pub serial: Option<String>,
-    /// Positions kept out of the fit for verification (default: those whose role is
-    /// verification, PP1..PP6 unless a positions file says otherwise).
-    #[arg(long, value_delimiter = ',')]
-    pub positions_for_check: Option<Vec<String>>,
     /// Recompute the firmware's cached matrices after this temperature change, C.
     #[arg(long, default_value_t = crate::fit::temperature::UPDATE_STEP_C)]
     pub update_step: f64,
@@ -223,9 +235,6 @@ pub struct VerifyArgs {
     /// Error model of method 2 (default: full); an error with method 1, which has none.
     #[arg(long, value_enum)]
     pub error_model: Option<ErrModel>,
-    /// Positions to check (default: those whose role is verification).
-    #[arg(long, value_delimiter = ',')]
-    pub positions_for_check: Option<Vec<String>>,
     /// The acceptance specification.
     #[command(flatten)]
     pub accept: AcceptArgs,
@@ -246,6 +255,10 @@ pub struct ReportArgs {
     /// The HTML file to write.
     #[arg(long)]
     pub out: PathBuf,
+    /// The twin's truth, for a simulated recording (`simulate --truth`, or a demo's
+    /// truth.json): drawn in the coefficient plots, and the departures taken from it.
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
     /// Overwrite an existing file.
     #[arg(long)]
     pub force: bool,
@@ -288,6 +301,9 @@ pub struct BatchArgs {
     /// Temperature model (default: chosen by the data for every unit).
     #[arg(long, value_enum)]
     pub model: Option<ModelArg>,
+    /// The positions of every unit's recording.
+    #[command(flatten)]
+    pub positions: PositionArgs,
     /// The acceptance specification.
     #[command(flatten)]
     pub accept: AcceptArgs,

@@ -95,7 +95,7 @@ pub(super) fn identify(a: IdentifyArgs, out: &mut dyn Write, err: &mut dyn Write
     if let Some(c) = &a.csv {
         check_writable(c, a.force)?;
     }
-    let rec = oriented(load(&a.input, None, err)?, err)?;
+    let rec = oriented(load(&a.input, err)?, err)?;
     let nz = noise(&rec);
     let st = identify_stops(&rec)?;
     let table = to_csv(&table_rows(&st))?;
@@ -291,7 +291,7 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     check_writable(&a.out, a.force)?;
     let req = ModelRequest::from(&a.model);
     req.check()?;
-    let rec = load(&a.input, a.positions_for_check.as_deref(), err)?;
+    let rec = load(&a.input, err)?;
     let oc = match (req.kind, Route::from(a.route)) {
         (_, Route::Static) => fit_chosen(&rec, &req)?,
         (None, route) => {

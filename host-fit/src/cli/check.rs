@@ -43,7 +43,7 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
     let m = method(a.method, a.error_model)?;
     let spec = Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?;
     let (b, _) = read_blob(&a.blob)?;
-    let rec = load(&a.input, a.positions_for_check.as_deref(), err)?;
+    let rec = load(&a.input, err)?;
     let unit = serial(&rec);
     if b.serial.as_str() != unit {
         if !a.force {

@@ -1,6 +1,6 @@
 //! What every command shares: reading a recording with its positions, the unit's serial,
 //! writing a line of output.
-use super::args::Input;
+use super::args::{Input, PositionArgs};
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::error::{HostError, Result};
@@ -22,21 +22,18 @@ pub(super) fn w(out: &mut dyn Write, s: impl std::fmt::Display) -> Result<()> {
     writeln!(out, "{s}").map_err(|e| HostError::msg(format!("cannot write output: {e}")))
 }
 
-/// Read the recording of `input` (with its positions file), the named positions made the
-/// verification positions when `check` is given; warnings go to `err`.
-pub(super) fn load(
-    input: &Input,
-    check: Option<&[String]>,
-    err: &mut dyn Write,
-) -> Result<Recording> {
-    let (mut pos, mut warns) = match &input.positions {
-        Some(p) => Positions::with_file(p)?,
+/// The positions of `p`: the built-ins and the positions file, the verification
+/// positions set by `--positions-for-check`, the file's vectors forgotten with
+/// `--unknown-orientations`; with the file's warnings.
+pub(super) fn positions(p: &PositionArgs) -> Result<(Positions, Vec<String>)> {
+    let (mut pos, warns) = match &p.positions {
+        Some(f) => Positions::with_file(f)?,
         None => (Positions::default(), Vec::new()),
     };
-    if let Some(names) = check {
+    if let Some(names) = &p.positions_for_check {
         pos.set_verification(names, "--positions-for-check")?;
     }
-    if input.unknown_orientations {
+    if p.unknown_orientations {
         let builtin = Positions::default();
         let from_file: Vec<String> = pos
             .list
@@ -50,13 +47,22 @@ pub(super) fn load(
             .collect();
         pos.forget_vectors(&from_file);
     }
+    Ok((pos, warns))
+}
+
+/// Read the recording of `input` with its positions ([`positions`]); warnings go to
+/// `err`, and the notes on expected features of the data too with `--verbose`.
+pub(super) fn load(input: &Input, err: &mut dyn Write) -> Result<Recording> {
+    let (pos, mut warns) = positions(&input.positions)?;
     let rec = Recording::read(&input.recording, pos)?;
     warns.extend(rec.warnings.iter().cloned());
     for wn in &warns {
         let _ = writeln!(err, "warning: {wn}");
     }
-    for n in &rec.notes {
-        let _ = writeln!(err, "note: {n}");
+    if input.verbose {
+        for n in &rec.notes {
+            let _ = writeln!(err, "note: {n}");
+        }
     }
     Ok(rec)
 }

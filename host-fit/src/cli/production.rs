@@ -12,12 +12,17 @@ use std::io::Write;
 
 pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let t = std::time::Instant::now();
+    let (positions, warns) = super::common::positions(&a.positions)?;
+    for wn in &warns {
+        let _ = writeln!(err, "warning: {wn}");
+    }
     let o = BatchOptions {
         jobs: a.jobs,
         model: a.model.map(Into::into),
         spec: Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?,
         diagnose: a.diagnose,
         force: a.force,
+        positions,
     };
     let res = crate::batch::run(&a.dir, &a.out, &o)?;
     let count = |s: UnitStatus| res.units.iter().filter(|r| r.acceptance == s).count();
@@ -122,7 +127,10 @@ pub(super) fn demo(a: DemoArgs, out: &mut dyn Write) -> Result<()> {
         out,
         format!(
             "{}{}",
-            crate::analysis::table(&oc.rows),
+            crate::analysis::table(
+                &oc.rows,
+                &crate::analysis::verification_names(&oc.recording)
+            ),
             crate::analysis::verdicts(&oc)
         ),
     )?;

@@ -3,17 +3,21 @@ use super::args::{BlindArgs, DiagnoseArgs, ReportArgs};
 use super::common::{load, oriented, serial, w};
 use crate::analysis::{analyse, table};
 use crate::blob::build_blob;
+use crate::data::recording::Recording;
 use crate::diagnose::contract::BlobNote;
-use crate::error::Result;
+use crate::error::{HostError, Result};
 use crate::output::{check_writable, json, write_atomic};
 use crate::progress::with_progress;
+use crate::simulate::{SimConfig, TrueUnit};
+use serde::Deserialize;
 use std::io::Write;
+use std::path::Path;
 
 pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     for p in a.report.iter().chain(a.out.iter()) {
         check_writable(p, a.force)?;
     }
-    let rec = oriented(load(&a.input, None, err)?, err)?;
+    let rec = oriented(load(&a.input, err)?, err)?;
     let d = crate::diagnose::diagnose(&rec)?;
     let mut c = d.contract();
     if let Some(b) = &a.out {
@@ -40,13 +44,46 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
 
 pub(super) fn report(a: ReportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     check_writable(&a.out, a.force)?;
-    let rec = oriented(load(&a.input, None, err)?, err)?;
-    let oc = analyse(rec, None)?;
-    let t = format!("{}{}", table(&oc.rows), crate::analysis::verdicts(&oc));
+    let rec = oriented(load(&a.input, err)?, err)?;
+    let truth = match &a.truth {
+        Some(p) => Some(twin_truth(p, &rec)?),
+        None => None,
+    };
+    let oc = analyse(rec, truth)?;
+    let names = crate::analysis::verification_names(&oc.recording);
+    let t = format!(
+        "{}{}",
+        table(&oc.rows, &names),
+        crate::analysis::verdicts(&oc)
+    );
     let html = crate::report::demo::demo_report(&oc)?;
     write_atomic(&a.out, html.as_bytes(), a.force)?;
     w(out, t)?;
     w(out, format!("report: {}", a.out.display()))
+}
+
+/// The twin's truth from `simulate --truth` (or a demo's truth.json): its `config`.
+fn twin_truth(path: &Path, rec: &Recording) -> Result<TrueUnit> {
+    let text = std::fs::read_to_string(path).map_err(|e| HostError::io(path, &e))?;
+    let bad = |e: serde_json::Error| {
+        HostError::in_file(
+            path,
+            format!("is not a twin's truth (`simulate --truth`): {e}"),
+        )
+    };
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(bad)?;
+    let cfg =
+        SimConfig::deserialize(v.get("config").unwrap_or(&serde_json::Value::Null)).map_err(bad)?;
+    if cfg.unit.serial != rec.unit {
+        return Err(HostError::in_file(
+            path,
+            format!(
+                "is the truth of unit `{}`, the recording is of unit `{}`",
+                cfg.unit.serial, rec.unit
+            ),
+        ));
+    }
+    TrueUnit::new(&cfg).map_err(|e| HostError::in_file(path, e.message))
 }
 
 pub(super) fn blind(a: BlindArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {

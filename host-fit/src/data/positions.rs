@@ -49,6 +49,12 @@ pub struct Positions {
     pub list: Vec<Position>,
 }
 
+/// A positions-file vector whose length is further than this from 1 is refused (a
+/// vector in degrees, a typo), not normalised: stricter than recording-format.md, which
+/// normalises every length with a warning. Within it, rounding of written-out
+/// components: normalised with a warning, as the format says.
+pub const MAX_LENGTH_ERROR: f64 = 0.01;
+
 /// The tilt of the verification positions, degrees.
 pub const PP_TILT_DEG: f64 = 25.0;
 
@@ -260,6 +266,17 @@ impl Positions {
                     format!("position `{name}` has a zero-length vector"),
                 ));
             }
+            if (norm - 1.0).abs() > MAX_LENGTH_ERROR {
+                return Err(HostError::at_field(
+                    path,
+                    line_no,
+                    "fx,fy,fz",
+                    format!(
+                        "position `{name}` has length {norm:.4}, more than {}% from 1: a unit vector of specific force (g) is expected (angles in degrees are not a vector)",
+                        MAX_LENGTH_ERROR * 100.0
+                    ),
+                ));
+            }
             if (norm - 1.0).abs() > 1e-6 {
                 warnings.push(format!(
                     "{}:{line_no}: position `{name}` has length {norm:.9}; normalised to unit length",
@@ -342,7 +359,7 @@ mod tests {
     #[test]
     fn whitespace_only_fields_are_empty_and_the_vector_stays_nan() {
         // found by the fuzzer: vertical tabs trim to empty fields
-        let text = "name,fx,fy,fz\nZ_0,1,0,1\nIXISme,,\x0b, \x0b, 0.,090";
+        let text = "name,fx,fy,fz\nZ_0,0.6,0,0.8\nIXISme,,\x0b, \x0b, 0.,090";
         let (p, _) = Positions::parse(Path::new("p.csv"), text).unwrap();
         let i = p.index("IXISme").unwrap();
         assert!(!p.is_known(i) && p.vector(i).iter().all(|v| v.is_nan()));
@@ -353,12 +370,23 @@ mod tests {
 
     #[test]
     fn an_empty_vector_is_a_pose_of_unknown_orientation() {
-        let text = "name,fx,fy,fz,role\nW1,,,\nW2,0,0,2,verification\nTP1,,,,\n";
+        let text = "name,fx,fy,fz,role\nW1,,,\nW2,0,0,1,verification\nTP1,,,,\n";
         let (p, _) = Positions::parse(Path::new("p.csv"), text).unwrap();
         let w1 = p.index("W1").unwrap();
         assert!(!p.is_known(w1) && p.vector(w1).iter().all(|v| v.is_nan()));
         assert!(p.has_role(w1, Role::Calibration));
         assert_eq!(p.vector(p.index("W2").unwrap()), [0.0, 0.0, 1.0]);
+        // a vector far from unit length is refused (here 2, written for 1); one within
+        // 1% is normalised
+        let e = Positions::parse(Path::new("p.csv"), "name,fx,fy,fz\nW1,0,0,2\n").unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(2), Some("fx,fy,fz")),
+            "{e}"
+        );
+        let (q, w) = Positions::parse(Path::new("p.csv"), "name,fx,fy,fz\nW1,0,0,1.009\n").unwrap();
+        assert_eq!(q.vector(q.index("W1").unwrap()), [0.0, 0.0, 1.0]);
+        assert!(w[0].contains("normalised"), "{w:?}");
         // a built-in may be declared unknown too
         let tp1 = p.index("TP1").unwrap();
         assert!(!p.is_known(tp1));

@@ -130,19 +130,44 @@ pub fn linear_ticks(lo: f64, hi: f64, len_px: f64, px_per_tick: f64) -> Vec<(f64
         .collect()
 }
 
-/// Ticks of a log10 scale: every decade inside `lo..hi`, and 2 and 5 times them when
-/// fewer than three decades are shown.
-pub fn log_ticks(lo: f64, hi: f64) -> Vec<(f64, String)> {
+/// The largest of 1, 2 or 5 times a power of ten at or below `v` (> 0).
+pub fn round_down_125(v: f64) -> f64 {
+    if !(v.is_finite() && v > 0.0) {
+        return v;
+    }
+    let e = v.log10().floor();
+    let p = 10f64.powf(e);
+    let m = [5.0, 2.0, 1.0]
+        .into_iter()
+        .find(|m| m * p <= v * (1.0 + 1e-9))
+        .unwrap_or(1.0);
+    m * p
+}
+
+/// Ticks of a log10 scale over `len_px` pixels: every decade inside `lo..hi`, with 2 and
+/// 5 times them where a decade has room for three labels (60 px), and always the lowest
+/// of these inside the range, so that the lowest values shown are read off a labelled
+/// tick (an axis from 0.012 mg shows 0.02 and 0.05, not only 0.1 and up).
+pub fn log_ticks(lo: f64, hi: f64, len_px: f64) -> Vec<(f64, String)> {
     let (a, b) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
-    let few = b - a <= 3;
-    let mut out = Vec::new();
+    let per_decade = len_px / (hi.log10() - lo.log10()).max(1e-9);
+    let all = per_decade >= 60.0;
+    let mut out: Vec<(f64, String)> = Vec::new();
     for e in a..=b {
-        let mults: &[f64] = if few { &[1.0, 2.0, 5.0] } else { &[1.0] };
-        for m in mults {
+        for m in [1.0, 2.0, 5.0] {
             let v = m * 10f64.powi(e);
-            if v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9) {
+            let inside = v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9);
+            // the lowest tick is kept whatever the room: it labels the bottom
+            if inside && (all || m == 1.0 || out.is_empty()) {
                 out.push((v, label(v, (-e).max(0) as usize)));
             }
+        }
+    }
+    // a lowest 2 or 5 that would crowd the decade above it: one label is enough there
+    if !all && out.len() > 1 && out[0].0 * 10.0 > out[1].0 * (1.0 + 1e-9) {
+        let gap = len_px * (out[1].0.log10() - out[0].0.log10()) / (hi.log10() - lo.log10());
+        if gap < 14.0 {
+            out.remove(1);
         }
     }
     out
@@ -211,9 +236,24 @@ mod tests {
 
     #[test]
     fn log_ticks_decades_and_scale_round_trip() {
-        let t = log_ticks(0.004, 15.0);
+        // little room: decades, and the lowest round value above the axis' foot (the
+        // decade just above it, 13 px away, gives way)
+        let t = log_ticks(0.004, 15.0, 150.0);
         let labels: Vec<&str> = t.iter().map(|x| x.1.as_str()).collect();
-        assert_eq!(labels, ["0.01", "0.1", "1", "10"]);
+        assert_eq!(labels, ["0.005", "0.1", "1", "10"]);
+        let t = log_ticks(0.004, 15.0, 200.0);
+        let labels: Vec<&str> = t.iter().map(|x| x.1.as_str()).collect();
+        assert_eq!(labels, ["0.005", "0.01", "0.1", "1", "10"]);
+        // room for three a decade: 1, 2 and 5 times each
+        let t = log_ticks(0.012, 15.0, 330.0);
+        let labels: Vec<&str> = t.iter().map(|x| x.1.as_str()).collect();
+        assert_eq!(
+            labels,
+            ["0.02", "0.05", "0.1", "0.2", "0.5", "1", "2", "5", "10"]
+        );
+        assert_eq!(round_down_125(0.012), 0.01);
+        assert_eq!(round_down_125(0.0049), 0.002);
+        assert_eq!(round_down_125(7.0), 5.0);
         let s = Scale {
             lo: 0.001,
             hi: 100.0,

@@ -5,18 +5,30 @@
 //! truth (or from the chosen model) with 1-sigma error bars, residuals against time above
 //! the temperature.
 use crate::acceptance::Spec;
-use crate::analysis::{Compensation, DemoModel, DemoOutcome, T0_CONSTANTS};
+use crate::analysis::{
+    names_text, verification_names, Compensation, DemoModel, DemoOutcome, T0_CONSTANTS,
+};
+use crate::data::positions::Role;
 use crate::error::Result;
 use crate::report::axis::prefixed;
 use crate::report::page::{esc, html, Section};
-use crate::report::plot::{Band, Dash, Marker, Plot, Rgb, Series, ACCEPT, PALETTE};
+use crate::report::plot::{
+    Band, Dash, Marker, Plot, Rgb, Series, ACCEPT, MODEL_COLORS, PALETTE, TRUTH,
+};
 use crate::report::trace::{temperature_plot, time_span, AXIS_COLORS, AXIS_MARKERS};
 use firmware_core::model::{AXES, COEFF_NAMES, K_INDEX, U0_INDEX};
 
-/// A model's colour: the same in every plot.
+/// A model's colour: the same in every plot, told apart at a glance ([`MODEL_COLORS`]).
 fn model_color(i: usize) -> Rgb {
-    PALETTE[1 + i % (PALETTE.len() - 1)]
+    MODEL_COLORS[i % MODEL_COLORS.len()]
 }
+
+/// The legend name of the per-stop values (formula (10) at each stop), and with their
+/// error bars.
+const PER_STOP: [&str; 2] = [
+    "identified at each stop (formula (10))",
+    "identified at each stop (formula (10), ±1 sigma)",
+];
 
 /// Method 1 and 2: marker and line.
 const METHODS: [(usize, Compensation, Marker, Dash); 2] = [
@@ -128,7 +140,10 @@ fn max_dg_plot(oc: &DemoOutcome) -> Plot {
         .collect();
     Plot {
         id: "max-dg".into(),
-        title: "worst |dg| over the verification positions".into(),
+        title: format!(
+            "worst |dg| over the verification positions {}",
+            names_text(&verification_names(&oc.recording))
+        ),
         x_label: "temperature, C".into(),
         y_label: "max |dg|, mg (log scale)".into(),
         x_range: Some((lo, hi)),
@@ -360,31 +375,23 @@ fn coeff_plot(oc: &DemoOutcome, c: usize, grid: &[f64], diff: bool) -> Plot {
             .collect()
     };
     let styles = [Dash::Solid, Dash::Solid, Dash::DashDot, Dash::Dashed];
-    let mut series: Vec<Series> = models
+    // the truth first: a wide light line under the models, with no markers, so that it
+    // reads as a reference and not as data, and both show where they coincide
+    let mut series: Vec<Series> = truth
         .iter()
-        .enumerate()
-        .map(|(i, v)| {
-            Series::line(
-                oc.models[i].name.clone(),
-                model_color(i),
-                styles[i % styles.len()],
-                Marker::ALL[(i + 2) % Marker::ALL.len()],
-                curve(v),
-            )
-        })
+        .map(|t| Series::reference("truth (the twin's)", TRUTH, curve(t)))
         .collect();
-    if let Some(t) = &truth {
-        // drawn over the models, dashed, so that both show where they coincide
-        series.push(Series::line(
-            "truth",
-            PALETTE[0],
-            Dash::Dashed,
-            Marker::Cross,
-            curve(t),
-        ));
-    }
+    series.extend(models.iter().enumerate().map(|(i, v)| {
+        Series::line(
+            oc.models[i].name.clone(),
+            model_color(i),
+            styles[i % styles.len()],
+            Marker::ALL[(i + 2) % Marker::ALL.len()],
+            curve(v),
+        )
+    }));
     let mut per_stop = Series::markers(
-        "per-stop (10)",
+        PER_STOP[usize::from(diff)],
         PALETTE[0],
         Marker::Circle,
         stops.iter().map(|p| (p.0, p.1 * k)).collect(),
@@ -394,7 +401,7 @@ fn coeff_plot(oc: &DemoOutcome, c: usize, grid: &[f64], diff: bool) -> Plot {
     }
     series.push(per_stop);
     let reference_name = match (&oc.truth, chosen) {
-        (Some(_), _) => "the truth".to_string(),
+        (Some(_), _) => "the truth (the twin's)".to_string(),
         (None, Some(i)) => oc.models[i].name.clone(),
         _ => "0".to_string(),
     };
@@ -450,6 +457,8 @@ fn coeff_plots(oc: &DemoOutcome, diff: bool) -> Vec<Plot> {
 fn residual_plots(oc: &DemoOutcome, model: &DemoModel) -> Vec<Plot> {
     let rec = &oc.recording;
     let mut axes: [Vec<(f64, f64)>; 3] = Default::default();
+    // the dwells held out of every fit (the verification positions'), ringed
+    let mut held_out: Vec<(f64, f64)> = Vec::new();
     for d in &rec.dwells {
         if d.len() > 120 {
             continue; // rests through ramps and soaks: shown in the temperature trace
@@ -464,11 +473,14 @@ fn residual_plots(oc: &DemoOutcome, model: &DemoModel) -> Vec<Plot> {
                 + c[K_INDEX[i][2]] * a[2]
                 + c[U0_INDEX[i]];
             axes[i].push((t_mid, d.u_mean[i] - pred));
+            if rec.positions.has_role(d.position, Role::Verification) {
+                held_out.push((t_mid, d.u_mean[i] - pred));
+            }
         }
     }
     let max_abs = axes.iter().flatten().fold(0.0f64, |a, p| a.max(p.1.abs()));
     let (k, unit) = prefixed(max_abs, &rec.output_unit);
-    let series = axes
+    let mut series: Vec<Series> = axes
         .iter()
         .enumerate()
         .map(|(i, p)| {
@@ -480,6 +492,17 @@ fn residual_plots(oc: &DemoOutcome, model: &DemoModel) -> Vec<Plot> {
             )
         })
         .collect();
+    if !held_out.is_empty() {
+        series.push(Series::markers(
+            format!(
+                "held out of every fit (verification positions {})",
+                names_text(&verification_names(rec))
+            ),
+            PALETTE[0],
+            Marker::Ring,
+            held_out.iter().map(|q| (q.0, q.1 * k)).collect(),
+        ));
+    }
     let span = Some(time_span(rec));
     vec![
         Plot {
@@ -523,7 +546,8 @@ fn verdict_table(oc: &DemoOutcome) -> String {
 
 /// The demo's report.
 pub fn demo_report(oc: &DemoOutcome) -> Result<String> {
-    let table = crate::analysis::table(&oc.rows);
+    let verification = verification_names(&oc.recording);
+    let table = crate::analysis::table(&oc.rows, &verification);
     let intro = format!(
         "<p>Unit {}, {} samples, output in {}. Models: {}. Compensation by firmware-core in f32 (method 1: correct the constants; method 2: correct the result).</p>\n<pre>{}</pre>\n{}<p>Data-chosen model: {} by {}; {}</p>\n",
         esc(&oc.recording.unit),
@@ -537,20 +561,23 @@ pub fn demo_report(oc: &DemoOutcome) -> Result<String> {
         esc(&oc.selection.reason)
     );
     let reference = if oc.truth.is_some() {
-        "the simulated truth"
+        "the truth (the twin's)"
     } else {
         "the data-chosen model"
     };
     let mut sections = vec![
         Section {
-            head: "Compensation error in the verification positions (formula (13))".into(),
+            head: format!(
+                "Compensation error in the verification positions {} (formula (13))",
+                names_text(&verification)
+            ),
             text: "dg = |a| - 1 in the positions held out of every fit. Top left: the worst per temperature for every model and method against the acceptance limits; top right: without compensation; then the compensated dg per position at each temperature, each on its own scale, with the acceptance band that applies there.".into(),
             plots: dg_plots(oc),
             pairs: false,
         },
         Section {
             head: "The 12 coefficients against temperature".into(),
-            text: "Per-stop identification by formula (10), the simulated truth (when simulated, dashed black over the models) and each fitted temperature model.".into(),
+            text: "The 12 coefficients identified at each stop by formula (10) (black dots), each fitted temperature model, and the twin's truth when the recording is simulated (the wide grey line under the models: a reference, not data).".into(),
             plots: coeff_plots(oc, false),
             pairs: false,
         },
@@ -568,7 +595,7 @@ pub fn demo_report(oc: &DemoOutcome) -> Result<String> {
     if let Some(b) = best {
         sections.push(Section {
             head: "Residuals against time".into(),
-            text: format!("Dwell means minus the {} model at the dwell's temperature, per axis; below, on the same time axis, the temperature.", b.name),
+            text: format!("Dwell means minus the {} model at the dwell's temperature, per axis; the dwells held out of every fit (the verification positions {}) ringed; below, on the same time axis, the temperature.", b.name, names_text(&verification)),
             plots: residual_plots(oc, b),
             pairs: false,
         });

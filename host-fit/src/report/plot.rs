@@ -3,7 +3,7 @@
 //! ranges and the layout and decimates long series to what the pixels can show (for
 //! drawing only: the data fitted are never touched); the drawn data go beside the SVG as
 //! JSON, so that a test can check the drawing against the numbers.
-use crate::report::axis::{padded_range, text_px, Scale};
+use crate::report::axis::{padded_range, round_down_125, text_px, Scale};
 use serde::Serialize;
 
 /// A colour.
@@ -28,6 +28,22 @@ pub const PALETTE: [Rgb; 7] = [
     Rgb(0, 158, 115),
 ];
 
+/// The models' colours, in turn: Paul Tol's high-contrast scheme (blue, red, yellow),
+/// then Okabe and Ito's sky blue. Every pair stays at least 20 apart (CIEDE2000) in
+/// normal vision and in simulated protanopia, deuteranopia and tritanopia, and from
+/// black (the T0 constants, the per-stop values); the browser test holds it. (Okabe
+/// and Ito's vermillion and orange, the models' colours before, are 12.5 apart to a
+/// deuteranope.)
+pub const MODEL_COLORS: [Rgb; 4] = [
+    Rgb(0, 68, 136),
+    Rgb(187, 85, 102),
+    Rgb(221, 170, 51),
+    Rgb(86, 180, 233),
+];
+
+/// The truth's colour (a wide, light line under the models: a reference, not data).
+pub const TRUTH: Rgb = Rgb(185, 185, 185);
+
 /// The acceptance bands' green (darker than any series colour, drawn shaded).
 pub const ACCEPT: Rgb = Rgb(26, 128, 54);
 /// The floor band's grey.
@@ -46,6 +62,11 @@ pub enum Marker {
     Diamond,
     /// A cross (x), stroked.
     Cross,
+    /// An open ring, wider than the other markers: drawn around points of another
+    /// series to mark them (held-out dwells).
+    Ring,
+    /// No marker: a line only (a reference such as the truth, which is not data).
+    None,
 }
 
 impl Marker {
@@ -66,6 +87,8 @@ impl Marker {
             Marker::Triangle => "triangle",
             Marker::Diamond => "diamond",
             Marker::Cross => "cross",
+            Marker::Ring => "ring",
+            Marker::None => "none",
         }
     }
 }
@@ -125,6 +148,8 @@ pub struct Series {
     pub errors: Option<Vec<f64>>,
     /// The line breaks where consecutive x differ by more than this (gaps in time).
     pub gap: Option<f64>,
+    /// The line's width, px.
+    pub width: f64,
 }
 
 impl Series {
@@ -144,6 +169,7 @@ impl Series {
             marker_every: 1,
             errors: None,
             gap: None,
+            width: 2.0,
         }
     }
 
@@ -161,6 +187,17 @@ impl Series {
             marker_every: every,
             line: Some(dash),
             ..Series::markers(name, color, marker, points)
+        }
+    }
+
+    /// A reference curve, not data (the twin's truth): a wide light line without
+    /// markers, drawn under the series that follow it so that both show where they
+    /// coincide.
+    pub fn reference(name: impl Into<String>, color: Rgb, points: Vec<(f64, f64)>) -> Series {
+        Series {
+            line: Some(Dash::Solid),
+            width: 7.0,
+            ..Series::markers(name, color, Marker::None, points)
         }
     }
 
@@ -316,7 +353,10 @@ fn ranges(p: &Plot) -> ((f64, f64), (f64, f64)) {
             .flat_map(|b| [b.lo, b.hi])
             .filter(|v| v.is_finite());
         let zero = p.zero_line.then_some(0.0);
-        padded_range(errs.chain(bands).chain(zero), 0.07, p.y_log)
+        let (lo, hi) = padded_range(errs.chain(bands).chain(zero), 0.07, p.y_log);
+        // a log axis starts at a round value (1, 2 or 5 times a power of ten) at or
+        // below the data, so that the lowest data have a labelled tick under them
+        (if p.y_log { round_down_125(lo) } else { lo }, hi)
     });
     (x, y)
 }
@@ -456,6 +496,7 @@ struct SeriesData<'a> {
     line: Option<&'static str>,
     marker: &'static str,
     marker_every: usize,
+    width: f64,
     points: Vec<[f64; 2]>,
     points_in_data: usize,
     errors: Option<&'a [f64]>,
@@ -521,6 +562,7 @@ impl Prepared {
                     line: s.line.map(Dash::name),
                     marker: s.marker.name(),
                     marker_every: s.marker_every,
+                    width: s.width,
                     points: stored(&s.points, &self.x, &self.y),
                     points_in_data: *n,
                     errors: s.errors.as_deref(),

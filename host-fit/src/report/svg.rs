@@ -109,7 +109,7 @@ pub fn svg(p: &Prepared) -> String {
 fn ticks(p: &Prepared, o: &mut String) {
     let (x0, x1, y0, y1) = (LEFT, p.size.0 - RIGHT, p.y.p1, p.y.p0);
     let yt = if p.y.log {
-        log_ticks(p.y.lo, p.y.hi)
+        log_ticks(p.y.lo, p.y.hi, y1 - y0)
     } else {
         linear_ticks(p.y.lo, p.y.hi, y1 - y0, 42.0)
     };
@@ -224,8 +224,19 @@ fn marker(m: Marker, x: f64, y: f64, r: f64) -> String {
             b = f(2.0 * r),
             c = f(-2.0 * r)
         ),
+        Marker::Ring => format!(
+            "M{x} {y}m{m} 0a{r} {r} 0 1 0 {d} 0a{r} {r} 0 1 0 {m2} 0",
+            m = f(-RING * r),
+            r = f(RING * r),
+            d = f(2.0 * RING * r),
+            m2 = f(-2.0 * RING * r)
+        ),
+        Marker::None => format!("M{x} {y}"),
     }
 }
+
+/// A ring's radius, in marker radii: it encloses the marker it marks.
+const RING: f64 = 1.9;
 
 /// The attributes that draw a marker of shape `m` as a path (in the legend).
 fn marker_style(m: Marker, c: &str, r: f64, opacity: f64) -> String {
@@ -243,6 +254,8 @@ fn marker_style(m: Marker, c: &str, r: f64, opacity: f64) -> String {
             format!(r#"fill="{c}" fill-opacity="{opacity}" stroke="none""#)
         }
         Marker::Cross => format!(r#"fill="none" stroke="{c}" stroke-width="1.8""#),
+        Marker::Ring => format!(r#"fill="none" stroke="{c}" stroke-width="1.6""#),
+        Marker::None => r#"fill="none" stroke="none""#.to_string(),
     }
 }
 
@@ -256,12 +269,13 @@ fn marker_def(id: &str, m: Marker, c: &str, r: f64, opacity: f64) -> String {
             a = f(-r * 0.9),
             w = f(r * 1.8)
         ),
+        Marker::Ring => format!(r#"<circle r="{}"/>"#, f(RING * r)),
         _ => format!(r#"<path d="{}"/>"#, marker(m, 0.0, 0.0, r)),
     };
-    let paint = if m == Marker::Cross {
-        format!(r#"fill="none" stroke="{c}" stroke-width="1.8""#)
-    } else {
-        format!(r#"fill="{c}" fill-opacity="{opacity}""#)
+    let paint = match m {
+        Marker::Cross => format!(r#"fill="none" stroke="{c}" stroke-width="1.8""#),
+        Marker::Ring => format!(r#"fill="none" stroke="{c}" stroke-width="1.6""#),
+        _ => format!(r#"fill="{c}" fill-opacity="{opacity}""#),
     };
     format!(
         r#"<marker id="{id}" viewBox="-6 -6 12 12" markerWidth="12" markerHeight="12" markerUnits="userSpaceOnUse" overflow="visible"><g {paint}>{shape}</g></marker>"#
@@ -290,7 +304,8 @@ fn series(p: &Prepared, i: usize, s: &Series, o: &mut String) {
             .unwrap_or_default();
         let _ = write!(
             o,
-            r#"<path class="line" d="{d}" fill="none" stroke="{c}" stroke-width="2" stroke-linejoin="round"{dash}/>"#
+            r#"<path class="line" d="{d}" fill="none" stroke="{c}" stroke-width="{}" stroke-linejoin="round"{dash}/>"#,
+            f(s.width)
         );
     }
     if let Some(e) = &s.errors {
@@ -310,6 +325,10 @@ fn series(p: &Prepared, i: usize, s: &Series, o: &mut String) {
             o,
             r#"<path class="errors" d="{d}" fill="none" stroke="{c}" stroke-width="1.3"/>"#
         );
+    }
+    if s.marker == Marker::None {
+        o.push_str("</g>");
+        return;
     }
     let r = if s.line.is_some() { 3.2 } else { 3.4 };
     let opacity = if s.line.is_none() && s.points.len() > 200 {
@@ -349,9 +368,10 @@ fn legend(p: &Prepared, o: &mut String) {
                         .unwrap_or_default();
                     let _ = write!(
                         g,
-                        r#"<path d="M{} {}h28" stroke="{c}" stroke-width="2"{da}/>"#,
+                        r#"<path d="M{} {}h28" stroke="{c}" stroke-width="{}"{da}/>"#,
                         f(x),
-                        f(ym)
+                        f(ym),
+                        f(s.width)
                     );
                 }
                 let _ = write!(

@@ -2,7 +2,8 @@
 //! its title, both axis labels (quantity, unit), a tick label per category name, a legend
 //! entry per series and per labelled band, and draws exactly the data embedded beside
 //! it: every series' line and markers pass through its points by one affine map per axis
-//! (log10 on a log axis), error bars where it has them.
+//! (log10 on a log axis), error bars where it has them; a series without markers (a
+//! reference such as the twin's truth) has its line.
 use serde_json::Value;
 
 /// One figure: its id and its embedded data.
@@ -157,10 +158,20 @@ fn drawn(
     let name = &se["name"];
     let mut out = Vec::new();
     let every = se["marker_every"].as_u64().unwrap() as usize;
-    let markers = pairs(path("markers").unwrap_or_else(|| panic!("{id}: {name} has no markers")));
-    let marked: Vec<_> = pts.iter().step_by(every.max(1)).copied().collect();
-    assert_eq!(markers.len(), marked.len(), "{id}: markers of {name}");
-    out.extend(marked.into_iter().zip(markers));
+    if se["marker"] == "none" {
+        // a reference line (the twin's truth): no markers, so a line it must have
+        assert!(path("markers").is_none(), "{id}: {name} has markers");
+        assert!(
+            se["line"].is_string(),
+            "{id}: {name} has neither markers nor a line"
+        );
+    } else {
+        let markers =
+            pairs(path("markers").unwrap_or_else(|| panic!("{id}: {name} has no markers")));
+        let marked: Vec<_> = pts.iter().step_by(every.max(1)).copied().collect();
+        assert_eq!(markers.len(), marked.len(), "{id}: markers of {name}");
+        out.extend(marked.into_iter().zip(markers));
+    }
     if se["line"].is_string() {
         let line = pairs(path("line").unwrap_or_else(|| panic!("{id}: no line for {name}")));
         assert_eq!(line.len(), pts.len(), "{id}: points of {name}'s line");

@@ -1,0 +1,416 @@
+//! The line's memory: a record store in SQLite (one file, the SQLite compiled into
+//! host-fit), written by `fit`, `verify`, `diagnose` and `demo` with `--db PATH` and by
+//! `batch` (into its output folder unless told otherwise), read by `history` and `trend`.
+//!
+//! One record per run and unit, never changed or deleted (triggers refuse it): a unit
+//! calibrated again keeps every record, and the view `latest_calibrations` (a query, no
+//! flag that an update could lose) names each unit's newest calibration.
+//!
+//! # Schema (version 1, `PRAGMA user_version = 1`, `PRAGMA application_id = 0x41544352`)
+//!
+//! Table `runs`, one row per record:
+//!
+//! | column | type | what |
+//! |---|---|---|
+//! | `id` | INTEGER PRIMARY KEY | order of writing (1, 2, ...) |
+//! | `run_id` | TEXT, unique | 16 random bytes as 32 lowercase hex digits; the blob's `run_id` (format 4) |
+//! | `serial` | TEXT | the unit's serial (as in its blob) |
+//! | `time_utc` | TEXT | when, UTC, RFC 3339 with microseconds (`2026-12-01T18:29:03.123456Z`; text order is time order) |
+//! | `host_fit_version`, `host_fit_commit` | TEXT | the tool that wrote it, and the git commit it was built from (`unknown` outside a checkout) |
+//! | `command` | TEXT | `fit`, `verify`, `diagnose`, `batch` (one record per unit) or `demo` (one per model) |
+//! | `options` | TEXT (JSON object) | every option of the command with its value, defaults included |
+//! | `lot` | TEXT | the lot: a batch's folder name or `--lot`; `--lot` elsewhere; NULL when none was given |
+//! | `input`, `input_sha256` | TEXT | the recording as given, and the SHA-256 of its bytes (64 hex digits) |
+//! | `output_unit` | TEXT | the recording's output unit: K is in it per g, U0 in it |
+//! | `model` | TEXT | the model in the blob (`poly3`, `pwl`, `diagnosed (temp_rate)`, ...) |
+//! | `t0_c` | REAL | T0, C |
+//! | `kxx` .. `u0z` | REAL | the 12 coefficients at T0 |
+//! | `sigma_kxx` .. `sigma_u0z` | REAL | their 1-sigma (fit, batch; NULL where the run does not estimate them) |
+//! | `blob`, `blob_crc` | BLOB, INTEGER | the blob made (fit, diagnose `--out`, batch, demo) or verified (verify), bit for bit, and its CRC-32 |
+//! | `acceptance`, `reason` | TEXT | `pass`, `fail` or `error` (a batch unit that could not be processed) against the acceptance specification, and why |
+//! | `worst_dg_mg` | REAL | the worst compensated \|dg\| over the verification dwells, mg |
+//! | `diagnosis_verdict`, `findings` | TEXT, TEXT (JSON) | the diagnosis' verdict and findings, as in its JSON contract |
+//!
+//! Indexes `runs_by_serial (serial, id)` and `runs_by_time (time_utc, id)`; view
+//! `latest_calibrations` (the newest record per serial that made a blob: not `verify`).
+//!
+//! # Many writers, no half records
+//! The store runs in WAL mode with `synchronous = FULL`; every write is one transaction
+//! (`BEGIN IMMEDIATE`: a writer waits for another up to [`BUSY_TIMEOUT`]), one per
+//! record or per chunk of a batch, so two batches writing one store at once lose
+//! nothing, and a writer killed mid-way leaves the records it committed, whole.
+//!
+//! # Bad stores
+//! A store of a newer schema is refused with its version named; a file that is not an
+//! SQLite database, an empty one, one cut short of the length its header states, or
+//! another program's database is reported, naming the file, and never re-created or
+//! altered.
+pub mod clock;
+pub mod history;
+pub mod record;
+pub mod schema;
+pub mod trend;
+
+use crate::error::{HostError, Result};
+use record::{Command, Record, RunId, COEFFS};
+use rusqlite::{params_from_iter, Connection, OpenFlags, TransactionBehavior};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+pub use record::Invocation;
+
+/// How long a writer waits for another to finish its transaction.
+pub const BUSY_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// An open record store.
+pub struct Store {
+    conn: Connection,
+    path: PathBuf,
+}
+
+/// A database error on `path`, said plainly for the cases a user meets.
+pub fn db_error(path: &Path, e: rusqlite::Error) -> HostError {
+    use rusqlite::ErrorCode as C;
+    let m = match e.sqlite_error_code() {
+        Some(C::NotADatabase) => {
+            format!("is not a record store (not an SQLite database: {e}); it is left as it is")
+        }
+        Some(C::DatabaseCorrupt) => format!(
+            "the record store is corrupt ({e}); it is left as it is: restore it from a copy"
+        ),
+        Some(C::DatabaseBusy) | Some(C::DatabaseLocked) => format!(
+            "the record store stayed locked by another process for {} s ({e})",
+            BUSY_TIMEOUT.as_secs()
+        ),
+        Some(C::ReadOnly) | Some(C::CannotOpen) | Some(C::PermissionDenied) => {
+            format!("cannot write the record store ({e})")
+        }
+        Some(C::DiskFull) => format!("the disk is full: the record was not written ({e})"),
+        _ => format!("record store: {e}"),
+    };
+    HostError::in_file(path, m)
+}
+
+/// What the bytes of an existing file say before SQLite opens it: an SQLite database of
+/// the length its header states, or why not. A store in use by another process (its
+/// `-wal` file not empty) may be longer in the log than in the file: only the magic is
+/// checked then.
+fn check_file(path: &Path) -> Result<()> {
+    use std::io::Read;
+    let mut f = std::fs::File::open(path).map_err(|e| HostError::io(path, &e))?;
+    let len = f.metadata().map_err(|e| HostError::io(path, &e))?.len();
+    if len == 0 {
+        return Err(HostError::in_file(
+            path,
+            "is empty (0 bytes): not a record store (a store cut to nothing?); it is left as it is: restore it, or give a path that does not exist yet for a new store",
+        ));
+    }
+    let mut head = [0u8; 100];
+    if len < 100 || f.read_exact(&mut head).is_err() {
+        return Err(HostError::in_file(
+            path,
+            format!("is {len} bytes: too short for an SQLite database header (100 bytes), not a record store or one cut short; it is left as it is"),
+        ));
+    }
+    if &head[..16] != b"SQLite format 3\0" {
+        return Err(HostError::in_file(
+            path,
+            "is not a record store (not an SQLite database); it is left as it is",
+        ));
+    }
+    let be = |r: std::ops::Range<usize>| head[r].iter().fold(0u64, |a, b| a << 8 | u64::from(*b));
+    let page = match be(16..18) {
+        1 => 65_536,
+        p => p,
+    };
+    let pages = be(28..32);
+    let valid = head[24..28] == head[92..96];
+    let wal = PathBuf::from(format!("{}-wal", path.display()));
+    let in_use = std::fs::metadata(&wal).is_ok_and(|m| m.len() > 0);
+    if valid && !in_use && len < page * pages {
+        return Err(HostError::in_file(
+            path,
+            format!("the record store is cut short: its header states {pages} pages of {page} bytes ({} bytes), the file has {len}; it is left as it is: restore it from a copy", page * pages),
+        ));
+    }
+    Ok(())
+}
+
+/// The record's values in the order of [`INSERT`]'s columns.
+fn values(r: &Record) -> Vec<rusqlite::types::Value> {
+    use rusqlite::types::Value as V;
+    let text = |s: &str| V::Text(s.to_string());
+    let opt_text = |s: Option<&str>| s.map_or(V::Null, text);
+    let real = |v: Option<f64>| v.filter(|v| v.is_finite()).map_or(V::Null, V::Real);
+    let mut v = vec![
+        text(&r.run_id.to_string()),
+        text(&r.serial),
+        text(&r.time_utc),
+        text(&r.version),
+        text(&r.commit),
+        text(r.command.name()),
+        text(&r.options.to_string()),
+        opt_text(r.lot.as_deref()),
+        text(&r.input),
+        opt_text(r.input_sha256.as_deref()),
+        opt_text(r.output_unit.as_deref()),
+        opt_text(r.model.as_deref()),
+        real(r.at_t0.map(|a| a.t0_c)),
+    ];
+    for c in 0..COEFFS {
+        v.push(real(r.at_t0.map(|a| a.values[c])));
+    }
+    for c in 0..COEFFS {
+        v.push(real(r.at_t0.and_then(|a| a.sigma).map(|s| s[c])));
+    }
+    v.push(r.blob.clone().map_or(V::Null, V::Blob));
+    v.push(r.blob_crc().map_or(V::Null, |c| V::Integer(i64::from(c))));
+    v.push(opt_text(r.judged.as_ref().map(|j| j.verdict.as_str())));
+    v.push(opt_text(r.judged.as_ref().map(|j| j.reason.as_str())));
+    v.push(real(r.worst_dg_mg));
+    v.push(opt_text(r.diagnosis_verdict.as_deref()));
+    v.push(
+        r.findings
+            .as_ref()
+            .map_or(V::Null, |f| V::Text(f.to_string())),
+    );
+    v
+}
+
+/// Every column of a record but `id`, in the order [`values`] gives them.
+pub fn record_columns() -> Vec<String> {
+    [
+        "run_id",
+        "serial",
+        "time_utc",
+        "host_fit_version",
+        "host_fit_commit",
+        "command",
+        "options",
+        "lot",
+        "input",
+        "input_sha256",
+        "output_unit",
+        "model",
+        "t0_c",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .chain(record::coefficient_columns())
+    .chain(
+        [
+            "blob",
+            "blob_crc",
+            "acceptance",
+            "reason",
+            "worst_dg_mg",
+            "diagnosis_verdict",
+            "findings",
+        ]
+        .iter()
+        .map(|s| s.to_string()),
+    )
+    .collect()
+}
+
+impl Store {
+    /// Open the store at `path`, creating it (and its schema) when the file does not
+    /// exist; an existing file must be a record store this host-fit can read.
+    pub fn open(path: &Path) -> Result<Store> {
+        Self::open_with(path, true)
+    }
+
+    /// Open an existing store (`history`, `trend`): a missing file is an error.
+    pub fn open_existing(path: &Path) -> Result<Store> {
+        Self::open_with(path, false)
+    }
+
+    fn open_with(path: &Path, create: bool) -> Result<Store> {
+        let exists = path.exists();
+        if path.is_dir() {
+            return Err(HostError::in_file(
+                path,
+                "is a folder: give the record store's file (e.g. this folder/records.sqlite)",
+            ));
+        }
+        if exists {
+            check_file(path)?;
+        } else if !create {
+            return Err(HostError::in_file(
+                path,
+                "no record store here: give the --db of a fit, verify, diagnose or batch (a batch writes records.sqlite in its output folder)",
+            ));
+        }
+        let flags = if create {
+            OpenFlags::SQLITE_OPEN_READ_WRITE | OpenFlags::SQLITE_OPEN_CREATE
+        } else {
+            OpenFlags::SQLITE_OPEN_READ_WRITE
+        } | OpenFlags::SQLITE_OPEN_NO_MUTEX;
+        let mut conn = Connection::open_with_flags(path, flags).map_err(|e| db_error(path, e))?;
+        conn.busy_timeout(BUSY_TIMEOUT)
+            .map_err(|e| db_error(path, e))?;
+        let mode: String = conn
+            .query_row("PRAGMA journal_mode", [], |r| r.get(0))
+            .map_err(|e| db_error(path, e))?;
+        if !mode.eq_ignore_ascii_case("wal") {
+            conn.query_row("PRAGMA journal_mode = WAL", [], |r| r.get::<_, String>(0))
+                .map_err(|e| db_error(path, e))?;
+        }
+        conn.execute_batch("PRAGMA synchronous = FULL;")
+            .map_err(|e| db_error(path, e))?;
+        schema::prepare(&mut conn, path, create, &schema::migrations())?;
+        Ok(Store {
+            conn,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// The store's file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The connection (for the queries of [`history`] and [`trend`]).
+    pub fn conn(&self) -> &Connection {
+        &self.conn
+    }
+
+    /// Append `records` in one transaction: all of them are written, or none (and the
+    /// error names the store). Their `id`s are set.
+    pub fn append(&mut self, records: &mut [Record]) -> Result<()> {
+        let path = self.path.clone();
+        let e = |e| db_error(&path, e);
+        let cols = record_columns();
+        let sql = format!(
+            "INSERT INTO runs ({}) VALUES ({})",
+            cols.join(", "),
+            (1..=cols.len())
+                .map(|i| format!("?{i}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        let tx = self
+            .conn
+            .transaction_with_behavior(TransactionBehavior::Immediate)
+            .map_err(e)?;
+        {
+            let mut st = tx.prepare_cached(&sql).map_err(e)?;
+            for r in records.iter_mut() {
+                st.execute(params_from_iter(values(r))).map_err(e)?;
+                r.id = tx.last_insert_rowid();
+            }
+        }
+        tx.commit().map_err(e)
+    }
+
+    /// How many records the store holds.
+    pub fn count(&self) -> Result<i64> {
+        self.conn
+            .query_row("SELECT count(*) FROM runs", [], |r| r.get(0))
+            .map_err(|e| db_error(&self.path, e))
+    }
+
+    /// The record of run `run`.
+    pub fn record(&self, run: RunId) -> Result<Option<Record>> {
+        history::read(self, "WHERE run_id = ?1", &[&run.to_string()]).map(|mut v| v.pop())
+    }
+
+    /// Every record, in the order written (for tools; a large store is read whole).
+    pub fn all(&self) -> Result<Vec<Record>> {
+        history::read(self, "", &[])
+    }
+}
+
+/// What a command was asked to record into: the store's path, the lot, and how the
+/// tool was run (filled by the command line).
+#[derive(Debug, Clone, Default)]
+pub struct Target {
+    /// The store's file.
+    pub db: PathBuf,
+    /// The lot, if given.
+    pub lot: Option<String>,
+    /// How the tool was run.
+    pub invocation: Option<Invocation>,
+}
+
+impl Target {
+    /// A record of `command` on `serial` from `input`, with this target's lot and the
+    /// invocation's options.
+    pub fn record(&self, command: Command, serial: &str, input: &Path) -> Result<Record> {
+        let mut r = Record::new(command, self.invocation.as_ref(), serial, input)?;
+        r.lot.clone_from(&self.lot);
+        Ok(r)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(serial: &str) -> Record {
+        let mut r = Record::new(Command::Fit, None, serial, Path::new("r.csv")).unwrap();
+        r.input_sha256 = Some("a".repeat(64));
+        r.blob = Some(vec![1, 2, 3, 4, 5, 6, 7, 8]);
+        r
+    }
+
+    #[test]
+    fn a_chunk_is_written_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("s.sqlite");
+        let mut s = Store::open(&p).unwrap();
+        let mut ok = vec![sample("A"), sample("B")];
+        s.append(&mut ok).unwrap();
+        assert_eq!((ok[0].id, ok[1].id), (1, 2));
+        // the third record of a chunk fails (a run id already stored): none of the
+        // chunk stays
+        let mut bad = vec![sample("C"), sample("D"), sample("E")];
+        bad[2].run_id = ok[0].run_id;
+        let e = s.append(&mut bad).unwrap_err();
+        assert_eq!(e.file.as_deref(), Some(p.as_path()));
+        assert_eq!(s.count().unwrap(), 2);
+        // a bad sha (not 64 digits) is refused by the schema, the record not written
+        let mut odd = vec![sample("F")];
+        odd[0].input_sha256 = Some("abc".into());
+        assert!(s.append(&mut odd).is_err());
+        assert_eq!(s.count().unwrap(), 2);
+        let back = s.record(ok[1].run_id).unwrap().unwrap();
+        assert_eq!(back.serial, "B");
+        assert_eq!(back.blob, ok[1].blob);
+        assert_eq!(back.time_utc, ok[1].time_utc);
+    }
+
+    #[test]
+    fn bad_files_are_named_and_left_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = dir.path().join("notes.txt");
+        std::fs::write(&text, "x".repeat(500)).unwrap();
+        let e = Store::open(&text).err().unwrap();
+        assert!(
+            e.to_string().contains("notes.txt") && e.message.contains("not an SQLite database"),
+            "{e}"
+        );
+        assert_eq!(std::fs::read(&text).unwrap(), "x".repeat(500).as_bytes());
+        let empty = dir.path().join("empty.sqlite");
+        std::fs::write(&empty, "").unwrap();
+        let e = Store::open(&empty).err().unwrap();
+        assert!(e.message.contains("is empty"), "{e}");
+        assert_eq!(std::fs::metadata(&empty).unwrap().len(), 0);
+        let missing = dir.path().join("none.sqlite");
+        let e = Store::open_existing(&missing).err().unwrap();
+        assert!(e.message.contains("no record store"), "{e}");
+        assert!(!missing.exists());
+        // a store cut to half its length
+        let p = dir.path().join("s.sqlite");
+        {
+            let mut s = Store::open(&p).unwrap();
+            let mut many: Vec<Record> = (0..200).map(|i| sample(&format!("U{i}"))).collect();
+            s.append(&mut many).unwrap();
+        }
+        let full = std::fs::read(&p).unwrap();
+        std::fs::write(&p, &full[..full.len() / 2]).unwrap();
+        let e = Store::open(&p).err().unwrap();
+        assert!(e.message.contains("cut short"), "{e}");
+        assert_eq!(std::fs::read(&p).unwrap().len(), full.len() / 2);
+    }
+}

@@ -310,6 +310,13 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     let cal = oc.fit.calibration(a.update_step, a.clamp);
     let serial_name = a.serial.as_deref().unwrap_or(serial(&rec));
     let (blob, bytes, dep) = build_blob(serial_name, &cal)?;
+    let run = super::records::Run {
+        args: &a.record,
+        serial: serial_name,
+        rec: &rec,
+        err,
+    };
+    let bytes = super::records::fit(run, &oc, &cal, bytes)?;
     write_atomic(&a.out, &bytes, a.force)?;
     let j = fitted(&a, &rec, &oc, &cal, (bytes.len(), dep), serial_name);
     if a.json {

@@ -27,7 +27,7 @@ struct Verified<'a> {
 
 pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let spec = Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?;
-    let (b, _) = read_blob(&a.blob)?;
+    let (b, blob_bytes) = read_blob(&a.blob)?;
     let rec = load(&a.input, a.positions_for_check.as_deref(), err)?;
     let unit = serial(&rec);
     if b.serial.as_str() != unit {
@@ -71,6 +71,13 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
         (f64::from(cal.t_min_c), f64::from(cal.t_max_c)),
     )
     .map_err(|e| HostError::in_file(&a.input.recording, e.message))?;
+    let run = super::records::Run {
+        args: &a.record,
+        serial: unit,
+        rec: &rec,
+        err,
+    };
+    super::records::verify(run, (&b, &blob_bytes), &v, &acc)?;
     let outcome = match acc.acceptance {
         Verdict::Pass => Outcome::Done,
         Verdict::Fail => Outcome::Rejected,

@@ -125,7 +125,7 @@ pub fn history(store: &Store, serial: &str) -> Result<History> {
     let records = read(store, "WHERE serial = ?1", &[&serial])?;
     let latest = records
         .iter()
-        .filter(|r| r.command != Command::Verify && r.blob.is_some())
+        .filter(|r| r.is_calibration())
         .map(|r| r.id)
         .max();
     Ok(History {

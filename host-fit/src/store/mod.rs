@@ -136,6 +136,40 @@ fn check_file(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Make a new store at `path` whole before it has its name: built in a temporary file
+/// beside it and linked into place only if no other process made one meanwhile (then
+/// that one is used), so that a store is never seen half-made and an empty file is
+/// never a store.
+fn create_new(path: &Path) -> Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let io = |e: std::io::Error| HostError::io(path, &e);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(io)?;
+    {
+        let e = |e| db_error(tmp.path(), e);
+        let mut c = Connection::open(tmp.path()).map_err(e)?;
+        c.query_row("PRAGMA journal_mode = WAL", [], |r| r.get::<_, String>(0))
+            .map_err(e)?;
+        schema::prepare(&mut c, tmp.path(), true, &schema::migrations())?;
+        // closed here: its log is folded into the file and removed
+    }
+    match tmp.persist_noclobber(path) {
+        Ok(_) => Ok(()),
+        Err(e) if e.error.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(io(e.error)),
+    }
+}
+
 /// The record's values in the order of [`INSERT`]'s columns.
 fn values(r: &Record) -> Vec<rusqlite::types::Value> {
     use rusqlite::types::Value as V;
@@ -226,26 +260,25 @@ impl Store {
     }
 
     fn open_with(path: &Path, create: bool) -> Result<Store> {
-        let exists = path.exists();
         if path.is_dir() {
             return Err(HostError::in_file(
                 path,
                 "is a folder: give the record store's file (e.g. this folder/records.sqlite)",
             ));
         }
-        if exists {
-            check_file(path)?;
-        } else if !create {
+        let exists = path.exists();
+        if !exists && !create {
             return Err(HostError::in_file(
                 path,
                 "no record store here: give the --db of a fit, verify, diagnose or batch (a batch writes records.sqlite in its output folder)",
             ));
         }
-        let flags = if create {
-            OpenFlags::SQLITE_OPEN_READ_WRITE | OpenFlags::SQLITE_OPEN_CREATE
-        } else {
-            OpenFlags::SQLITE_OPEN_READ_WRITE
-        } | OpenFlags::SQLITE_OPEN_NO_MUTEX;
+        if !exists {
+            create_new(path)?;
+        }
+        check_file(path)?;
+        // never SQLite's own create: a store that vanished is not quietly made anew
+        let flags = OpenFlags::SQLITE_OPEN_READ_WRITE | OpenFlags::SQLITE_OPEN_NO_MUTEX;
         let mut conn = Connection::open_with_flags(path, flags).map_err(|e| db_error(path, e))?;
         conn.busy_timeout(BUSY_TIMEOUT)
             .map_err(|e| db_error(path, e))?;
@@ -318,6 +351,76 @@ impl Store {
     /// Every record, in the order written (for tools; a large store is read whole).
     pub fn all(&self) -> Result<Vec<Record>> {
         history::read(self, "", &[])
+    }
+}
+
+/// A store written from another thread: records sent from any number of threads are
+/// appended in chunks, one transaction each (a chunk is written when it is full, or a
+/// second after its first record came), so a long batch keeps its records even if it is
+/// stopped mid-way.
+pub struct Writer {
+    tx: std::sync::mpsc::Sender<Record>,
+    handle: std::thread::JoinHandle<Result<usize>>,
+}
+
+/// The longest a record waits in a writer's chunk before the chunk is written.
+pub const FLUSH_AFTER: Duration = Duration::from_secs(1);
+
+impl Writer {
+    /// Append `r` (in the writer's next chunk). A writer that failed takes no more; its
+    /// error comes from [`Writer::finish`].
+    pub fn send(&self, r: Record) {
+        let _ = self.tx.send(r);
+    }
+
+    /// Write what is left and return how many records were written, or the first error.
+    pub fn finish(self) -> Result<usize> {
+        drop(self.tx);
+        self.handle
+            .join()
+            .map_err(|_| HostError::msg("the record store's writer stopped unexpectedly"))?
+    }
+}
+
+impl Store {
+    /// Hand the store to a writer thread that appends in chunks of `chunk` records.
+    pub fn writer(mut self, chunk: usize) -> Writer {
+        let (tx, rx) = std::sync::mpsc::channel::<Record>();
+        let handle = std::thread::spawn(move || {
+            use std::sync::mpsc::RecvTimeoutError;
+            let mut buf = Vec::with_capacity(chunk);
+            let (mut written, mut since) = (0, std::time::Instant::now());
+            loop {
+                let wait = if buf.is_empty() {
+                    Duration::from_secs(3600)
+                } else {
+                    FLUSH_AFTER.saturating_sub(since.elapsed())
+                };
+                let last = match rx.recv_timeout(wait) {
+                    Ok(r) => {
+                        if buf.is_empty() {
+                            since = std::time::Instant::now();
+                        }
+                        buf.push(r);
+                        if buf.len() < chunk && since.elapsed() < FLUSH_AFTER {
+                            continue;
+                        }
+                        false
+                    }
+                    Err(RecvTimeoutError::Timeout) => false,
+                    Err(RecvTimeoutError::Disconnected) => true,
+                };
+                if !buf.is_empty() {
+                    self.append(&mut buf)?;
+                    written += buf.len();
+                    buf.clear();
+                }
+                if last {
+                    return Ok(written);
+                }
+            }
+        });
+        Writer { tx, handle }
     }
 }
 

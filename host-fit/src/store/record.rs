@@ -302,6 +302,14 @@ impl Record {
         Ok(())
     }
 
+    /// Whether it is a calibration (see [`super::schema::CALIBRATION`]): it made a blob
+    /// and did not end in an error.
+    pub fn is_calibration(&self) -> bool {
+        self.command != Command::Verify
+            && self.blob.is_some()
+            && self.judged.as_ref().is_none_or(|j| j.verdict != "error")
+    }
+
     /// The blob's CRC (its last four bytes).
     pub fn blob_crc(&self) -> Option<u32> {
         self.blob.as_deref().and_then(blob_crc)

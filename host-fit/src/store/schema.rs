@@ -15,6 +15,11 @@ pub const SCHEMA_VERSION: i64 = 1;
 /// calibration records).
 pub const APPLICATION_ID: i64 = 0x4154_4352;
 
+/// Which records are calibrations (SQL): those that made a blob that was judged or not
+/// judged, but did not end in an error, and are not a verification of another's blob.
+pub const CALIBRATION: &str =
+    "command <> 'verify' AND blob IS NOT NULL AND (acceptance IS NULL OR acceptance <> 'error')";
+
 /// The migrations: the i-th brings a store from version i to i + 1.
 pub fn migrations() -> Vec<String> {
     let commands = Command::ALL
@@ -58,7 +63,7 @@ CREATE TRIGGER runs_append_only_delete BEFORE DELETE ON runs
   BEGIN SELECT RAISE(ABORT, 'the record store is append-only: records are never deleted'); END;
 CREATE VIEW latest_calibrations AS
   SELECT * FROM runs r
-  WHERE r.id = (SELECT max(id) FROM runs WHERE serial = r.serial AND command <> 'verify' AND blob IS NOT NULL);
+  WHERE r.id = (SELECT max(id) FROM runs WHERE serial = r.serial AND {CALIBRATION});
 "
     )]
 }

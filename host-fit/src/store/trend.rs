@@ -332,8 +332,9 @@ type Loaded = (
 fn load(store: &Store) -> Result<Loaded> {
     let e = |e| db_error(store.path(), e);
     let sql = format!(
-        "SELECT serial, lot, time_utc, run_id, output_unit, {} FROM runs WHERE id IN (SELECT max(id) FROM runs WHERE command <> 'verify' AND blob IS NOT NULL GROUP BY serial) ORDER BY time_utc, id",
-        COEFF_NAMES.join(", ")
+        "SELECT serial, lot, time_utc, run_id, output_unit, {} FROM runs WHERE id IN (SELECT max(id) FROM runs WHERE {} GROUP BY serial) ORDER BY time_utc, id",
+        COEFF_NAMES.join(", "),
+        crate::store::schema::CALIBRATION
     );
     let mut st = store.conn().prepare(&sql).map_err(e)?;
     let mut rows = st.query([]).map_err(e)?;

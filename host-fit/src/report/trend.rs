@@ -6,7 +6,7 @@ use crate::error::Result;
 use crate::report::axis::prefixed;
 use crate::report::page::{esc, html, Section};
 use crate::report::plot::{Band, Dash, Marker, Plot, Series, ACCEPT, FLOOR, PALETTE};
-use crate::store::trend::{Chart, Rule, Trend, ALL_RULES_FALSE_ALARM_RATE};
+use crate::store::trend::{Chart, Rule, Trend, ALL_RULES_BY_REFERENCE, ALL_RULES_FALSE_ALARM_RATE};
 
 /// Flagged units listed in the page (all of them: `host-fit trend --json`).
 const LISTED_FLAGS: usize = 60;
@@ -228,7 +228,7 @@ pub fn trend_report(t: &Trend) -> Result<String> {
         .map(|l| format!("{} (units {}-{})", l.lot, l.first + 1, l.last + 1))
         .collect();
     let intro = format!(
-        "<p>Record store {}: {} units, each serial's latest calibration, in the order they were calibrated. Lots in that order: {}{}. Centre line and limits from {} ({} units): the centre is their mean, sigma their mean moving range / 1.128. Points are flagged by Nelson's run rules {}; on a stable process each flags a point with probability {} (all eight together {:.2}%).</p>\n<pre>{}</pre>\n{}",
+        "<p>Record store {}: {} units, each serial's latest calibration, in the order they were calibrated. Lots in that order: {}{}. Centre line and limits from {} ({} units): the centre is their mean, sigma their mean moving range / 1.128. Points are flagged by Nelson's run rules {}; on a stable process with its limits known each flags a point with probability {} (all eight together {:.2}%); limits estimated from 20, 50 or 100 reference units flag more: all eight together {}.</p>\n<pre>{}</pre>\n{}",
         esc(&t.store),
         t.unit_count,
         esc(&lots.join(", ")),
@@ -246,6 +246,11 @@ pub fn trend_report(t: &Trend) -> Result<String> {
             .collect::<Vec<_>>()
             .join(", "),
         100.0 * ALL_RULES_FALSE_ALARM_RATE,
+        ALL_RULES_BY_REFERENCE
+            .iter()
+            .map(|(n, r)| format!("{:.1}% ({n})", 100.0 * r))
+            .collect::<Vec<_>>()
+            .join(", "),
         esc(&t.text()),
         flag_table(t)
     );

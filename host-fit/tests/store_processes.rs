@@ -101,17 +101,17 @@ fn two_batches_writing_one_store_at_once_lose_nothing() {
         assert_eq!(mine.len(), 10, "{lot}");
         assert!(mine.iter().all(|r| r.serial.starts_with(prefix)));
     }
-    // the two wrote at the same time: their spans of record times overlap
-    let span = |lot: &str| {
-        let t: Vec<&str> = all
-            .iter()
+    // the two wrote at the same time: their records' places in the table interleave
+    let ids = |lot: &str| -> Vec<i64> {
+        all.iter()
             .filter(|r| r.lot.as_deref() == Some(lot))
-            .map(|r| r.time_utc.as_str())
-            .collect();
-        (*t.iter().min().unwrap(), *t.iter().max().unwrap())
+            .map(|r| r.id)
+            .collect()
     };
-    let (sa, sb) = (span("lot-a"), span("lot-b"));
-    assert!(sa.0 < sb.1 && sb.0 < sa.1, "not concurrent: {sa:?} {sb:?}");
+    let (ia, ib) = (ids("lot-a"), ids("lot-b"));
+    let (a0, a1) = (ia.iter().min().unwrap(), ia.iter().max().unwrap());
+    let (b0, b1) = (ib.iter().min().unwrap(), ib.iter().max().unwrap());
+    assert!(a0 < b1 && b0 < a1, "not concurrent: ids {ia:?} {ib:?}");
     assert_whole(&s);
     assert_eq!(integrity(&db), "ok");
     let _ = std::fs::remove_dir_all(&root);

@@ -83,6 +83,7 @@ where
         r.invocation = Some(Invocation {
             command: name.to_string(),
             options: options(name, sub),
+            started: Some(clock::now()),
         });
     }
     Ok(cli)

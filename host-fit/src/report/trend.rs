@@ -8,8 +8,8 @@ use crate::report::page::{esc, html, Section};
 use crate::report::plot::{Band, Dash, Marker, Plot, Series, ACCEPT, FLOOR, PALETTE};
 use crate::store::trend::{Chart, Rule, Trend, ALL_RULES_BY_REFERENCE, ALL_RULES_FALSE_ALARM_RATE};
 
-/// Flagged units listed in the page (all of them: `host-fit trend --json`).
-const LISTED_FLAGS: usize = 60;
+/// Flagged units listed per chart in the page (all of them: `host-fit trend --json`).
+const LISTED_FLAGS: usize = 12;
 
 /// Lot spans shaded (beyond it, lots interleave too finely to shade).
 const SHADED_LOTS: usize = 400;
@@ -178,41 +178,38 @@ fn plot(t: &Trend, c: &Chart, wide: bool) -> Plot {
     }
 }
 
-/// The flagged units as an HTML table (the first [`LISTED_FLAGS`]).
+/// The flagged units per chart, as an HTML table: how many, by rule, and the first
+/// [`LISTED_FLAGS`] with their rules (every one: `host-fit trend --json`).
 fn flag_table(t: &Trend) -> String {
-    let all: Vec<(&Chart, &crate::store::trend::Flag)> = t
-        .charts
-        .iter()
-        .flat_map(|c| c.flags.iter().map(move |f| (c, f)))
-        .collect();
-    if all.is_empty() {
+    if t.charts.iter().all(|c| c.flags.is_empty()) {
         return "<p>No point is flagged by the rules applied.</p>\n".into();
     }
-    let mut s = format!(
-        "<p>Flagged points ({} in all{}):</p>\n<table class=\"verdicts\">\n<tr><td><b>chart</b></td><td><b>unit</b></td><td><b>serial</b></td><td><b>lot</b></td><td><b>calibrated</b></td><td><b>rules</b></td></tr>\n",
-        all.len(),
-        if all.len() > LISTED_FLAGS {
-            format!("; the first {LISTED_FLAGS} here, `host-fit trend --json` lists every one")
-        } else {
-            String::new()
-        }
+    let mut s = String::from(
+        "<p>Flagged units per chart (Nelson's rule numbers in brackets; `host-fit trend --json` lists every one with its value):</p>\n<table class=\"verdicts\">\n",
     );
-    for (c, f) in all.iter().take(LISTED_FLAGS) {
-        let u = &t.units[f.unit];
+    for c in t.charts.iter().filter(|c| !c.flags.is_empty()) {
+        let by_rule: Vec<String> = c
+            .by_rule
+            .iter()
+            .filter(|r| r.1 > 0)
+            .map(|(n, k)| format!("Nelson {n}: {k}"))
+            .collect();
+        let first: Vec<String> = c
+            .flags
+            .iter()
+            .take(LISTED_FLAGS)
+            .map(|f| {
+                let rules: Vec<String> = f.rules.iter().map(u8::to_string).collect();
+                format!("{} ({})", f.serial, rules.join(","))
+            })
+            .collect();
         s.push_str(&format!(
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+            "<tr><td>{}</td><td>{}&#160;flagged</td><td>{}</td><td>{}{}</td></tr>\n",
             esc(&c.title()),
-            f.unit + 1,
-            esc(&f.serial),
-            esc(u.lot.as_deref().unwrap_or("-")),
-            esc(&u.time_utc),
-            esc(&f
-                .rules
-                .iter()
-                .filter_map(|n| Rule::from_number(*n))
-                .map(Rule::name)
-                .collect::<Vec<_>>()
-                .join("; "))
+            c.flags.len(),
+            esc(&by_rule.join(", ")),
+            esc(&first.join(", ")),
+            if c.flags.len() > LISTED_FLAGS { ", ..." } else { "" }
         ));
     }
     s.push_str("</table>\n");

@@ -15,7 +15,7 @@
 //! | `id` | INTEGER PRIMARY KEY | order of writing (1, 2, ...) |
 //! | `run_id` | TEXT, unique | 16 random bytes as 32 lowercase hex digits; the blob's `run_id` (format 4) |
 //! | `serial` | TEXT | the unit's serial (as in its blob) |
-//! | `time_utc` | TEXT | when, UTC, RFC 3339 with microseconds (`2026-12-01T18:29:03.123456Z`; text order is time order) |
+//! | `time_utc` | TEXT | when the run started, UTC, RFC 3339 with microseconds (`2026-12-01T18:29:03.123456Z`; text order is time order); a batch's units share it |
 //! | `host_fit_version`, `host_fit_commit` | TEXT | the tool that wrote it, and the git commit it was built from (`unknown` outside a checkout) |
 //! | `command` | TEXT | `fit`, `verify`, `diagnose`, `batch` (one record per unit) or `demo` (one per model) |
 //! | `options` | TEXT (JSON object) | every option of the command with its value, defaults included |

@@ -96,6 +96,8 @@ pub struct Invocation {
     pub command: String,
     /// `{"option": "value" | ["v1", "v2"]}`.
     pub options: serde_json::Map<String, serde_json::Value>,
+    /// When the run started (a store time): every record of the run carries it.
+    pub started: Option<String>,
 }
 
 /// The version of host-fit and the commit it was built from (`unknown` when it was
@@ -209,7 +211,7 @@ pub struct Record {
     pub run_id: RunId,
     /// The unit's serial.
     pub serial: String,
-    /// When (UTC, RFC 3339).
+    /// When its run started (UTC, RFC 3339): the units of a batch share their batch's.
     pub time_utc: String,
     /// host-fit's version.
     pub version: String,
@@ -246,7 +248,8 @@ pub struct Record {
 
 impl Record {
     /// A record of `command` on the unit `serial` from `input`, stamped with a fresh run
-    /// id, the time and the tool's version; the rest is filled by the command.
+    /// id, the time the run started (now, without an invocation) and the tool's version;
+    /// the rest is filled by the command.
     pub fn new(
         command: Command,
         inv: Option<&Invocation>,
@@ -258,7 +261,9 @@ impl Record {
             id: 0,
             run_id: RunId::fresh()?,
             serial: serial.to_string(),
-            time_utc: super::clock::now(),
+            time_utc: inv
+                .and_then(|i| i.started.clone())
+                .unwrap_or_else(super::clock::now),
             version: version.into(),
             commit: commit.into(),
             command,

@@ -1,5 +1,7 @@
 //! Control charts across lots (`host-fit trend`): every calibrated unit of the store
-//! (its latest calibration) in time order, each coefficient at T0 and the worst
+//! (its latest calibration) in time order (the units of one batch, which share its
+//! start, in the order of their files: never in the order parallel jobs happened to
+//! finish them, which interleaves a lot's halves), each coefficient at T0 and the worst
 //! verification |dg| as an individuals chart whose centre line and limits come from a
 //! reference period, and the points flagged by Nelson's run rules (the first four of
 //! which include Western Electric's: Nelson 1 = WE 1, Nelson 5 = WE 2, Nelson 6 = WE 3).
@@ -349,7 +351,7 @@ type Loaded = (
 fn load(store: &Store) -> Result<Loaded> {
     let e = |e| db_error(store.path(), e);
     let sql = format!(
-        "SELECT serial, lot, time_utc, run_id, output_unit, {} FROM runs WHERE id IN (SELECT max(id) FROM runs WHERE {} GROUP BY serial) ORDER BY time_utc, id",
+        "SELECT serial, lot, time_utc, run_id, output_unit, {} FROM runs WHERE id IN (SELECT max(id) FROM runs WHERE {} GROUP BY serial) ORDER BY time_utc, input, id",
         COEFF_NAMES.join(", "),
         crate::store::schema::CALIBRATION
     );

@@ -209,7 +209,11 @@ fn flag_table(t: &Trend) -> String {
             c.flags.len(),
             esc(&by_rule.join(", ")),
             esc(&first.join(", ")),
-            if c.flags.len() > LISTED_FLAGS { ", ..." } else { "" }
+            if c.flags.len() > LISTED_FLAGS {
+                ", ..."
+            } else {
+                ""
+            }
         ));
     }
     s.push_str("</table>\n");

@@ -1,9 +1,10 @@
 //! Reading records back: every record of a unit in the order written, its latest
 //! calibration marked (`host-fit history`), and a stored blob re-issued bit for bit
 //! after its CRC is checked (`--blob RUN`).
+use super::db::{record_columns, Store};
+use super::fault::db_error;
+use super::record::{AtT0, Command, Judged, Record, RunId, COEFFS};
 use crate::error::{HostError, Result};
-use crate::store::record::{AtT0, Command, Judged, Record, RunId, COEFFS};
-use crate::store::{db_error, record_columns, Store};
 use rusqlite::types::ValueRef;
 use rusqlite::{Row, ToSql};
 use serde::Serialize;
@@ -92,6 +93,18 @@ pub fn read(store: &Store, filter: &str, params: &[&dyn ToSql]) -> Result<Vec<Re
     let mut st = store.conn().prepare(&sql).map_err(e)?;
     let rows = st.query_map(params, from_row).map_err(e)?;
     rows.collect::<rusqlite::Result<Vec<_>>>().map_err(e)
+}
+
+impl Store {
+    /// The record of run `run`.
+    pub fn record(&self, run: RunId) -> Result<Option<Record>> {
+        read(self, "WHERE run_id = ?1", &[&run.to_string()]).map(|mut v| v.pop())
+    }
+
+    /// Every record, in the order written (for tools; a large store is read whole).
+    pub fn all(&self) -> Result<Vec<Record>> {
+        read(self, "", &[])
+    }
 }
 
 /// One record in a unit's history.

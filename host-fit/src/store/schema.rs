@@ -3,8 +3,8 @@
 //! one of a newer version is refused (with its version named), never altered; a
 //! migration runs in one transaction, so a store is at one version or the next, never
 //! between.
+use super::record::{coefficient_columns, Command};
 use crate::error::{HostError, Result};
-use crate::store::record::{coefficient_columns, Command};
 use rusqlite::{Connection, TransactionBehavior};
 use std::path::Path;
 
@@ -69,7 +69,7 @@ CREATE VIEW latest_calibrations AS
 }
 
 fn db(path: &Path, e: rusqlite::Error) -> HostError {
-    super::db_error(path, e)
+    super::fault::db_error(path, e)
 }
 
 /// The store's version, checked to be a record store this host-fit can read.

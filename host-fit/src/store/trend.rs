@@ -13,8 +13,9 @@
 //! with probability [`ALL_RULES_FALSE_ALARM_RATE`], 2.5 %; with limits estimated from a
 //! reference of 20, 50 or 100 units, 5.4 %, 3.5 % or 3.0 % ([`ALL_RULES_BY_REFERENCE`]).
 //! Monte-Carlo tests hold every one of these rates.
+use super::db::Store;
+use super::fault::db_error;
 use crate::error::{HostError, Result};
-use crate::store::{db_error, Store};
 use firmware_core::model::COEFF_NAMES;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -353,7 +354,7 @@ fn load(store: &Store) -> Result<Loaded> {
     let sql = format!(
         "SELECT serial, lot, time_utc, run_id, output_unit, {} FROM runs WHERE id IN (SELECT max(id) FROM runs WHERE {} GROUP BY serial) ORDER BY time_utc, input, id",
         COEFF_NAMES.join(", "),
-        crate::store::schema::CALIBRATION
+        super::schema::CALIBRATION
     );
     let mut st = store.conn().prepare(&sql).map_err(e)?;
     let mut rows = st.query([]).map_err(e)?;

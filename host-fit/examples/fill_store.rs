@@ -40,6 +40,7 @@ fn main() {
         r.run_id = RunId::fresh().unwrap_or_else(|e| fail(e));
         r.serial = format!("UNIT-{i:06}");
         r.lot = Some(format!("LOT-{:03}", i / 1000 + 1));
+        r.input = format!("LOT-{:03}/UNIT-{i:06}.csv", i / 1000 + 1);
         r.time_utc = clock::rfc3339(t0 + (i / 1000) as i64 * 1_000_000);
         chunk.push(r);
         if chunk.len() == 10_000 || i + 1 == n {

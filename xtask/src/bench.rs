@@ -1,5 +1,5 @@
-//! `cargo xtask bench`: criterion benchmarks of firmware-core and host-fit, and a batch
-//! of 1000 simulated units; writes target/bench/summary.md.
+//! `cargo xtask bench`: criterion benchmarks of firmware-core and host-fit, a batch of
+//! 1000 simulated units, the record store at scale; writes target/bench/summary.md.
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -114,6 +114,152 @@ fn diagnosis_times(bin: &Path, root: &Path, steps: &mut crate::Steps) -> String 
     md
 }
 
+/// The best wall-clock time (s) of `n` runs of `host-fit ARGS` that exit 0 (or 3, a run
+/// whose units did not all pass), `before` called ahead of each; None if one fails.
+fn best_of(bin: &Path, args: &[String], n: usize, before: &dyn Fn()) -> Option<f64> {
+    let mut best = f64::INFINITY;
+    for _ in 0..n {
+        before();
+        let t = std::time::Instant::now();
+        let o = Command::new(bin).args(args).output().ok()?;
+        if !matches!(o.status.code(), Some(0 | 3)) {
+            eprintln!("{}", String::from_utf8_lossy(&o.stderr));
+            return None;
+        }
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    Some(best)
+}
+
+/// The record store at scale: the batch of the 1000 units without a store and with one
+/// (alternating, best of two each), a store of 100 000 records made from that batch's
+/// records by the `fill_store` example (new serials, run ids, lots of 1000), then one
+/// serial's history and the trend over every unit through the release binary, against
+/// the targets (20 %, 50 ms, 5 s).
+fn store_figures(bin: &Path, root: &Path, units: &Path, steps: &mut crate::Steps) -> String {
+    let dir = root.join("target/bench");
+    let s = |p: &Path| p.display().to_string();
+    let remove = |p: &Path| {
+        for ext in ["", "-wal", "-shm"] {
+            let _ = std::fs::remove_file(format!("{}{ext}", p.display()));
+        }
+    };
+    let db = dir.join("store-batch.sqlite");
+    let batch = |store: bool| {
+        let mut a: Vec<String> = [
+            "batch",
+            &s(units),
+            "--out",
+            &s(&dir.join("store-batch-out")),
+        ]
+        .iter()
+        .map(|x| x.to_string())
+        .collect();
+        a.extend(["--jobs", "2", "--force"].map(String::from));
+        if store {
+            a.extend(["--db".to_string(), s(&db)]);
+        } else {
+            a.push("--no-db".into());
+        }
+        a
+    };
+    eprintln!("\n==> batch of 1000 units without and with the record store");
+    let (mut without, mut with) = (Some(f64::INFINITY), Some(f64::INFINITY));
+    for _ in 0..2 {
+        let nothing = || {};
+        let t = best_of(bin, &batch(false), 1, &nothing);
+        without = without.zip(t).map(|(a, b)| a.min(b));
+        let t = best_of(bin, &batch(true), 1, &|| remove(&db));
+        with = with.zip(t).map(|(a, b)| a.min(b));
+    }
+    let mut md = String::from("\n### Record store\n\n| measure | time | target |\n|---|---|---|\n");
+    match (without, with) {
+        (Some(a), Some(b)) => {
+            steps.passed.push("batch with and without the store".into());
+            md.push_str(&format!(
+                "| batch of 1000 units, `--jobs 2`, no store (`--no-db`) | {a:.2} s | |\n| the same, recording every unit (one transaction per chunk of 64) | {b:.2} s ({:+.1} %) | at most +20 % |\n",
+                100.0 * (b / a - 1.0)
+            ));
+        }
+        _ => steps.failed.push("batch with and without the store".into()),
+    }
+    let mut c = crate::cargo();
+    c.args([
+        "build",
+        "--release",
+        "-p",
+        "host-fit",
+        "--example",
+        "fill_store",
+    ]);
+    steps.run("build the fill_store example", c);
+    let big = dir.join("store-100k.sqlite");
+    remove(&big);
+    eprintln!("\n==> a store of 100 000 records at {}", big.display());
+    let t = std::time::Instant::now();
+    let filled = Command::new(root.join("target/release/examples/fill_store"))
+        .args([s(&db), s(&big), "100000".into()])
+        .status()
+        .is_ok_and(|st| st.success());
+    if !filled {
+        steps.failed.push("a store of 100 000 records".into());
+        return md;
+    }
+    let size = std::fs::metadata(&big).map(|m| m.len()).unwrap_or(0);
+    md.push_str(&format!(
+        "| write 100 000 records (10 000 a transaction; the store: {:.0} MB) | {:.2} s | |\n",
+        size as f64 / 1e6,
+        t.elapsed().as_secs_f64()
+    ));
+    let cases = [
+        (
+            "`host-fit history UNIT-054321` in it (a new process: open, check, query, print)",
+            vec![
+                "history".to_string(),
+                "UNIT-054321".into(),
+                "--db".into(),
+                s(&big),
+            ],
+            5,
+            0.050,
+        ),
+        (
+            "`host-fit trend` over its 100 000 units (13 charts, 8 rules, HTML written)",
+            vec![
+                "trend".to_string(),
+                "--db".into(),
+                s(&big),
+                "--out".into(),
+                s(&dir.join("trend-100k.html")),
+                "--force".into(),
+            ],
+            3,
+            5.0,
+        ),
+    ];
+    for (name, args, n, target) in cases {
+        eprintln!("\n==> {name}");
+        match best_of(bin, &args, n, &|| {}) {
+            Some(t) => {
+                steps.passed.push(name.to_string());
+                let shown = if t < 1.0 {
+                    format!("{:.1} ms", t * 1e3)
+                } else {
+                    format!("{t:.2} s")
+                };
+                let goal = if target < 1.0 {
+                    format!("< {:.0} ms", target * 1e3)
+                } else {
+                    format!("< {target:.0} s")
+                };
+                md.push_str(&format!("| {name}, best of {n} | {shown} | {goal} |\n"));
+            }
+            None => steps.failed.push(name.to_string()),
+        }
+    }
+    md
+}
+
 /// Run the benchmarks.
 pub fn bench(steps: &mut crate::Steps) {
     let root = crate::root();
@@ -177,6 +323,7 @@ pub fn bench(steps: &mut crate::Steps) {
         }
     };
     let diag = diagnosis_times(&bin, &root, steps);
+    let store = store_figures(&bin, &root, &units, steps);
     let res = results(&root.join("target/criterion"));
     let get = |k: &str| res.iter().find(|r| r.0 == k).map(|r| r.1);
     let mut md = String::from("## Benchmarks (`cargo xtask bench`, this machine: 2 cores)\n\n### firmware-core on the host (x86-64, f32)\n\n| benchmark | time |\n|---|---|\n");
@@ -208,6 +355,7 @@ pub fn bench(steps: &mut crate::Steps) {
     }
     md.push_str(&format!("\n### Batch\n\n`host-fit batch` of 1000 simulated units of the paper's profile (22 k rows each), `--jobs 2`, every unit's model chosen by cross-validation and judged against the acceptance specification: **{batch_s:.1} s** (target < 60 s).\n\n`{verdicts}`\n"));
     md.push_str(&diag);
+    md.push_str(&store);
     let dir = root.join("target/bench");
     let _ = std::fs::create_dir_all(&dir);
     let _ = std::fs::write(dir.join("summary.md"), &md);

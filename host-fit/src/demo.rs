@@ -85,8 +85,11 @@ fn records(oc: &DemoOutcome, rec_path: &Path, csv: &str, seed: u64) -> Result<Ve
         .finish()
         .map_err(|e| HostError::io(rec_path, &e))?;
     let mut out = Vec::new();
+    // one run: its records share its time
+    let started = crate::store::clock::now();
     for m in &oc.models {
         let mut r = Record::new(Command::Demo, None, &oc.recording.unit, rec_path)?;
+        r.time_utc.clone_from(&started);
         r.options = serde_json::json!({ "seed": seed, "model": m.name, "blob": m.file });
         r.input_sha256 = Some(sha.clone());
         r.output_unit = Some(oc.recording.output_unit.clone());

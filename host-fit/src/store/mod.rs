@@ -1,6 +1,7 @@
 //! The line's memory: a record store in SQLite (one file, the SQLite compiled into
-//! host-fit), written by `fit`, `verify`, `diagnose` and `demo` with `--db PATH` and by
-//! `batch` (into its output folder unless told otherwise), read by `history` and `trend`.
+//! host-fit), written by `fit`, `verify` and `diagnose` with `--db PATH`, by `batch` (into
+//! its output folder unless told otherwise) and by `demo` (into its folder), read by
+//! `history` and `trend`.
 //!
 //! One record per run and unit, never changed or deleted (triggers refuse it): a unit
 //! calibrated again keeps every record, and the view `latest_calibrations` (a query, no
@@ -32,7 +33,8 @@
 //! | `diagnosis_verdict`, `findings` | TEXT, TEXT (JSON) | the diagnosis' verdict and findings, as in its JSON contract |
 //!
 //! Indexes `runs_by_serial (serial, id)` and `runs_by_time (time_utc, id)`; view
-//! `latest_calibrations` (the newest record per serial that made a blob: not `verify`).
+//! `latest_calibrations` (the newest record per serial that made a blob and did not end in
+//! an error; `verify` records are checks of a blob, not calibrations).
 //!
 //! # Many writers, no half records
 //! The store runs in WAL mode with `synchronous = FULL`; every write is one transaction

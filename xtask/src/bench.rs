@@ -131,6 +131,61 @@ fn best_of(bin: &Path, args: &[String], n: usize, before: &dyn Fn()) -> Option<f
     Some(best)
 }
 
+/// The batch of the 1000 units without the store and with one at `db` (removed before
+/// each run), alternating, best of two each: the table's first rows.
+fn batch_with_and_without_store(
+    bin: &Path,
+    units: &Path,
+    db: &Path,
+    steps: &mut crate::Steps,
+) -> String {
+    let dir = db.parent().unwrap_or(Path::new("."));
+    let s = |p: &Path| p.display().to_string();
+    let batch = |store: bool| {
+        let mut a: Vec<String> = [
+            "batch",
+            &s(units),
+            "--out",
+            &s(&dir.join("store-batch-out")),
+        ]
+        .iter()
+        .map(|x| x.to_string())
+        .collect();
+        a.extend(["--jobs", "2", "--force"].map(String::from));
+        if store {
+            a.extend(["--db".to_string(), s(db)]);
+        } else {
+            a.push("--no-db".into());
+        }
+        a
+    };
+    let remove = |p: &Path| {
+        for ext in ["", "-wal", "-shm"] {
+            let _ = std::fs::remove_file(format!("{}{ext}", p.display()));
+        }
+    };
+    let mut md = String::from("\n### Record store\n\n| measure | time | target |\n|---|---|---|\n");
+    let timed = steps.step(
+        "batch of 1000 units without and with the record store",
+        || {
+            let (mut without, mut with) = (f64::INFINITY, f64::INFINITY);
+            let failed = || "a host-fit batch failed (its error is above)".to_string();
+            for _ in 0..2 {
+                without = without.min(best_of(bin, &batch(false), 1, &|| {}).ok_or_else(failed)?);
+                with = with.min(best_of(bin, &batch(true), 1, &|| remove(db)).ok_or_else(failed)?);
+            }
+            Ok((without, with))
+        },
+    );
+    if let Ok((a, b)) = timed {
+        md.push_str(&format!(
+            "| batch of 1000 units, `--jobs 2`, no store (`--no-db`) | {a:.2} s | |\n| the same, recording every unit (one transaction per chunk of 64) | {b:.2} s ({:+.1} %) | at most +20 % |\n",
+            100.0 * (b / a - 1.0)
+        ));
+    }
+    md
+}
+
 /// The record store at scale: the batch of the 1000 units without a store and with one
 /// (alternating, best of two each), a store of 100 000 records made from that batch's
 /// records by the `fill_store` example (new serials, run ids, lots of 1000), then one
@@ -145,43 +200,7 @@ fn store_figures(bin: &Path, root: &Path, units: &Path, steps: &mut crate::Steps
         }
     };
     let db = dir.join("store-batch.sqlite");
-    let batch = |store: bool| {
-        let mut a: Vec<String> = [
-            "batch",
-            &s(units),
-            "--out",
-            &s(&dir.join("store-batch-out")),
-        ]
-        .iter()
-        .map(|x| x.to_string())
-        .collect();
-        a.extend(["--jobs", "2", "--force"].map(String::from));
-        if store {
-            a.extend(["--db".to_string(), s(&db)]);
-        } else {
-            a.push("--no-db".into());
-        }
-        a
-    };
-    let mut md = String::from("\n### Record store\n\n| measure | time | target |\n|---|---|---|\n");
-    let timed = steps.step(
-        "batch of 1000 units without and with the record store",
-        || {
-            let (mut without, mut with) = (f64::INFINITY, f64::INFINITY);
-            let failed = || "a host-fit batch failed (its error is above)".to_string();
-            for _ in 0..2 {
-                without = without.min(best_of(bin, &batch(false), 1, &|| {}).ok_or_else(failed)?);
-                with = with.min(best_of(bin, &batch(true), 1, &|| remove(&db)).ok_or_else(failed)?);
-            }
-            Ok((without, with))
-        },
-    );
-    if let Ok((a, b)) = timed {
-        md.push_str(&format!(
-            "| batch of 1000 units, `--jobs 2`, no store (`--no-db`) | {a:.2} s | |\n| the same, recording every unit (one transaction per chunk of 64) | {b:.2} s ({:+.1} %) | at most +20 % |\n",
-            100.0 * (b / a - 1.0)
-        ));
-    }
+    let mut md = batch_with_and_without_store(bin, units, &db, steps);
     let mut c = crate::cargo();
     c.args([
         "build",

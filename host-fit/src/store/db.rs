@@ -363,7 +363,6 @@ impl Target {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::store::record::RunId;
 
     fn sample(serial: &str) -> Record {
         let mut r = Record::new(Command::Fit, None, serial, Path::new("r.csv")).unwrap();

@@ -1,11 +1,12 @@
 //! The trend report: one control chart per coefficient at T0 and one of the worst
 //! verification |dg|, units in time order, the reference period and every other lot
-//! shaded, the centre line and the 3-sigma limits, the points each run rule flags in a
-//! series of their own (named by the rule), and a table of the flagged units.
+//! shaded, the centre line and the 3-sigma limits, each lot's mean, the points each run
+//! rule flags in a series of their own (named by the rule), and a table of the flagged
+//! units.
 use crate::error::Result;
 use crate::report::axis::prefixed;
 use crate::report::page::{esc, html, Section};
-use crate::report::plot::{Band, Dash, Marker, Plot, Series, ACCEPT, FLOOR, PALETTE};
+use crate::report::plot::{Band, Dash, Marker, Plot, Rgb, Series, ACCEPT, FLOOR, PALETTE};
 use crate::store::trend::{Chart, Rule, Trend, ALL_RULES_BY_REFERENCE, ALL_RULES_FALSE_ALARM_RATE};
 
 /// Flagged units listed per chart in the page (all of them: `host-fit trend --json`).
@@ -57,6 +58,35 @@ fn bands(t: &Trend, centre: f64, sigma: Option<f64>) -> Vec<Band> {
     b
 }
 
+/// The lots' colour (apart from the palette's, which the rules use).
+const LOT_MEANS: Rgb = Rgb(110, 60, 160);
+
+/// Each lot's mean at the middle of its units, joined: what moves from lot to lot stays
+/// visible where thousands of units fill the chart. None with fewer than two lots.
+fn lot_means(t: &Trend, c: &Chart, y: &dyn Fn(f64) -> f64) -> Option<Series> {
+    if t.lots.len() < 2 || t.lots.len() > SHADED_LOTS {
+        return None;
+    }
+    let mut pts = Vec::new();
+    let mut k = 0;
+    for l in &t.lots {
+        let (mut sum, mut n) = (0.0, 0usize);
+        while k < c.points.len() && c.points[k].0 <= l.last {
+            if c.points[k].0 >= l.first {
+                sum += c.points[k].1;
+                n += 1;
+            }
+            k += 1;
+        }
+        if n > 0 {
+            pts.push((0.5 * (l.first + l.last) as f64 + 1.0, y(sum / n as f64)));
+        }
+    }
+    let mut s = Series::line("lot means", LOT_MEANS, Dash::Solid, Marker::Diamond, pts);
+    s.marker_every = 1;
+    Some(s)
+}
+
 /// One chart as a plot. Coefficients are drawn as their departure from the centre line
 /// in a prefixed unit (their digits differ far behind the point); |dg| as it is.
 fn plot(t: &Trend, c: &Chart, wide: bool) -> Plot {
@@ -101,6 +131,9 @@ fn plot(t: &Trend, c: &Chart, wide: bool) -> Plot {
             Marker::Square,
             vec![(1.0, y(centre)), (x_end, y(centre))],
         ));
+    }
+    if let Some(means) = lot_means(t, c, &y) {
+        series.push(means);
     }
     let shapes = [
         Marker::Triangle,

@@ -87,6 +87,34 @@ fn lot_means(t: &Trend, c: &Chart, y: &dyn Fn(f64) -> f64) -> Option<Series> {
     Some(s)
 }
 
+/// The points each rule flags, one series per rule that flags any, named by it.
+fn flag_series(c: &Chart, y: &dyn Fn(f64) -> f64) -> Vec<Series> {
+    let mut out = Vec::new();
+    let shapes = [
+        Marker::Triangle,
+        Marker::Diamond,
+        Marker::Cross,
+        Marker::Square,
+    ];
+    for (i, r) in Rule::ALL.iter().enumerate() {
+        let hits: Vec<(f64, f64)> = c
+            .flags
+            .iter()
+            .filter(|f| f.rules.contains(&r.number()))
+            .map(|f| (f.unit as f64 + 1.0, y(f.value)))
+            .collect();
+        if !hits.is_empty() {
+            out.push(Series::markers(
+                format!("{} ({})", r.name(), hits.len()),
+                PALETTE[2 + i % 5],
+                shapes[i % shapes.len()],
+                hits,
+            ));
+        }
+    }
+    out
+}
+
 /// One chart as a plot. Coefficients are drawn as their departure from the centre line
 /// in a prefixed unit (their digits differ far behind the point); |dg| as it is.
 fn plot(t: &Trend, c: &Chart, wide: bool) -> Plot {
@@ -135,28 +163,7 @@ fn plot(t: &Trend, c: &Chart, wide: bool) -> Plot {
     if let Some(means) = lot_means(t, c, &y) {
         series.push(means);
     }
-    let shapes = [
-        Marker::Triangle,
-        Marker::Diamond,
-        Marker::Cross,
-        Marker::Square,
-    ];
-    for (i, r) in Rule::ALL.iter().enumerate() {
-        let hits: Vec<(f64, f64)> = c
-            .flags
-            .iter()
-            .filter(|f| f.rules.contains(&r.number()))
-            .map(|f| (f.unit as f64 + 1.0, y(f.value)))
-            .collect();
-        if !hits.is_empty() {
-            series.push(Series::markers(
-                format!("{} ({})", r.name(), hits.len()),
-                PALETTE[2 + i % 5],
-                shapes[i % shapes.len()],
-                hits,
-            ));
-        }
-    }
+    series.extend(flag_series(c, &y));
     let flagged: Vec<String> = c
         .by_rule
         .iter()

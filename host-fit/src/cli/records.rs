@@ -112,10 +112,14 @@ pub(super) struct Run<'a> {
 
 impl Run<'_> {
     /// Fill a new record of `command` with `fill` and append it to the store; a note
-    /// names the run. Nothing happens without `--db`.
-    fn save(self, command: Recorded, fill: impl FnOnce(&mut Record)) -> Result<()> {
+    /// names the run. Returns the record (None without `--db`, when nothing happens).
+    fn save(
+        self,
+        command: Recorded,
+        fill: impl FnOnce(&mut Record) -> Result<()>,
+    ) -> Result<Option<Record>> {
         let Some(t) = target(self.args) else {
-            return Ok(());
+            return Ok(None);
         };
         // opened (and checked) before the record is made: a bad store is reported
         // before anything is written
@@ -123,7 +127,7 @@ impl Run<'_> {
         let mut r = t.record(command, self.serial, &self.rec.path)?;
         r.input_sha256 = Some(sha256_file(&self.rec.path)?);
         r.output_unit = Some(self.rec.output_unit.clone());
-        fill(&mut r);
+        fill(&mut r)?;
         store.append(std::slice::from_mut(&mut r))?;
         let _ = writeln!(
             self.err,
@@ -133,11 +137,12 @@ impl Run<'_> {
             self.serial,
             t.db.display()
         );
-        Ok(())
+        Ok(Some(r))
     }
 }
 
-/// `fit --db`: the model, its coefficients at T0 with their 1-sigma, the blob.
+/// `fit --db`: the model, its coefficients at T0 with their 1-sigma, the blob. Returns
+/// the blob to write (as recorded).
 pub(super) fn fit(
     run: Run<'_>,
     oc: &FitOutcome,
@@ -146,17 +151,17 @@ pub(super) fn fit(
 ) -> Result<Vec<u8>> {
     let sigma = coefficient_sigma(&oc.fit, &oc.noise, cal.t0_c);
     let model = oc.fit.basis.describe();
-    let stored = blob.clone();
-    run.save(Recorded::Fit, |r| {
+    let saved = run.save(Recorded::Fit, |r| {
         r.model = Some(model);
         r.at_t0 = Some(AtT0 {
             t0_c: cal.t0_c,
             values: cal.at_t0(),
             sigma: Some(sigma),
         });
-        r.blob = Some(stored);
+        r.blob = Some(blob.clone());
+        Ok(())
     })?;
-    Ok(blob)
+    Ok(saved.and_then(|r| r.blob).unwrap_or(blob))
 }
 
 /// The worst compensated |dg| of a verification, mg.
@@ -175,7 +180,6 @@ pub(super) fn verify(
     v: &Verification,
     acc: &Acceptance,
 ) -> Result<()> {
-    let mut fill_err = None;
     run.save(Recorded::Verify, |r| {
         r.model = Some(Inspection::of(b, bytes.len()).model);
         let c = &b.calibration;
@@ -186,13 +190,13 @@ pub(super) fn verify(
         });
         r.blob = Some(bytes.to_vec());
         r.worst_dg_mg = worst_dg(v);
-        fill_err = r.with_verdict(&acc.acceptance, &acc.reason).err();
+        r.with_verdict(&acc.acceptance, &acc.reason)
     })?;
-    fill_err.map_or(Ok(()), Err)
+    Ok(())
 }
 
 /// `diagnose --db`: the diagnosis' verdict and findings, the flashed model, its
-/// coefficients at T0, the blob (with `--out`).
+/// coefficients at T0, the blob (with `--out`). Returns the blob to write (as recorded).
 pub(super) fn diagnose(
     run: Run<'_>,
     d: &Diagnosis,
@@ -200,9 +204,7 @@ pub(super) fn diagnose(
     blob: Option<Vec<u8>>,
 ) -> Result<Option<Vec<u8>>> {
     let cal = d.calibration(run.rec.t0_c).ok();
-    let stored = blob.clone();
-    let mut fill_err = None;
-    run.save(Recorded::Diagnose, |r| {
+    let saved = run.save(Recorded::Diagnose, |r| {
         r.model = Some(if c.flashed.model.is_empty() {
             c.final_model.temperature_model.clone()
         } else {
@@ -217,10 +219,13 @@ pub(super) fn diagnose(
             values: cal.at_t0(),
             sigma: None,
         });
-        r.blob = stored;
-        fill_err = r.with_diagnosis(c).err();
+        r.blob.clone_from(&blob);
+        r.with_diagnosis(c)
     })?;
-    fill_err.map_or(Ok(blob), Err)
+    Ok(match saved {
+        Some(r) => r.blob,
+        None => blob,
+    })
 }
 
 pub(super) fn history(a: HistoryArgs, out: &mut dyn Write) -> Result<()> {

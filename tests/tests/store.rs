@@ -568,3 +568,44 @@ fn bad_stores_are_refused_named_and_left_alone() {
     assert!(err.contains("reads versions up to 1"), "{err}");
     let _ = std::fs::remove_dir_all(&root);
 }
+
+/// The demo records every blob it writes in its folder's store and ends by printing the
+/// unit's history, the data-chosen model marked as its calibration; run again with
+/// `--force` it appends.
+#[test]
+fn the_demo_records_its_blobs_and_shows_the_history() {
+    let root = tempdir("demo");
+    let dir = root.join("demo-out");
+    let (code, out, err) = cli(&["demo", "--out", s(&dir)]);
+    assert_eq!(code, 0, "{err}");
+    let db = dir.join("records.sqlite");
+    let all = records(&db);
+    assert_eq!(all.len(), 3);
+    let sha = sha256sum(&dir.join("recording.csv"));
+    for r in &all {
+        assert_eq!(r.command, Command::Demo);
+        assert_eq!(r.input_sha256.as_deref(), Some(sha.as_str()));
+        let file = r.options["blob"].as_str().unwrap();
+        assert_eq!(
+            r.blob.as_deref(),
+            Some(&std::fs::read(dir.join(file)).unwrap()[..]),
+            "{file}"
+        );
+    }
+    assert_eq!(all[2].options["blob"], "chosen.blob");
+    // the history printed is the store's, the chosen model marked
+    let shown = &out[out.find("unit PAPER-UNIT: 3 records").expect("the history")..];
+    let (code, text, _) = cli(&["history", "PAPER-UNIT", "--db", s(&db)]);
+    assert_eq!(code, 0);
+    assert_eq!(shown.trim_end(), text.trim_end());
+    let marked: Vec<&str> = text.lines().filter(|l| l.starts_with("* #")).collect();
+    assert!(
+        marked.len() == 1 && marked[0].starts_with("* #3 "),
+        "{text}"
+    );
+    assert!(text.contains("model chosen-poly4"), "{text}");
+    let (code, _, err) = cli(&["demo", "--out", s(&dir), "--force"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(records(&db).len(), 6);
+    let _ = std::fs::remove_dir_all(&root);
+}

@@ -72,8 +72,10 @@ fn integrity(db: &Path) -> String {
 fn two_batches_writing_one_store_at_once_lose_nothing() {
     let root = tempdir("two");
     let (a, b) = (root.join("lot-a"), root.join("lot-b"));
-    units(&a, "A", 10, 100);
-    units(&b, "B", 10, 200);
+    // 40 units each: several seconds of work, so that each writer commits several
+    // chunks (one a second) while the other runs
+    units(&a, "A", 40, 100);
+    units(&b, "B", 40, 200);
     let db = root.join("shared.sqlite");
     let mut pa = batch(&a, &root.join("out-a"), &db).spawn().unwrap();
     let mut pb = batch(&b, &root.join("out-b"), &db).spawn().unwrap();
@@ -88,17 +90,17 @@ fn two_batches_writing_one_store_at_once_lose_nothing() {
     assert!(rb.success(), "{}", err(pb));
     let s = Store::open_existing(&db).unwrap();
     let all = s.all().unwrap();
-    assert_eq!(all.len(), 20, "every unit of both batches recorded");
+    assert_eq!(all.len(), 80, "every unit of both batches recorded");
     let mut runs: Vec<String> = all.iter().map(|r| r.run_id.to_string()).collect();
     runs.sort();
     runs.dedup();
-    assert_eq!(runs.len(), 20, "run ids are unique");
+    assert_eq!(runs.len(), 80, "run ids are unique");
     for (lot, prefix) in [("lot-a", "A-"), ("lot-b", "B-")] {
         let mine: Vec<_> = all
             .iter()
             .filter(|r| r.lot.as_deref() == Some(lot))
             .collect();
-        assert_eq!(mine.len(), 10, "{lot}");
+        assert_eq!(mine.len(), 40, "{lot}");
         assert!(mine.iter().all(|r| r.serial.starts_with(prefix)));
     }
     // the two wrote at the same time: their records' places in the table interleave

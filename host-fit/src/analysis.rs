@@ -13,11 +13,38 @@ use crate::fit::identify::StopCoeffs;
 use crate::fit::noise::noise;
 use crate::fit::pipeline::{fit_chosen, identify_stops, stop_temperatures, ModelRequest};
 use crate::fit::select::Selection;
-use crate::fit::temperature::{fit_joint, fit_table, Basis, ModelFit};
+use crate::fit::temperature::{
+    fit_joint, fit_table, Basis, Frame, ModelFit, Setting, UPDATE_STEP_C,
+};
 use crate::simulate::TrueUnit;
 use crate::verify::{verify, Verification};
 use firmware_core::compensate::{ErrorModel, Method};
 use serde::{Deserialize, Serialize};
+
+/// How a row's outputs were compensated.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+pub enum Compensation {
+    /// Not at all: the T0 constants.
+    #[serde(rename = "none")]
+    None,
+    /// Method 1: correct the constants.
+    #[serde(rename = "1")]
+    Method1,
+    /// Method 2: correct the result.
+    #[serde(rename = "2")]
+    Method2,
+}
+
+impl Compensation {
+    /// `none`, `1` or `2`, as summary.json and the table write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Compensation::None => "none",
+            Compensation::Method1 => "1",
+            Compensation::Method2 => "2",
+        }
+    }
+}
 
 /// One row of summary.json.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -25,7 +52,7 @@ pub struct SummaryRow {
     /// `t0-constants`, `paper-pwl2`, `polyN`, `pwl-all`.
     pub model: String,
     /// `none`, `1` or `2`.
-    pub method: String,
+    pub method: Compensation,
     /// Verification temperature, C.
     pub temp_c: f64,
     /// Max |dg| over the verification positions, mg.
@@ -36,7 +63,7 @@ pub struct SummaryRow {
 pub struct DemoModel {
     /// Name in the summary.
     pub name: String,
-    /// File name of its blob (`paper-pwl2.blob`, `poly.blob`, `pwl-all.blob`).
+    /// File name of its blob (`paper-pwl2.blob`, `chosen.blob`, `pwl-all.blob`).
     pub file: &'static str,
     /// The fit.
     pub fit: ModelFit,
@@ -100,28 +127,24 @@ type Fits = (Vec<(String, &'static str, ModelFit)>, Selection);
 
 fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Fits> {
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
-    let (obs, _) = static_observations(rec, &cal, 0.25);
+    let (obs, _) = static_observations(rec, &cal);
     let nz = noise(rec);
-    let chosen = fit_chosen(
-        rec,
-        &ModelRequest {
-            kind: None,
-            order: None,
-            breakpoints: None,
-        },
-    )?;
+    let chosen = fit_chosen(rec, &ModelRequest::default())?;
     let selection = chosen
         .selection
         .clone()
         .ok_or_else(|| HostError::msg("internal: no selection"))?;
     let pwl_all = fit_joint(
         &obs,
-        &nz,
         &Basis::Pwl {
             breakpoints: stop_temperatures(stops),
         },
-        rec.t0_c,
-        &rec.path,
+        &Setting {
+            noise: &nz,
+            t0_c: rec.t0_c,
+            frame: Frame::Given,
+            path: &rec.path,
+        },
     )?;
     let mut out = Vec::new();
     if let Ok(p) = paper_pwl2(stops, rec.t0_c) {
@@ -146,7 +169,7 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
     let spec = Spec::default();
     let (list, selection) = fits(&rec, &stops)?;
     for (name, file, fit) in list {
-        let cal = fit.calibration(0.1, false);
+        let cal = fit.calibration(UPDATE_STEP_C, false);
         let (blob, bytes, _) = build_blob(&serial, &cal)?;
         let run = |m: Method| -> Result<Verification> {
             verify(&rec, &blob, m, &check).ok_or_else(|| HostError::msg("singular K(T0)"))
@@ -156,10 +179,10 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
             run(Method::CorrectResult(ErrorModel::Full))?,
         ];
         if models.is_empty() {
-            rows.extend(summary_rows("t0-constants", "none", &v[0], true));
+            rows.extend(summary_rows(T0_CONSTANTS, Compensation::None, &v[0]));
         }
-        rows.extend(summary_rows(&name, "1", &v[0], false));
-        rows.extend(summary_rows(&name, "2", &v[1], false));
+        rows.extend(summary_rows(&name, Compensation::Method1, &v[0]));
+        rows.extend(summary_rows(&name, Compensation::Method2, &v[1]));
         let acceptance =
             judge(&v[0], &spec, cal.t0_c, (cal.t_min_c, cal.t_max_c)).map_err(|e| e.message);
         models.push(DemoModel {
@@ -201,22 +224,19 @@ pub fn verdicts(oc: &DemoOutcome) -> String {
     s
 }
 
-fn summary_rows(
-    model: &str,
-    method: &str,
-    v: &Verification,
-    uncompensated: bool,
-) -> Vec<SummaryRow> {
+/// The summary's name of the uncompensated row.
+pub const T0_CONSTANTS: &str = "t0-constants";
+
+fn summary_rows(model: &str, method: Compensation, v: &Verification) -> Vec<SummaryRow> {
     v.max_by_temperature
         .iter()
         .map(|t| SummaryRow {
             model: model.to_string(),
-            method: method.to_string(),
+            method,
             temp_c: (t.temp_c * 100.0).round() / 100.0,
-            max_abs_dg_mg: if uncompensated {
-                t.max_abs_dg_mg_uncompensated
-            } else {
-                t.max_abs_dg_mg
+            max_abs_dg_mg: match method {
+                Compensation::None => t.max_abs_dg_mg_uncompensated,
+                Compensation::Method1 | Compensation::Method2 => t.max_abs_dg_mg,
             },
         })
         .collect()
@@ -228,14 +248,14 @@ pub fn table(rows: &[SummaryRow]) -> String {
     let mut temps: Vec<f64> = rows.iter().map(|r| r.temp_c).collect();
     temps.sort_by(f64::total_cmp);
     temps.dedup();
-    let mut keys: Vec<(String, String)> = Vec::new();
+    let mut keys: Vec<(String, Compensation)> = Vec::new();
     for r in rows {
-        let k = (r.model.clone(), r.method.clone());
+        let k = (r.model.clone(), r.method);
         if !keys.contains(&k) {
             keys.push(k);
         }
     }
-    let get = |m: &str, me: &str, t: f64| {
+    let get = |m: &str, me: Compensation, t: f64| {
         rows.iter()
             .find(|r| r.model == m && r.method == me && r.temp_c == t)
             .map(|r| r.max_abs_dg_mg)
@@ -249,12 +269,13 @@ pub fn table(rows: &[SummaryRow]) -> String {
     }
     s.push('\n');
     for (m, me) in &keys {
-        s.push_str(&format!("{m:<14} {me:<6}"));
+        s.push_str(&format!("{m:<14} {:<6}", me.name()));
         for t in &temps {
-            let v = get(m, me, *t).unwrap_or(f64::NAN);
-            let cell = match get("t0-constants", "none", *t) {
-                Some(u) if me != "none" && v > 0.0 && u >= v => format!("{v:.3} ({:.1}x)", u / v),
-                Some(u) if me != "none" && u > 0.0 => format!("{v:.3} ({:.1}x worse)", v / u),
+            let v = get(m, *me, *t).unwrap_or(f64::NAN);
+            let compensated = *me != Compensation::None;
+            let cell = match get(T0_CONSTANTS, Compensation::None, *t) {
+                Some(u) if compensated && v > 0.0 && u >= v => format!("{v:.3} ({:.1}x)", u / v),
+                Some(u) if compensated && u > 0.0 => format!("{v:.3} ({:.1}x worse)", v / u),
                 _ => format!("{v:.3}"),
             };
             s.push_str(&format!(" {cell:>16}"));

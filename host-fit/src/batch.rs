@@ -11,11 +11,12 @@ use crate::blob::build_blob;
 use crate::data::positions::{Positions, Role};
 use crate::data::recording::Recording;
 use crate::diagnose::contract::Contract;
+use crate::diagnose::EffectId;
 use crate::error::{HostError, Result};
 use crate::fit::pipeline::{fit_chosen, ModelKind, ModelRequest};
 use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
-use crate::fit::temperature::span;
+use crate::fit::temperature::{span, UPDATE_STEP_C};
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::store::record::{sha256_file, AtT0, Command as Recorded, HashingReader, Record};
 use crate::store::{Store, Target};
@@ -35,6 +36,44 @@ pub const OUTLIER_Z: f64 = 3.5;
 /// Units recorded in one transaction of the record store.
 pub const RECORD_CHUNK: usize = 64;
 
+/// How a unit of the batch ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum UnitStatus {
+    /// Fitted, and its blob passed acceptance.
+    Pass,
+    /// Fitted, and its blob failed acceptance.
+    Fail,
+    /// Could not be processed (the reason says why).
+    Error,
+}
+
+impl UnitStatus {
+    /// `pass`, `fail` or `error`, as the summary writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            UnitStatus::Pass => "pass",
+            UnitStatus::Fail => "fail",
+            UnitStatus::Error => "error",
+        }
+    }
+}
+
+impl From<Verdict> for UnitStatus {
+    fn from(v: Verdict) -> Self {
+        match v {
+            Verdict::Pass => UnitStatus::Pass,
+            Verdict::Fail => UnitStatus::Fail,
+        }
+    }
+}
+
+impl std::fmt::Display for UnitStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// One unit's line of the summary.
 #[derive(Debug, Clone)]
 pub struct UnitResult {
@@ -42,8 +81,8 @@ pub struct UnitResult {
     pub file: PathBuf,
     /// Unit serial (from the metadata), or the file stem.
     pub unit: String,
-    /// `pass`, `fail` or `error`.
-    pub acceptance: &'static str,
+    /// Pass, fail or error.
+    pub acceptance: UnitStatus,
     /// Why (the acceptance's reason, or the error).
     pub reason: String,
     /// The model in the blob.
@@ -53,10 +92,11 @@ pub struct UnitResult {
     /// ... compensated with method 1 by the unit's blob.
     pub max_dg_after_mg: Option<f64>,
     /// Diagnosis findings (with `--diagnose`).
-    pub findings: Vec<String>,
-    /// The 12 coefficients at T0 (for the lot statistics).
+    pub findings: Vec<EffectId>,
+    /// The 12 coefficients at T0 of the unit's blob (for the lot statistics).
     pub at_t0: Option<[f64; 12]>,
-    /// Their 1-sigma from the unit's fit (zeros when unknown).
+    /// Their 1-sigma from the model the blob carries (the chosen fit's, or with
+    /// `--diagnose` the diagnosed model's; zeros when unknown).
     pub at_t0_sigma: [f64; 12],
     /// The coefficients far from the lot, with their robust z-scores.
     pub outlier: Vec<(&'static str, f64)>,
@@ -125,16 +165,19 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         },
     )?;
     r.model = oc.fit.basis.describe();
+    // the blob's model, and its own uncertainty for the lot's statistics
     let (cal, diagnosis) = if o.diagnose {
         let d = crate::diagnose::diagnose(&rec)?;
-        r.findings = d.findings.iter().map(|f| f.effect.clone()).collect();
-        r.model = format!("diagnosed ({})", r.findings.join("+"));
-        (d.calibration(rec.t0_c)?, Some(d.contract(&rec)))
+        r.findings = d.findings.iter().map(|f| f.effect).collect();
+        let names: Vec<&str> = r.findings.iter().map(|e| e.as_str()).collect();
+        r.model = format!("diagnosed ({})", names.join("+"));
+        r.at_t0_sigma = d.coefficient_sigma(rec.t0_c);
+        (d.calibration(rec.t0_c)?, Some(d.contract()))
     } else {
-        (oc.fit.calibration(0.1, false), None)
+        r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
+        (oc.fit.calibration(UPDATE_STEP_C, false), None)
     };
     r.at_t0 = Some(cal.at_t0());
-    r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
     let (blob, bytes, dep) = build_blob(&r.unit, &cal)?;
     if let Some(t) = &o.store {
         let mut rc = t.record(Recorded::Batch, &r.unit, path)?;
@@ -162,9 +205,9 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     };
     r.max_dg_before_mg = worst(&|t| t.max_abs_dg_mg_uncompensated);
     r.max_dg_after_mg = worst(&|t| t.max_abs_dg_mg);
-    let acc = judge(&v, &o.spec, cal.t0_c, (cal.t_min_c, cal.t_max_c))
-        .map_err(|e| HostError::in_file(path, e.message))?;
-    r.acceptance = acc.acceptance.name();
+    let acc =
+        judge(&v, &o.spec, cal.t0_c, (cal.t_min_c, cal.t_max_c)).map_err(|e| e.within(path))?;
+    r.acceptance = acc.acceptance.into();
     r.reason = acc.reason.clone();
     if let Some(rc) = &mut r.record {
         rc.worst_dg_mg = r.max_dg_after_mg;
@@ -198,7 +241,7 @@ fn one(path: &Path, out: &Path, o: &BatchOptions) -> UnitResult {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default(),
-        acceptance: "error",
+        acceptance: UnitStatus::Error,
         reason: String::new(),
         model: String::new(),
         max_dg_before_mg: None,
@@ -210,7 +253,7 @@ fn one(path: &Path, out: &Path, o: &BatchOptions) -> UnitResult {
         record: None,
     };
     if let Err(e) = fit_unit(path, out, o, &mut r) {
-        r.acceptance = "error";
+        r.acceptance = UnitStatus::Error;
         r.reason = e.to_string();
         if let Some(t) = &o.store {
             let begun = r.record.take();
@@ -274,7 +317,7 @@ pub fn summary_csv(results: &[UnitResult]) -> Result<String> {
             [
                 r.unit.clone(),
                 r.file.display().to_string(),
-                r.acceptance.to_string(),
+                r.acceptance.name().to_string(),
                 r.reason.clone(),
                 r.model.clone(),
                 opt(r.max_dg_before_mg),
@@ -284,7 +327,11 @@ pub fn summary_csv(results: &[UnitResult]) -> Result<String> {
                     .map(|(c, z)| format!("{c} z={z:.1}"))
                     .collect::<Vec<_>>()
                     .join(";"),
-                r.findings.join(";"),
+                r.findings
+                    .iter()
+                    .map(|e| e.as_str())
+                    .collect::<Vec<_>>()
+                    .join(";"),
             ]
         }),
     )
@@ -406,9 +453,7 @@ pub struct BatchOutcome {
 impl BatchOutcome {
     /// Whether every unit passed.
     pub fn all_pass(&self) -> bool {
-        self.units
-            .iter()
-            .all(|u| u.acceptance == Verdict::Pass.name())
+        self.units.iter().all(|u| u.acceptance == UnitStatus::Pass)
     }
 }
 

@@ -53,6 +53,18 @@ impl HostError {
     pub fn io(file: &Path, e: &std::io::Error) -> Self {
         Self::in_file(file, e.to_string())
     }
+
+    /// This error located in `file` when it names no file yet; a file, line and field it
+    /// already names are kept (they are more precise than the caller's).
+    pub fn within(self, file: &Path) -> Self {
+        if self.file.is_some() {
+            return self;
+        }
+        HostError {
+            file: Some(file.to_path_buf()),
+            ..self
+        }
+    }
 }
 
 impl fmt::Display for HostError {
@@ -72,3 +84,18 @@ impl fmt::Display for HostError {
 }
 
 impl std::error::Error for HostError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn within_names_the_file_and_keeps_a_more_precise_location() {
+        let (a, b) = (Path::new("a.csv"), Path::new("b.csv"));
+        let e = HostError::msg("bad").within(a);
+        assert_eq!(e.to_string(), "a.csv: bad");
+        let e = HostError::at_field(a, 7, "temp_c", "not a number").within(b);
+        assert_eq!(e.to_string(), "a.csv:7: field `temp_c`: not a number");
+        assert_eq!((e.line, e.field.as_deref()), (Some(7), Some("temp_c")));
+    }
+}

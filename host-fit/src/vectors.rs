@@ -86,10 +86,11 @@ pub fn expected(blob: &Blob, bytes: &[u8], prefix: &str) -> (Vec<String>, f64) {
                 for (x, y) in o.accel.iter().zip(r.accel) {
                     // the bound is for |a| <= 1 g; relative beyond
                     let d = (f64::from(*x) - y).abs() / y.abs().max(1.0);
-                    if std::env::var_os("HOSTFIT_DEBUG").is_some() && d > 2e-6 {
-                        eprintln!(
+                    if d > crate::blob::F32_BOUND_G {
+                        log::debug!(
                             "{prefix}{tag} input {i}: u {u:?} t {t}: f32 {:?} f64 {:?}",
-                            o.accel, r.accel
+                            o.accel,
+                            r.accel
                         );
                     }
                     worst = worst.max(d);

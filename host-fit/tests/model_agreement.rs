@@ -123,9 +123,11 @@ proptest! {
     }
 }
 
-/// The bound is tight enough to catch a different segment rule: a firmware that took
-/// the segment ABOVE a breakpoint at the breakpoint's left would disagree here by far
-/// more than the bound.
+/// The bound is tight enough to catch a different segment rule, run in firmware-core: a
+/// firmware that took the segment ABOVE a breakpoint left of it (here evaluated by the
+/// firmware's own code on a table of that segment alone) would disagree with the host by
+/// far more than the bound, where the firmware's real rule agrees within it; below the
+/// table (extrapolated) and just left of an interior breakpoint.
 #[test]
 fn a_wrong_segment_rule_would_be_caught() {
     let b = [-40.0, 20.0, 70.0];
@@ -136,14 +138,30 @@ fn a_wrong_segment_rule_would_be_caught() {
         &[0.3, -0.8, 0.5, 0.9],
         20.0,
     );
-    let t = -60.0; // below the table: the first segment, extrapolated
-    let h = host_value(&m, t);
-    let wrong: [f64; N_COEFFS] = std::array::from_fn(|c| {
-        let v = &m.params[c];
-        v[1] + (v[2] - v[1]) * (t - b[1]) / (b[2] - b[1])
-    });
-    let gap = (0..N_COEFFS)
-        .map(|c| (h[c] - wrong[c]).abs() / pwl_bound(&b, &m.params[c], t))
-        .fold(0.0, f64::max);
-    assert!(gap > 1e3, "the wrong rule is only {gap}x the bound away");
+    // the segment above the first interior breakpoint, alone: its line, extended
+    let above = ModelFit {
+        basis: Basis::Pwl {
+            breakpoints: b[1..].to_vec(),
+        },
+        params: std::array::from_fn(|c| m.params[c][1..].to_vec()),
+        ..m.clone()
+    };
+    for t in [-60.0, 19.0] {
+        let h = host_value(&m, t);
+        let (right, wrong) = (firmware_value(&m, t), firmware_value(&above, t));
+        let (mut agree, mut gap) = (0.0f64, 0.0f64);
+        for c in 0..N_COEFFS {
+            let bound = pwl_bound(&b, &m.params[c], t);
+            agree = agree.max((h[c] - f64::from(right[c])).abs() / bound);
+            gap = gap.max((h[c] - f64::from(wrong[c])).abs() / bound);
+        }
+        assert!(
+            agree <= 1.0,
+            "at {t} C the firmware is {agree}x the bound away"
+        );
+        assert!(
+            gap > 1e3,
+            "at {t} C the wrong rule is only {gap}x the bound away"
+        );
+    }
 }

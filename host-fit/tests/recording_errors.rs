@@ -1,16 +1,12 @@
 //! Every error and warning of recording-format.md: a tiny file that triggers it, and the
 //! message names the file, the line and the field; errors exit non-zero without a panic.
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hf-cat-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn write(name: &str, text: &str) -> PathBuf {
-    let p = dir().join(name);
+/// Write `text` as `name` in the test's own folder (a `tempfile` folder the test holds:
+/// removed when it ends, passed or failed).
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
     p
 }
@@ -56,7 +52,8 @@ fn good_rows(t0: usize) -> String {
 }
 
 fn expect_error(name: &str, text: &str, line: usize, field: Option<&str>, words: &str) {
-    let p = write(name, text);
+    let tmp = tempfile::tempdir().unwrap();
+    let p = write(tmp.path(), name, text);
     let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
     assert_eq!(code, 1, "{name}: {err}");
     assert!(
@@ -101,6 +98,7 @@ fn value_not_a_finite_number() {
 /// `recording` fuzz target, which saw an infinite noise estimate).
 #[test]
 fn value_too_large_to_fit() {
+    let tmp = tempfile::tempdir().unwrap();
     for (i, bad) in ["2.1E249", "-1e13", "1.7e308"].iter().enumerate() {
         let text = format!("{HEAD}{}21,TP1,20.0,0.1,{bad},0.3\n", good_rows(0));
         expect_error(
@@ -113,7 +111,7 @@ fn value_too_large_to_fit() {
     }
     // the bound itself is accepted: raw counts of wide ADCs must read
     let text = format!("{HEAD}{}21,TP1,20.0,0.1,1e12,0.3\n", good_rows(0));
-    let p = write("huge-ok.csv", &text);
+    let p = write(tmp.path(), "huge-ok.csv", &text);
     let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
 }
@@ -121,8 +119,13 @@ fn value_too_large_to_fit() {
 /// The positions file and the coefficient table share the recording's number check.
 #[test]
 fn other_inputs_refuse_values_too_large_to_fit() {
-    let rec = write("rec-ok2.csv", &format!("{HEAD}{}", good_rows(0)));
-    let pos = write("pos-huge.csv", "name,fx,fy,fz\nA,1,1e300,0\n");
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = write(
+        tmp.path(),
+        "rec-ok2.csv",
+        &format!("{HEAD}{}", good_rows(0)),
+    );
+    let pos = write(tmp.path(), "pos-huge.csv", "name,fx,fy,fz\nA,1,1e300,0\n");
     let (code, _, err) = run(&[
         "identify",
         rec.to_str().unwrap(),
@@ -148,7 +151,7 @@ fn other_inputs_refuse_values_too_large_to_fit() {
         let mut f: Vec<&str> = lines[first_data].split(',').collect();
         f[col] = value;
         l[first_data] = f.join(",");
-        write(name, &(l.join("\n") + "\n"))
+        write(tmp.path(), name, &(l.join("\n") + "\n"))
     };
     let table = with(1, "3e200", "table-huge.csv");
     let (code, _, err) = run(&["temp-fit", table.to_str().unwrap()]);
@@ -196,8 +199,13 @@ fn unknown_position_name() {
 
 #[test]
 fn positions_file_zero_vector_and_bad_number() {
-    let rec = write("rec-ok.csv", &format!("{HEAD}{}", good_rows(0)));
-    let pos = write("pos-zero.csv", "name,fx,fy,fz\nA,1,0,0\nB,0,0,0\n");
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = write(tmp.path(), "rec-ok.csv", &format!("{HEAD}{}", good_rows(0)));
+    let pos = write(
+        tmp.path(),
+        "pos-zero.csv",
+        "name,fx,fy,fz\nA,1,0,0\nB,0,0,0\n",
+    );
     let (code, _, err) = run(&[
         "identify",
         rec.to_str().unwrap(),
@@ -209,7 +217,7 @@ fn positions_file_zero_vector_and_bad_number() {
         err.contains("pos-zero.csv:3:") && err.contains("zero-length"),
         "{err}"
     );
-    let pos = write("pos-nan.csv", "name,fx,fy,fz\nA,1,x,0\n");
+    let pos = write(tmp.path(), "pos-nan.csv", "name,fx,fy,fz\nA,1,x,0\n");
     let (code, _, err) = run(&[
         "identify",
         rec.to_str().unwrap(),
@@ -225,8 +233,10 @@ fn positions_file_zero_vector_and_bad_number() {
 
 #[test]
 fn positions_file_normalises_with_a_warning_and_adds_names() {
-    let pos = write("pos-warn.csv", "name,fx,fy,fz\nSIDE,2,0,0\n");
+    let tmp = tempfile::tempdir().unwrap();
+    let pos = write(tmp.path(), "pos-warn.csv", "name,fx,fy,fz\nSIDE,2,0,0\n");
     let rec = write(
+        tmp.path(),
         "rec-side.csv",
         &format!("{HEAD}{}100,SIDE,20,0.1,0.2,0.3\n", good_rows(0)),
     );
@@ -245,6 +255,7 @@ fn positions_file_normalises_with_a_warning_and_adds_names() {
 
 #[test]
 fn warnings_name_the_lines() {
+    let tmp = tempfile::tempdir().unwrap();
     // unknown column, unknown metadata, a short dwell, a drifting dwell
     let mut text = String::from(
         "# format=at-recording/1\n# operator=ann\nt_s,position,temp_c,ux_v,uy_v,uz_v,humidity\n",
@@ -261,7 +272,7 @@ fn warnings_name_the_lines() {
             21.0 + 0.3 * k as f64
         ));
     }
-    let p = write("warn.csv", &text);
+    let p = write(tmp.path(), "warn.csv", &text);
     let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     assert!(
@@ -284,6 +295,7 @@ fn warnings_name_the_lines() {
 
 #[test]
 fn many_drifting_dwells_are_one_warning_naming_the_worst() {
+    let tmp = tempfile::tempdir().unwrap();
     let mut text = format!("{HEAD}{}", good_rows(0));
     // five drifting dwells (0.6 .. 1.0 C), separated by transit rows
     for d in 0..5 {
@@ -296,7 +308,7 @@ fn many_drifting_dwells_are_one_warning_naming_the_worst() {
         }
         text.push_str(&format!("{},-,20.0,0,0,0\n", 104 + 10 * d));
     }
-    let p = write("drifts.csv", &text);
+    let p = write(tmp.path(), "drifts.csv", &text);
     let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     let lines: Vec<&str> = err.lines().filter(|l| l.contains("drift")).collect();
@@ -310,12 +322,13 @@ fn many_drifting_dwells_are_one_warning_naming_the_worst() {
 
 #[test]
 fn not_enough_positions_says_which() {
+    let tmp = tempfile::tempdir().unwrap();
     let text: String = format!("{HEAD}{}", good_rows(0))
         .lines()
         .take(13)
         .map(|l| format!("{l}\n"))
         .collect();
-    let p = write("four.csv", &text);
+    let p = write(tmp.path(), "four.csv", &text);
     let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
     assert_eq!(code, 1);
     assert!(
@@ -326,7 +339,8 @@ fn not_enough_positions_says_which() {
 
 #[test]
 fn empty_header_only_semicolons_comma_decimals() {
-    let p = write("empty2.csv", "");
+    let tmp = tempfile::tempdir().unwrap();
+    let p = write(tmp.path(), "empty2.csv", "");
     let (code, _, err) = run(&["identify", p.to_str().unwrap()]);
     assert_eq!(code, 1);
     assert!(err.contains("empty2.csv: no header row"), "{err}");
@@ -349,11 +363,12 @@ fn empty_header_only_semicolons_comma_decimals() {
 
 #[test]
 fn crlf_and_bom_are_read() {
+    let tmp = tempfile::tempdir().unwrap();
     let text = format!(
         "\u{feff}# unit=CR\r\n{}",
         format!("{HEAD}{}", good_rows(0)).replace('\n', "\r\n")
     );
-    let p = write("crlf.csv", &text);
+    let p = write(tmp.path(), "crlf.csv", &text);
     let (code, out, err) = run(&["identify", p.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("unit CR"), "{out}");
@@ -372,9 +387,8 @@ fn bad_format_metadata_is_an_error() {
 
 #[test]
 fn a_failed_run_leaves_no_partial_files() {
-    let d = dir().join("nopartial");
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
     let rec = d.join("rec.csv");
     std::fs::write(&rec, format!("{HEAD}{}", good_rows(0))).unwrap();
     let out = d.join("unit.blob");
@@ -391,7 +405,7 @@ fn a_failed_run_leaves_no_partial_files() {
     ]);
     assert_eq!(code, 1);
     assert!(err.contains("3 or more temperatures"), "{err}");
-    let left: Vec<_> = std::fs::read_dir(&d)
+    let left: Vec<_> = std::fs::read_dir(d)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
@@ -409,9 +423,10 @@ fn a_failed_run_leaves_no_partial_files() {
 /// this test binary reads a small file), so nothing outside the test is needed.
 #[test]
 fn a_100_mb_recording_is_read_with_bounded_memory() {
+    let tmp = tempfile::tempdir().unwrap();
     use nix::sys::resource::{getrusage, UsageWho};
     use std::fmt::Write as _;
-    let p = dir().join("big.csv");
+    let p = tmp.path().join("big.csv");
     let mut s = String::with_capacity(101_000_000);
     s.push_str("# unit=BIG\nt_s,position,temp_c,ux_v,uy_v,uz_v\n");
     let u = [

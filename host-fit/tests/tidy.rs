@@ -1,7 +1,9 @@
 //! The house rules of host-fit's source, checked like rust-analyzer's tidy test: modules
 //! import one way (each layer uses only its own layer and those below, and no file module
-//! imports in a circle), every module says what it is for, and no function is longer
-//! than [`MAX_FN_LINES`] lines of code.
+//! imports in a circle), every module says what it is for, no function is longer than
+//! [`MAX_FN_LINES`] lines of code (host-fit's sources, tests and benches, and the `tests`
+//! crate), the command line's parser stays in `cli`, the library reads no environment,
+//! and a closed set is matched exhaustively (no `_ =>` beside its variants).
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
@@ -37,6 +39,40 @@ const LAYERS: [(&str, u8); 22] = [
 fn src() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
 }
+
+/// Every folder whose functions the length rule covers: host-fit's sources, tests and
+/// benches, and the end-to-end `tests` crate.
+fn all_code() -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    vec![
+        root.join("src"),
+        root.join("tests"),
+        root.join("benches"),
+        root.join("../tests/src"),
+        root.join("../tests/tests"),
+    ]
+}
+
+/// The closed sets of host-fit: a `match` with arms of one of them must name every
+/// variant (or group them), never fall through `_ =>`.
+const CLOSED: [&str; 16] = [
+    "EffectId::",
+    "Extra::",
+    "Term::",
+    "Param::",
+    "Verdict::",
+    "NoteKind::",
+    "Class::",
+    "Form::",
+    "OtherForm::",
+    "Outside::",
+    "Nuisance::",
+    "UnitStatus::",
+    "MethodArg::",
+    "Route::",
+    "Compensation::",
+    "Grouping::",
+];
 
 /// Every `.rs` file under `dir`, with its module path (`fit/lsq.rs` -> `fit::lsq`).
 fn files(dir: &Path) -> Vec<(String, PathBuf)> {
@@ -390,11 +426,13 @@ fn function_lengths(code: &str) -> Vec<(String, usize)> {
 #[test]
 fn no_function_is_longer_than_the_limit() {
     let mut long = Vec::new();
-    for (m, p) in files(&src()) {
-        let code = code_only(&std::fs::read_to_string(&p).unwrap());
-        for (name, n) in function_lengths(&code) {
-            if n > MAX_FN_LINES {
-                long.push(format!("{m}::{name}: {n} lines"));
+    for dir in all_code() {
+        for (m, p) in files(&dir) {
+            let code = code_only(&std::fs::read_to_string(&p).unwrap());
+            for (name, n) in function_lengths(&code) {
+                if n > MAX_FN_LINES {
+                    long.push(format!("{}: {m}::{name}: {n} lines", dir.display()));
+                }
             }
         }
     }
@@ -403,6 +441,129 @@ fn no_function_is_longer_than_the_limit() {
         "functions over {MAX_FN_LINES} lines of code:\n{}",
         long.join("\n")
     );
+}
+
+/// The arms of every `match` in `code`, at the match's own depth: for each match, the
+/// text of each arm's pattern (up to its `=>`).
+fn match_arms(code: &str) -> Vec<Vec<String>> {
+    let b = code.as_bytes();
+    let mut out = Vec::new();
+    let mut at = 0;
+    while let Some(p) = code[at..].find("match ") {
+        let start = at + p;
+        at = start + 6;
+        if start > 0 && (b[start - 1].is_ascii_alphanumeric() || b[start - 1] == b'_') {
+            continue;
+        }
+        // the arms' block: the first `{` after the scrutinee at bracket depth 0
+        let mut i = at;
+        let mut depth = 0i32;
+        while i < b.len() {
+            match b[i] {
+                b'(' | b'[' => depth += 1,
+                b')' | b']' => depth -= 1,
+                b'{' if depth == 0 => break,
+                b'{' => depth += 1,
+                b'}' => depth -= 1,
+                _ => {}
+            }
+            i += 1;
+        }
+        let (mut depth, mut arm, mut arms) = (0i32, String::new(), Vec::new());
+        let mut in_pattern = true;
+        for &c in &b[(i + 1).min(b.len())..] {
+            match c {
+                b'{' | b'(' | b'[' => depth += 1,
+                b'}' | b')' | b']' if depth == 0 => break,
+                b'}' | b')' | b']' => {
+                    depth -= 1;
+                    // a block body ends its arm
+                    if depth == 0 && c == b'}' && !in_pattern {
+                        in_pattern = true;
+                        arm.clear();
+                        continue;
+                    }
+                }
+                b',' if depth == 0 && !in_pattern => {
+                    in_pattern = true;
+                    arm.clear();
+                    continue;
+                }
+                _ => {}
+            }
+            if in_pattern {
+                arm.push(c as char);
+                if arm.ends_with("=>") && depth == 0 {
+                    arms.push(arm.trim_end_matches("=>").trim().to_string());
+                    in_pattern = false;
+                }
+            }
+        }
+        out.push(arms);
+    }
+    out
+}
+
+/// Matches of `code` over a closed set with a `_` arm.
+fn wildcards_over_closed_sets(code: &str) -> Vec<String> {
+    match_arms(code)
+        .into_iter()
+        .filter(|arms| {
+            arms.iter().any(|a| a == "_")
+                && arms.iter().any(|a| {
+                    CLOSED.iter().any(|c| {
+                        a.split(['|', '(', ' '])
+                            .any(|w| w.trim_start_matches('&').starts_with(c))
+                    })
+                })
+        })
+        .map(|arms| arms.join(" | "))
+        .collect()
+}
+
+#[test]
+fn closed_sets_are_matched_exhaustively() {
+    let mut bad = Vec::new();
+    for (m, p) in files(&src()) {
+        let code = code_only(&std::fs::read_to_string(&p).unwrap());
+        for arms in wildcards_over_closed_sets(&code) {
+            bad.push(format!("{m}: match {{ {arms} }}"));
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "`_ =>` beside the variants of a closed set (name them):\n{}",
+        bad.join("\n")
+    );
+}
+
+/// Whether `code` uses the path `what` (`clap`, `std::env::var`).
+fn uses(code: &str, what: &str) -> bool {
+    code.match_indices(what).any(|(i, _)| {
+        let before = code[..i].chars().last();
+        !before.is_some_and(|c| c.is_alphanumeric() || c == '_')
+    })
+}
+
+#[test]
+fn the_parser_stays_in_the_cli_and_the_library_reads_no_environment() {
+    let mut bad = Vec::new();
+    for (m, p) in files(&src()) {
+        let code = code_only(&std::fs::read_to_string(&p).unwrap());
+        if uses(&code, "clap") && !(m == "cli" || m.starts_with("cli::") || m == "main") {
+            bad.push(format!(
+                "{m} uses clap: the command line's types belong in cli"
+            ));
+        }
+        for env in ["std::env::var", "env::var_os", "env::var("] {
+            if uses(&code, env) && m != "main" {
+                bad.push(format!(
+                    "{m} reads the environment ({env}): only main does, once"
+                ));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
 }
 
 /// The checks themselves can fail: a circle, an upward import, a long function.
@@ -445,6 +606,23 @@ fn the_checks_catch_what_they_are_for() {
     );
     let lifetimes = code_only("fn g<'a>(x: &'a str) -> char { let c = '{'; x.len(); c }");
     assert_eq!(function_lengths(&lifetimes), vec![("g".to_string(), 1)]);
+    let wild = "match e { EffectId::A => f(x), EffectId::B | EffectId::C => { g() } _ => {} }";
+    assert_eq!(
+        wildcards_over_closed_sets(wild).len(),
+        1,
+        "{:?}",
+        match_arms(wild)
+    );
+    let named = "match e { EffectId::A => 1, EffectId::B => match x { Some(_) => 2, _ => 3 } }";
+    assert!(
+        wildcards_over_closed_sets(named).is_empty(),
+        "{:?}",
+        match_arms(named)
+    );
+    let other = "match (a, b) { (Some(x), _) => 1, _ => 2 }";
+    assert!(wildcards_over_closed_sets(other).is_empty());
+    assert!(uses("let x = std::env::var(\"A\");", "std::env::var"));
+    assert!(!uses("my_clap::f()", "clap"));
 }
 
 /// The `src/` folder of another crate of the workspace (`xtask`, `firmware-core`).

@@ -3,6 +3,12 @@
 //! reported without stopping the batch, a summary that stays a valid CSV whatever the
 //! paths hold, the lot's statistics flag the unit unlike the others, and the exit code
 //! says whether every unit passed.
+use firmware_core::model::COEFF_NAMES;
+use host_fit::data::positions::Positions;
+use host_fit::data::recording::Recording;
+use host_fit::diagnose::diagnose;
+use host_fit::fit::pipeline::{fit_chosen, ModelRequest};
+use host_fit::fit::predict::coefficient_sigma;
 use host_fit::simulate::{simulate, Curvature, SimConfig, Stop, PAPER_UNIT, PAPER_UNIT_TEMPS};
 use tests::cli;
 
@@ -49,7 +55,8 @@ fn odd_unit() -> SimConfig {
 
 #[test]
 fn batch_judges_every_unit_writes_a_real_csv_and_flags_the_odd_unit() {
-    let root = tempfile_dir("hf-batch");
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
     // a folder name with a comma and a quote: the summary's file column must survive it
     let units = root.join("lot 7, \"B\"");
     std::fs::create_dir_all(&units).unwrap();
@@ -161,13 +168,13 @@ fn batch_judges_every_unit_writes_a_real_csv_and_flags_the_odd_unit() {
     assert!(stderr.contains("--force"), "{stderr}");
     let (code, _, stderr) = run(true);
     assert_eq!(code, 3, "{stderr}");
-    std::fs::remove_dir_all(&root).unwrap();
 }
 
 /// A lot where every unit passes exits 0.
 #[test]
 fn a_lot_that_passes_exits_zero() {
-    let root = tempfile_dir("hf-batch-pass");
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
     let units = root.join("units");
     std::fs::create_dir_all(&units).unwrap();
     for seed in [3u64, 4] {
@@ -201,13 +208,13 @@ fn a_lot_that_passes_exits_zero() {
     ]);
     assert_eq!(code, 3, "{out}");
     assert!(out.contains("0 pass, 2 fail"), "{out}");
-    std::fs::remove_dir_all(&root).unwrap();
 }
 
 /// With --diagnose the blob and the "after" figure are the diagnosed model's.
 #[test]
 fn batch_with_the_diagnosis_takes_the_diagnosed_blob() {
-    let root = tempfile_dir("hf-batch-diag");
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
     let units = root.join("units");
     std::fs::create_dir_all(&units).unwrap();
     let sim = simulate(&SimConfig::default(), |_| {}).unwrap();
@@ -245,12 +252,36 @@ fn batch_with_the_diagnosis_takes_the_diagnosed_blob() {
         u["diagnosis"].is_object() && u["acceptance"] == "pass",
         "{u}"
     );
-    std::fs::remove_dir_all(&root).unwrap();
-}
-
-fn tempfile_dir(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    // the lot's statistics take the diagnosed model's own uncertainty, not the chosen
+    // fit's: with one unit the lot's robust sigma is that unit's 1-sigma
+    let rec = Recording::read(&units.join("u1.csv"), Positions::default()).unwrap();
+    let diagnosed = diagnose(&rec).unwrap().coefficient_sigma(rec.t0_c);
+    let oc = fit_chosen(&rec, &ModelRequest::default()).unwrap();
+    let chosen = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
+    let mut lot = csv::Reader::from_path(out.join("lot.csv")).unwrap();
+    let cols: Vec<String> = lot.headers().unwrap().iter().map(String::from).collect();
+    let at = |name: &str| cols.iter().position(|h| h == name).unwrap();
+    let (mut same, mut differ) = (0, 0);
+    for row in lot.records().map(Result::unwrap) {
+        let c = COEFF_NAMES
+            .iter()
+            .position(|n| *n == &row[at("coefficient")])
+            .unwrap();
+        let lot_sigma: f64 = row[at("robust_sigma")].parse().unwrap();
+        let rel = |v: f64| (lot_sigma - v).abs() / v;
+        assert!(
+            rel(diagnosed[c]) < 1e-3,
+            "{}: lot {lot_sigma:e}, diagnosed {:e}, chosen fit {:e}",
+            &row[at("coefficient")],
+            diagnosed[c],
+            chosen[c]
+        );
+        same += 1;
+        differ += usize::from(rel(chosen[c]) > 0.05);
+    }
+    assert_eq!(same, 12);
+    assert!(
+        differ > 0,
+        "the two models' sigmas must differ for the check to tell"
+    );
 }

@@ -28,8 +28,8 @@ fn truth(t: f64) -> [f64; 12] {
 
 #[test]
 fn fit_inspect_verify_and_never_overwrite() {
-    let dir = std::env::temp_dir().join(format!("hf-chain-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let cal = synthetic_csv(&[-40.0, 20.0, 70.0], &truth, &TP, 20, 2e-6, 0.0, 3);
     let ver = synthetic_csv(&[-10.0, 45.0], &truth, &pp(), 20, 2e-6, 0.0, 4);
     // one recording: the calibration stops, then the verification stops (time shifted)
@@ -48,7 +48,13 @@ fn fit_inspect_verify_and_never_overwrite() {
     let _ = std::fs::remove_file(&blob);
     let (r, b) = (rec.to_str().unwrap(), blob.to_str().unwrap());
 
-    let j = cli_json(&["fit", r, "--model", "pwl", "--out", b, "--json"]);
+    let (code, out, err) = cli(&["fit", r, "--model", "pwl", "--out", b, "--json"]);
+    assert_eq!(code, 0, "{err}");
+    // the noise source is stated once, not again in the prediction in other words
+    assert_eq!(out.matches("\"noise_source\"").count(), 1, "{out}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(j["noise_source"], "in-dwell (successive samples)");
+    assert!(j["predicted_error"]["noise_source"].is_null(), "{j}");
     assert_eq!(j["route"], "static");
     assert_eq!(j["unit"], "SYN-1");
     assert!(j["f32_departure_g"].as_f64().unwrap() <= 2e-6);
@@ -83,6 +89,33 @@ fn fit_inspect_verify_and_never_overwrite() {
         }
         assert_eq!(j["dwells"].as_array().unwrap().len(), 12);
     }
+    // an option that does not apply is an error: method 1 has no error model
+    let (code, out, err) = cli(&[
+        "verify",
+        r,
+        "--blob",
+        b,
+        "--method",
+        "1",
+        "--error-model",
+        "simplified",
+    ]);
+    assert_eq!(code, 1, "{out}");
+    assert!(err.contains("--error-model applies to method 2"), "{err}");
+    let (code, _, err) = cli(&["verify", r, "--blob", b, "--error-model", "simplified"]);
+    assert_eq!(code, 1, "the default method is 1: {err}");
+    let j = cli_json(&[
+        "verify",
+        r,
+        "--blob",
+        b,
+        "--method",
+        "2",
+        "--error-model",
+        "simplified",
+        "--json",
+    ]);
+    assert_eq!(j["method"], "2");
 
     // corrupt one byte: inspect and verify refuse with the reason
     let mut bad = bytes.clone();
@@ -102,5 +135,4 @@ fn fit_inspect_verify_and_never_overwrite() {
     ]);
     assert_eq!(code, 0, "{err}");
     assert_ne!(std::fs::read(&blob).unwrap(), bytes);
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,5 +1,6 @@
 //! The main job: its outputs agree with each other, the report's plots hold the data they
 //! claim, and a unit outside every fitted family is reported as such.
+use host_fit::analysis::Compensation;
 use serde_json::Value;
 use tests::cli;
 
@@ -34,8 +35,8 @@ fn at(rows: &[(String, String, f64, f64)], model: &str, method: &str, t: f64) ->
 /// those numbers.
 #[test]
 fn demo_outputs_agree_with_each_other_and_the_report_holds_its_data() {
-    let dir = std::env::temp_dir().join(format!("hf-demo-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("demo");
     let d = dir.to_str().unwrap();
     let (code, out, err) = cli(&["demo", "--out", d]);
     assert_eq!(code, 0, "{err}");
@@ -106,7 +107,6 @@ fn demo_outputs_agree_with_each_other_and_the_report_holds_its_data() {
         &std::fs::read_to_string(dir.join("report.html")).unwrap(),
         &r,
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A unit whose truth lies outside every fitted family is not claimed to be within
@@ -147,7 +147,7 @@ fn a_unit_outside_every_fitted_family_is_not_claimed_within_acceptance() {
     let at_t = |t: f64| -> Vec<&host_fit::analysis::SummaryRow> {
         oc.rows
             .iter()
-            .filter(|r| r.method != "none" && (r.temp_c - t).abs() < 2.0)
+            .filter(|r| r.method != Compensation::None && (r.temp_c - t).abs() < 2.0)
             .collect()
     };
     println!("{}", host_fit::analysis::table(&oc.rows));
@@ -158,7 +158,7 @@ fn a_unit_outside_every_fitted_family_is_not_claimed_within_acceptance() {
             r.max_abs_dg_mg > 0.3,
             "{} method {} claims {:.3} mg at {} C, inside a 1.6 mg bump",
             r.model,
-            r.method,
+            r.method.name(),
             r.max_abs_dg_mg,
             r.temp_c
         );
@@ -248,8 +248,8 @@ fn check_report(html: &str, rows: &[(String, String, f64, f64)]) {
 
 #[test]
 fn report_command_on_any_recording() {
-    let dir = std::env::temp_dir().join(format!("hf-report-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let case = host_fit::blind::Case::catalogue(vec![], 1.0, 2);
     let sim = host_fit::simulate::simulate(&host_fit::blind::configure(&case), |_| {}).unwrap();
     let rec = dir.join("rec.csv");
@@ -287,5 +287,4 @@ fn report_command_on_any_recording() {
     ]);
     assert_eq!(code, 1);
     assert!(err.contains("--force"));
-    std::fs::remove_dir_all(&dir).unwrap();
 }

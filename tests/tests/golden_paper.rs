@@ -22,10 +22,13 @@ fn temp_fit_reproduces_table3_within_1e_3_relative() {
     );
     let (worst, line) = tests::figures::golden_table3();
     println!("{line}");
+    tests::readme::same("golden", &line);
     assert!(line.ends_with("over 24 coefficients"), "{line}");
     assert!(worst < 1e-3, "{line}");
 }
 
+/// Cramer's solution of (11): `c(T) = c(T0) + a1 dT + a2 dT^2` through three temperatures
+/// passes through every row of the table, for every one of the 12 coefficients.
 #[test]
 fn poly_order_2_through_three_temperatures_interpolates_the_table() {
     let tables = repo().join("testdata/paper/paper-tables.csv");
@@ -38,19 +41,31 @@ fn poly_order_2_through_three_temperatures_interpolates_the_table() {
         "2",
         "--json",
     ]);
-    // Cramer's solution of (11): c(T) = c(T0) + a1 dT + a2 dT^2 passes through all rows.
     let text = std::fs::read_to_string(&tables).unwrap();
-    for line in text
-        .lines()
-        .filter(|l| l.starts_with('-') || l.starts_with('7'))
-    {
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut checked = 0;
+    for line in lines {
         let f: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
         let dt = f[0] - 20.0;
-        let c0 = j["at_t0"]["u0x"].as_f64().unwrap();
-        let a = j["coefficients"]["alpha_x"].as_array().unwrap();
-        let v = c0 + a[0].as_f64().unwrap() * dt + a[1].as_f64().unwrap() * dt * dt;
-        assert!((v - f[10]).abs() < 1e-12, "{v} vs {}", f[10]);
+        for (col, name) in header.iter().enumerate().skip(1) {
+            // the terms are named as the coefficients, offsets as the paper's alpha
+            let term = name
+                .strip_prefix("u0")
+                .map_or(name.to_string(), |a| format!("alpha_{a}"));
+            let c0 = j["at_t0"][name].as_f64().unwrap();
+            let a = j["coefficients"][&term].as_array().unwrap();
+            let v = c0 + a[0].as_f64().unwrap() * dt + a[1].as_f64().unwrap() * dt * dt;
+            assert!(
+                (v - f[col]).abs() < 1e-12,
+                "{name} at {} C: {v} vs {}",
+                f[0],
+                f[col]
+            );
+            checked += 1;
+        }
     }
+    assert_eq!(checked, 3 * 12, "three temperatures, 12 coefficients");
 }
 
 #[test]

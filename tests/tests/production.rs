@@ -1,22 +1,35 @@
 //! Production calibration end to end: the data-chosen model against the plain
 //! least-squares fit on twins it was not tuned to, the predicted error's coverage,
 //! acceptance and its exit codes, unknown orientations, dwell-averaged recordings.
-use tests::{cli_json, figures};
+use tests::readme::same;
+use tests::{cli_json, figures, s};
 
+/// The default fit is never worse than the plain least-squares cubic by more than the
+/// noise of a verification dwell's mean can make a worst |dg| differ (twice its 1-sigma:
+/// the in-dwell noise over the root of the dwell's samples, from the fit's own JSON).
 #[test]
-fn default_fit_is_never_worse_than_the_plain_least_squares_cubic() {
+fn default_fit_is_never_worse_than_the_plain_least_squares_cubic_beyond_dwell_noise() {
     let (rows, text) = figures::model_choice();
     println!("{text}");
-    for (name, model, default, stat3, _joint3, plain) in &rows {
-        // "never worse": within the noise of a dwell mean (about 0.005 mg here)
+    same("model-choice", &text);
+    for r in &rows {
+        let (name, model, plain) = (&r.name, &r.model, r.plain);
+        let noise = 2.0 * r.dwell_noise_mg;
         assert!(
-            *default <= plain * 1.1 + 0.01,
-            "{name}: default ({model}) {default:.4} mg, plain cubic {plain:.4} mg"
+            noise > 0.0 && noise < 0.1,
+            "{name}: a dwell's noise of {noise:.4} mg"
         );
-        // the static route with the same cubic is the plain fit (an even-order term aside)
         assert!(
-            (stat3 - plain).abs() <= 0.1 * plain + 0.01,
-            "{name}: static poly3 {stat3:.4} mg, plain cubic {plain:.4} mg"
+            r.default <= plain + noise,
+            "{name}: default ({model}) {:.4} mg, plain cubic {plain:.4} mg, dwell noise {noise:.4} mg",
+            r.default
+        );
+        // the static route with the same cubic is the plain fit but for its even-order
+        // term (the plain fit has none): within 5% or the dwell noise
+        assert!(
+            (r.static_cubic - plain).abs() <= 0.05 * plain + noise,
+            "{name}: static poly3 {:.4} mg, plain cubic {plain:.4} mg",
+            r.static_cubic
         );
     }
 }
@@ -25,6 +38,7 @@ fn default_fit_is_never_worse_than_the_plain_least_squares_cubic() {
 fn the_predicted_error_covers_the_held_out_error_at_about_its_rate() {
     let (rows, text) = figures::coverage();
     println!("{text}");
+    same("coverage", &text);
     // the twins whose truth the chosen family holds and that settle at their stops; the
     // others (a truth between the stops no family follows, a recording never in
     // equilibrium) are where the covariance cannot know the model's error, and the
@@ -51,6 +65,7 @@ fn the_predicted_error_covers_the_held_out_error_at_about_its_rate() {
 fn unknown_orientations_on_the_wrist_recording_beat_ggir_on_held_out_dwells() {
     let (rms, model, line) = figures::ggir_wrist();
     println!("{line}");
+    same("ggir-wrist", &line);
     assert!(rms < 2.92, "{line}");
     assert!(
         model.starts_with("poly") || model.starts_with("pwl"),
@@ -64,6 +79,7 @@ fn unknown_orientations_on_the_wrist_recording_beat_ggir_on_held_out_dwells() {
 fn one_temperature_gives_the_twelve_coefficients_and_says_no_temperature_model() {
     let (j, text) = figures::imucal();
     println!("{text}");
+    same("imucal", &text);
     assert_eq!(j["model"], "poly0");
     assert!(j["no_temperature_model"]
         .as_str()
@@ -94,11 +110,11 @@ fn one_temperature_gives_the_twelve_coefficients_and_says_no_temperature_model()
     }
 }
 
-/// A temporary folder with the paper unit's recording (seed `seed`) in it.
-fn paper_recording(tag: &str, seed: u64) -> (std::path::PathBuf, std::path::PathBuf) {
-    let dir = std::env::temp_dir().join(format!("hf-prod-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+/// A temporary folder (removed when the test drops it, passed or failed) with the paper
+/// unit's recording (seed `seed`) in it.
+fn paper_recording(seed: u64) -> (tempfile::TempDir, std::path::PathBuf) {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let cfg = host_fit::simulate::SimConfig {
         seed,
         ..Default::default()
@@ -106,11 +122,7 @@ fn paper_recording(tag: &str, seed: u64) -> (std::path::PathBuf, std::path::Path
     let sim = host_fit::simulate::simulate(&cfg, |_| {}).unwrap();
     let rec = dir.join("rec.csv");
     std::fs::write(&rec, sim.csv).unwrap();
-    (dir, rec)
-}
-
-fn s(p: &std::path::Path) -> &str {
-    p.to_str().unwrap()
+    (tmp, rec)
 }
 
 /// verify: pass exits 0, fail exits 3 with the reason, a bad specification or another
@@ -118,7 +130,8 @@ fn s(p: &std::path::Path) -> &str {
 #[test]
 fn verify_judges_acceptance_with_its_exit_codes_and_refuses_another_units_blob() {
     use tests::cli;
-    let (dir, rec) = paper_recording("verify", 11);
+    let (tmp, rec) = paper_recording(11);
+    let dir = tmp.path();
     let good = dir.join("good.blob");
     let (code, _, err) = cli(&["fit", s(&rec), "--out", s(&good)]);
     assert_eq!(code, 0, "{err}");
@@ -183,7 +196,6 @@ fn verify_judges_acceptance_with_its_exit_codes_and_refuses_another_units_blob()
     let (code, _, err) = cli(&["verify", s(&other), "--blob", s(&good), "--force"]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("warning") && err.contains("OTHER-7"), "{err}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// An option that does not apply to the model is an error, never ignored; the data's
@@ -191,7 +203,8 @@ fn verify_judges_acceptance_with_its_exit_codes_and_refuses_another_units_blob()
 #[test]
 fn options_that_do_not_apply_are_errors() {
     use tests::cli;
-    let (dir, rec) = paper_recording("options", 12);
+    let (tmp, rec) = paper_recording(12);
+    let dir = tmp.path();
     let b = dir.join("u.blob");
     for (args, says) in [
         (vec!["--model", "pwl", "--order", "3"], "--order"),
@@ -242,14 +255,14 @@ fn options_that_do_not_apply_are_errors() {
     let (code, _, err) = cli(&["temp-fit", s(&table), "--model", "pwl", "--order", "2"]);
     assert_eq!(code, 1);
     assert!(err.contains("--order"), "{err}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The default fit says what it chose and why, with the predicted error against
 /// temperature over the valid range, and what the equilibrium rule left out.
 #[test]
 fn the_default_fit_states_its_choice_and_its_predicted_error() {
-    let (dir, rec) = paper_recording("states", 13);
+    let (tmp, rec) = paper_recording(13);
+    let dir = tmp.path();
     let b = dir.join("u.blob");
     let j = cli_json(&["fit", s(&rec), "--out", s(&b), "--json"]);
     let sel = &j["chosen_by"];
@@ -301,7 +314,6 @@ fn the_default_fit_states_its_choice_and_its_predicted_error() {
     assert!((lag2 / lag - 2.0).abs() < 1e-9, "{lag} {lag2}");
     let ex = &j["excluded_not_in_equilibrium"];
     assert_eq!(ex["dwells"], 5, "the five rests through the ramps: {ex}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Unit names of any length up to the blob format's limit (MAX_SERIAL_LEN bytes of
@@ -311,7 +323,8 @@ fn the_default_fit_states_its_choice_and_its_predicted_error() {
 fn serials_up_to_the_blob_limit_and_a_clear_refusal_beyond() {
     use firmware_core::blob::MAX_SERIAL_LEN;
     use tests::cli;
-    let (dir, rec) = paper_recording("serial", 14);
+    let (tmp, rec) = paper_recording(14);
+    let dir = tmp.path();
     let text = std::fs::read_to_string(&rec).unwrap();
     let b = dir.join("u.blob");
     // exactly the limit fits (with the CATS tag's kind of characters), one more does not
@@ -378,7 +391,6 @@ fn serials_up_to_the_blob_limit_and_a_clear_refusal_beyond() {
         err.contains("printable ASCII") && err.contains("--serial"),
         "{err}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// inspect shows every in-flight term of a blob, in text and JSON, and says when there
@@ -388,8 +400,8 @@ fn inspect_shows_every_in_flight_term() {
     use firmware_core::blob::example_blob;
     use firmware_core::temperature::Physics;
     use tests::cli;
-    let dir = std::env::temp_dir().join(format!("hf-inspect-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let write = |b: &firmware_core::blob::Blob, name: &str| {
         let mut buf = [0u8; firmware_core::blob::MAX_BLOB_LEN];
         let n = b.encode(&mut buf).unwrap();
@@ -459,7 +471,6 @@ fn inspect_shows_every_in_flight_term() {
         text.contains("2.1000e-4") && text.contains("-4.2000e-4"),
         "{text}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Poses of unknown orientation mixed with known ones: their directions are
@@ -498,9 +509,8 @@ fn known_and_unknown_poses_mix_in_one_recording() {
     pos.extend(extra.iter().map(|(n, v)| (n.as_str(), *v)));
     pos.extend(pp);
     let csv = synthetic_csv(&[-20.0, 20.0, 60.0], &truth, &pos, 30, 1e-5, 0.0, 21);
-    let dir = std::env::temp_dir().join(format!("hf-mixed-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let rec = dir.join("rec.csv");
     std::fs::write(&rec, csv).unwrap();
     let positions = dir.join("pos.csv");
@@ -571,7 +581,6 @@ fn known_and_unknown_poses_mix_in_one_recording() {
     ]);
     assert_eq!(code, 1);
     assert!(err.contains("pos.csv:16") && err.contains("`fy`"), "{err}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A dwell-averaged recording (one row per position and temperature, made here by
@@ -583,7 +592,8 @@ fn dwell_averaged_recordings_work_and_say_where_their_noise_comes_from() {
     use host_fit::data::positions::Positions;
     use host_fit::data::recording::Recording;
     use tests::cli;
-    let (dir, rec) = paper_recording("averaged", 15);
+    let (tmp, rec) = paper_recording(15);
+    let dir = tmp.path();
     let full = Recording::read(&rec, Positions::default()).unwrap();
     let mut text =
         String::from("# unit=PAPER-UNIT\n# t0_c=20\nt_s,position,temp_c,ux_v,uy_v,uz_v\n");
@@ -631,10 +641,10 @@ fn dwell_averaged_recordings_work_and_say_where_their_noise_comes_from() {
         "{}",
         j["noise_source"]
     );
-    assert!(j["predicted_error"]["noise_source"]
-        .as_str()
-        .unwrap()
-        .contains("residual scatter"));
+    assert!(
+        j["predicted_error"]["noise_source"].is_null(),
+        "stated once: {j}"
+    );
     let sig = j["predicted_error"]["points"][0]["dg_1sigma_mg"]
         .as_f64()
         .unwrap();
@@ -645,7 +655,6 @@ fn dwell_averaged_recordings_work_and_say_where_their_noise_comes_from() {
         (w_avg - w_full).abs() < 0.005,
         "averaged {w_avg:.4} mg, full {w_full:.4} mg"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `--unknown-orientations` treats a positions file's vectors as unknown: the wrist
@@ -656,8 +665,8 @@ fn the_unknown_orientations_flag_forgets_the_files_vectors() {
     use tests::cli;
     let real = tests::repo().join("../shared/real/ggir-wrist");
     let (rec, pos) = (real.join("recording.csv"), real.join("positions.csv"));
-    let dir = std::env::temp_dir().join(format!("hf-flag-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let b = dir.join("g.blob");
     let run = |flag: bool| {
         let mut a = vec![
@@ -689,7 +698,6 @@ fn the_unknown_orientations_flag_forgets_the_files_vectors() {
     for c in ["kxy", "kxz", "kyz"] {
         assert_eq!(estimated["temperature_model"]["at_t0"][c], 0.0, "{c}");
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Where the sensing elements lag the temperature sensor (300 s), the windows taken
@@ -700,11 +708,11 @@ fn ramps_do_not_bias_the_static_default_when_the_unit_lags() {
     let mut cfg = host_fit::simulate::SimConfig::default();
     cfg.effects.thermal_lag = Some(host_fit::simulate::PerAxis { value: [300.0; 3] });
     let (csv, _) = tests::twins::recording("lag", &cfg);
-    let dir = std::env::temp_dir().join(format!("hf-lag-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let p = dir.join("rec.csv");
     std::fs::write(&p, csv).unwrap();
-    let run = |args: &[&str]| figures::fit_verify(&dir, &p, args).1;
+    let run = |args: &[&str]| figures::fit_verify(dir, &p, args).worst_mg;
     let default = run(&[]);
     let joint4 = run(&["--model", "poly", "--order", "4", "--route", "joint"]);
     let pwl = run(&["--model", "pwl"]);
@@ -720,5 +728,4 @@ fn ramps_do_not_bias_the_static_default_when_the_unit_lags() {
         pwl < 0.7 * pwl_joint,
         "pwl {pwl:.4} vs joint pwl {pwl_joint:.4}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -7,7 +7,7 @@
 //! (nothing cut). The plots' structure and their data are checked on the page's source
 //! (`reports::check_plots`: titles, axis labels with units, a legend entry per series,
 //! markers and lines through the embedded data).
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -36,7 +36,7 @@ fn chromium() -> &'static str {
 /// Run headless Chromium on `page` with `args`; its stdout. Killed after two minutes.
 fn run_chromium(page: &Path, args: &[String]) -> Vec<u8> {
     let _one = BROWSER.lock().unwrap_or_else(|e| e.into_inner());
-    let profile = tempdir("chromium-profile");
+    let profile = tempdir();
     let mut child = Command::new(chromium())
         .args([
             "--headless",
@@ -49,7 +49,7 @@ fn run_chromium(page: &Path, args: &[String]) -> Vec<u8> {
             "--disable-sync",
             "--hide-scrollbars",
         ])
-        .arg(format!("--user-data-dir={}", profile.display()))
+        .arg(format!("--user-data-dir={}", profile.path().display()))
         .args(args)
         .arg(format!("file://{}", page.display()))
         .stdout(Stdio::piped())
@@ -74,19 +74,12 @@ fn run_chromium(page: &Path, args: &[String]) -> Vec<u8> {
         }
         std::thread::sleep(Duration::from_millis(100));
     }
-    let _ = std::fs::remove_dir_all(&profile);
     reader.join().unwrap()
 }
 
-fn tempdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "hf-browser-{}-{name}-{:?}",
-        std::process::id(),
-        std::thread::current().id()
-    ));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A folder of the test's own, removed when the test drops it (passed or failed).
+fn tempdir() -> tempfile::TempDir {
+    tempfile::tempdir().unwrap()
 }
 
 /// Measures the page as laid out and appends the result, as JSON, in `#layout-check`.
@@ -226,10 +219,11 @@ fn check_in_browser(name: &str, report: &Path) {
     let html = std::fs::read_to_string(report).unwrap();
     let figures = reports::check_plots(&html);
     assert!(!figures.is_empty(), "{name}: no plots");
-    let dir = tempdir(name);
+    let tmp = tempdir();
+    let dir = tmp.path();
     let mut height = 0;
     for width in WIDTHS {
-        let l = layout(&html, width, &dir);
+        let l = layout(&html, width, dir);
         let list = |k: &str| l[k].as_array().unwrap().clone();
         assert_eq!(l["viewport"], width, "{name}");
         assert!(
@@ -252,7 +246,7 @@ fn check_in_browser(name: &str, report: &Path) {
         );
         if width == SHOT_WIDTH {
             height = l["height"].as_u64().unwrap() as u32;
-            let shot = screenshot(report, height.min(30_000), &dir);
+            let shot = screenshot(report, height.min(30_000), dir);
             check_shot(name, &shot, &list("figures"));
         }
     }
@@ -261,7 +255,6 @@ fn check_in_browser(name: &str, report: &Path) {
         figures.len(),
         html.len() / 1024
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The screenshot shows the page (not blank), in colour, every figure drawn, and white
@@ -298,17 +291,19 @@ fn check_shot(name: &str, s: &Shot, figures: &[serde_json::Value]) {
 
 #[test]
 fn the_demo_report_in_a_browser() {
-    let dir = tempdir("demo-out");
+    let tmp = tempdir();
+    let dir = tmp.path();
     let (code, _, err) = cli(&["demo", "--out", dir.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     check_in_browser("demo report", &dir.join("report.html"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn a_diagnosis_report_with_findings_in_a_browser() {
-    let dir = tempdir("diagnosis");
-    let case = host_fit::blind::Case::catalogue(vec!["temp_rate"], 1.0, 3);
+    let tmp = tempdir();
+    let dir = tmp.path();
+    let case =
+        host_fit::blind::Case::catalogue(vec![host_fit::diagnose::EffectId::TempRate], 1.0, 3);
     let sim = host_fit::simulate::simulate(&host_fit::blind::configure(&case), |_| {}).unwrap();
     let rec = dir.join("rec.csv");
     std::fs::write(&rec, sim.csv).unwrap();
@@ -322,7 +317,6 @@ fn a_diagnosis_report_with_findings_in_a_browser() {
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("finding: temp_rate"), "{out}");
     check_in_browser("diagnosis report (simulated, temp_rate)", &report);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The wrist recording (11 k samples over 84 h, 1050 poses): its report stays small.
@@ -336,7 +330,8 @@ fn the_wrist_recordings_diagnosis_report_in_a_browser() {
         );
         return;
     }
-    let dir = tempdir("wrist");
+    let tmp = tempdir();
+    let dir = tmp.path();
     let report = dir.join("wrist.html");
     let (code, _, err) = cli(&[
         "diagnose",
@@ -351,7 +346,6 @@ fn the_wrist_recordings_diagnosis_report_in_a_browser() {
     let size = std::fs::metadata(&report).unwrap().len();
     assert!(size < 600_000, "the wrist report is {size} bytes");
     check_in_browser("diagnosis report (ggir-wrist)", &report);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The trend report of 150 units in 6 lots (written through the store's own API; the x
@@ -359,7 +353,8 @@ fn the_wrist_recordings_diagnosis_report_in_a_browser() {
 #[test]
 fn the_trend_report_in_a_browser() {
     use host_fit::store::record::{AtT0, Command, Record};
-    let dir = tempdir("trend");
+    let tmp = tempdir();
+    let dir = tmp.path();
     let db = dir.join("line.sqlite");
     let mut store = host_fit::store::Store::open(&db).unwrap();
     let mut rng = host_fit::rng::Rng::new(4);
@@ -367,7 +362,7 @@ fn the_trend_report_in_a_browser() {
     for lot in 1..=6 {
         for u in 0..25 {
             let serial = format!("L{lot}-{u:02}");
-            let input = PathBuf::from(format!("L{lot}/{serial}.csv"));
+            let input = std::path::PathBuf::from(format!("L{lot}/{serial}.csv"));
             let mut r = Record::new(Command::Batch, None, &serial, &input).unwrap();
             let mut values = host_fit::simulate::PAPER_UNIT[2];
             for v in values.iter_mut() {
@@ -405,5 +400,4 @@ fn the_trend_report_in_a_browser() {
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("150 units"), "{out}");
     check_in_browser("trend report", &report);
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -89,47 +89,19 @@ fn worst(v: &Value) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// `fit`, `verify` and `diagnose` with `--db`: one record each, holding what each made.
-#[test]
-fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
-    let root = tempdir("commands");
-    let rec = root.join("unit.csv");
-    let (code, _, err) = cli(&["simulate", "--seed", "3", "--out", s(&rec)]);
-    assert_eq!(code, 0, "{err}");
-    let db = root.join("line.sqlite");
-    let (fb, db_s) = (root.join("fit.blob"), s(&db));
-    let fit = cli_json(&[
-        "fit",
-        s(&rec),
-        "--out",
-        s(&fb),
-        "--db",
-        db_s,
-        "--lot",
-        "L7",
-        "--json",
-    ]);
-    let (code, out, err) = cli(&["verify", s(&rec), "--blob", s(&fb), "--db", db_s, "--json"]);
-    assert!(code == 0 || code == 3, "{err}");
-    let ver: Value = serde_json::from_str(&out).unwrap();
-    let dblob = root.join("diag.blob");
-    let diag = cli_json(&[
-        "diagnose",
-        s(&rec),
-        "--out",
-        s(&dblob),
-        "--db",
-        db_s,
-        "--json",
-    ]);
-
-    let all = records(&db);
+/// What `fit`, `verify` and `diagnose` recorded holds what they made and printed.
+fn assert_records_hold_what_was_made(
+    all: &[Record],
+    rec: &Path,
+    (fb, dblob): (&Path, &Path),
+    (fit, ver, diag): (&Value, &Value, &Value),
+) {
     let cmds: Vec<Command> = all.iter().map(|r| r.command).collect();
     assert_eq!(cmds, [Command::Fit, Command::Verify, Command::Diagnose]);
-    let sha = sha256sum(&rec);
-    for r in &all {
+    let sha = sha256sum(rec);
+    for r in all {
         assert_eq!(r.serial, "PAPER-UNIT");
-        assert_eq!(r.input, s(&rec));
+        assert_eq!(r.input, s(rec));
         assert_eq!(r.input_sha256.as_deref(), Some(sha.as_str()));
         assert_eq!(r.version, env!("CARGO_PKG_VERSION"));
         assert!(
@@ -145,14 +117,14 @@ fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
     // fit: its options, model, blob, coefficients at T0 (the blob's f32 row dT^0)
     assert_eq!(f.lot.as_deref(), Some("L7"));
     assert_eq!(f.options["lot"], "L7");
-    assert_eq!(f.options["out"], s(&fb));
+    assert_eq!(f.options["out"], s(fb));
     assert_eq!(f.options["route"], "static");
     assert_eq!(f.options["json"], true);
     assert_eq!(f.model.as_deref(), fit["model"].as_str());
-    assert_eq!(f.blob.as_deref(), Some(&std::fs::read(&fb).unwrap()[..]));
+    assert_eq!(f.blob.as_deref(), Some(&std::fs::read(fb).unwrap()[..]));
     let at = f.at_t0.unwrap();
     assert_eq!(at.t0_c, fit["t0_c"].as_f64().unwrap());
-    let insp = cli_json(&["inspect", s(&fb), "--json"]);
+    let insp = cli_json(&["inspect", s(fb), "--json"]);
     // the table's row at T0: a polynomial's dT^0, or a piecewise-linear model's 20 C
     let row = insp["rows"]
         .as_array()
@@ -175,13 +147,19 @@ fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
     let j = v.judged.as_ref().unwrap();
     assert_eq!(j.verdict, ver["acceptance"].as_str().unwrap());
     assert_eq!(j.reason, ver["reason"].as_str().unwrap());
-    close(v.worst_dg_mg.unwrap(), worst(&ver));
+    close(v.worst_dg_mg.unwrap(), worst(ver));
     assert!(v.at_t0.unwrap().sigma.is_none());
     // diagnose: the contract's verdict and findings, its blob
     assert_eq!(d.diagnosis_verdict.as_deref(), diag["verdict"].as_str());
     assert_eq!(d.findings.as_ref(), Some(&diag["findings"]));
-    assert_eq!(d.blob.as_deref(), Some(&std::fs::read(&dblob).unwrap()[..]));
+    assert_eq!(d.blob.as_deref(), Some(&std::fs::read(dblob).unwrap()[..]));
+}
 
+/// `history` lists the records oldest first, the latest calibration marked, and
+/// re-issues stored blobs bit for bit, never over a file without `--force`.
+fn assert_history_and_blobs(root: &Path, db: &Path, all: &[Record], (fb, dblob): (&Path, &Path)) {
+    let db_s = s(db);
+    let (f, d) = (&all[0], &all[2]);
     // history: oldest first, the diagnosis' blob is the latest calibration
     let h = cli_json(&["history", "PAPER-UNIT", "--db", db_s, "--json"]);
     let ids: Vec<i64> = h["records"]
@@ -219,7 +197,7 @@ fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
     let (code, out, err) = h(&["--blob", &run[..8], "--out", s(&again)]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains(&run), "{out}");
-    assert_eq!(std::fs::read(&again).unwrap(), std::fs::read(&fb).unwrap());
+    assert_eq!(std::fs::read(&again).unwrap(), std::fs::read(fb).unwrap());
     // never over a file without --force; with it, the diagnosis' blob
     let (code, _, err) = h(&["--blob", &d.run_id.to_string(), "--out", s(&again)]);
     assert_eq!(code, 1);
@@ -227,7 +205,7 @@ fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
         err.contains("--force") && err.contains("again.blob"),
         "{err}"
     );
-    assert_eq!(std::fs::read(&again).unwrap(), std::fs::read(&fb).unwrap());
+    assert_eq!(std::fs::read(&again).unwrap(), std::fs::read(fb).unwrap());
     let (code, _, err) = h(&[
         "--blob",
         &d.run_id.to_string(),
@@ -238,7 +216,7 @@ fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
     assert_eq!(code, 0, "{err}");
     assert_eq!(
         std::fs::read(&again).unwrap(),
-        std::fs::read(&dblob).unwrap()
+        std::fs::read(dblob).unwrap()
     );
     // a run of another unit, a prefix too short
     let (code, _, err) = cli(&[
@@ -256,6 +234,46 @@ fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
     let (code, _, err) = h(&["--blob", &run[..4], "--out", s(&root.join("x.blob"))]);
     assert_eq!(code, 1);
     assert!(err.contains("6 or more"), "{err}");
+}
+
+/// `fit`, `verify` and `diagnose` with `--db`: one record each, holding what each made.
+#[test]
+fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
+    let root = tempdir("commands");
+    let rec = root.join("unit.csv");
+    let (code, _, err) = cli(&["simulate", "--seed", "3", "--out", s(&rec)]);
+    assert_eq!(code, 0, "{err}");
+    let db = root.join("line.sqlite");
+    let (fb, db_s) = (root.join("fit.blob"), s(&db));
+    let fit = cli_json(&[
+        "fit",
+        s(&rec),
+        "--out",
+        s(&fb),
+        "--db",
+        db_s,
+        "--lot",
+        "L7",
+        "--json",
+    ]);
+    let (code, out, err) = cli(&["verify", s(&rec), "--blob", s(&fb), "--db", db_s, "--json"]);
+    assert!(code == 0 || code == 3, "{err}");
+    let ver: Value = serde_json::from_str(&out).unwrap();
+    let dblob = root.join("diag.blob");
+    let diag = cli_json(&[
+        "diagnose",
+        s(&rec),
+        "--out",
+        s(&dblob),
+        "--db",
+        db_s,
+        "--json",
+    ]);
+
+    let all = records(&db);
+    assert_records_hold_what_was_made(&all, &rec, (&fb, &dblob), (&fit, &ver, &diag));
+
+    assert_history_and_blobs(&root, &db, &all, (&fb, &dblob));
 
     // calibrated again: every record stays, the new fit is the latest
     let fb2 = root.join("fit2.blob");
@@ -314,6 +332,46 @@ fn flags(t: &Value, q: &str) -> Vec<(usize, Vec<u64>)> {
         .collect()
 }
 
+/// A batch without `--db` records into its output folder, each unit as its own files say.
+fn assert_default_store_matches_the_files(root: &Path, dir: &Path, n: usize) {
+    let own = root.join("out-default");
+    let (code, _, err) = cli(&["batch", s(dir), "--out", s(&own), "--jobs", "2"]);
+    assert!(code == 0 || code == 3, "{err}");
+    let recs = records(&own.join("records.sqlite"));
+    assert_eq!(recs.len(), n);
+    let summary = std::fs::read_to_string(own.join("summary.csv")).unwrap();
+    let mut rd = csv::Reader::from_reader(summary.as_bytes());
+    for row in rd.records() {
+        let row = row.unwrap();
+        let (unit, file, acc, reason) = (&row[0], &row[1], &row[2], &row[3]);
+        let r = recs
+            .iter()
+            .find(|r| r.serial == unit)
+            .unwrap_or_else(|| panic!("{unit}"));
+        assert_eq!(r.command, Command::Batch);
+        assert_eq!(r.input, file);
+        assert_eq!(r.lot.as_deref(), Some("L1"));
+        assert_eq!(
+            r.input_sha256.as_deref(),
+            Some(sha256sum(Path::new(file)).as_str())
+        );
+        let j = r.judged.as_ref().unwrap();
+        assert_eq!((j.verdict.as_str(), j.reason.as_str()), (acc, reason));
+        let blob = own.join(format!("{unit}.blob"));
+        assert_eq!(r.blob.as_deref(), Some(&std::fs::read(&blob).unwrap()[..]));
+        let uj: Value = serde_json::from_str(
+            &std::fs::read_to_string(own.join(format!("{unit}.json"))).unwrap(),
+        )
+        .unwrap();
+        close(
+            r.worst_dg_mg.unwrap(),
+            uj["max_abs_dg_mg_method1"].as_f64().unwrap(),
+        );
+        assert_eq!(r.model.as_deref(), uj["model"].as_str());
+        assert!(r.at_t0.unwrap().sigma.is_some());
+    }
+}
+
 /// Lots made by the twin, batched into one store (one job: units in file order): the
 /// batch records every unit as its own files say; from lot 5 on the units' x offset is
 /// 3 uV higher (2.7 times the lot's own spread of u0x): `trend` flags at least half the
@@ -352,43 +410,7 @@ fn batches_record_every_unit_and_trend_flags_a_shift_across_lots() {
         );
         made += n;
         if l == 1 {
-            // without --db a batch records into its output folder: its own files agree
-            let own = root.join("out-default");
-            let (code, _, err) = cli(&["batch", s(&dir), "--out", s(&own), "--jobs", "2"]);
-            assert!(code == 0 || code == 3, "{err}");
-            let recs = records(&own.join("records.sqlite"));
-            assert_eq!(recs.len(), n);
-            let summary = std::fs::read_to_string(own.join("summary.csv")).unwrap();
-            let mut rd = csv::Reader::from_reader(summary.as_bytes());
-            for row in rd.records() {
-                let row = row.unwrap();
-                let (unit, file, acc, reason) = (&row[0], &row[1], &row[2], &row[3]);
-                let r = recs
-                    .iter()
-                    .find(|r| r.serial == unit)
-                    .unwrap_or_else(|| panic!("{unit}"));
-                assert_eq!(r.command, Command::Batch);
-                assert_eq!(r.input, file);
-                assert_eq!(r.lot.as_deref(), Some("L1"));
-                assert_eq!(
-                    r.input_sha256.as_deref(),
-                    Some(sha256sum(Path::new(file)).as_str())
-                );
-                let j = r.judged.as_ref().unwrap();
-                assert_eq!((j.verdict.as_str(), j.reason.as_str()), (acc, reason));
-                let blob = own.join(format!("{unit}.blob"));
-                assert_eq!(r.blob.as_deref(), Some(&std::fs::read(&blob).unwrap()[..]));
-                let uj: Value = serde_json::from_str(
-                    &std::fs::read_to_string(own.join(format!("{unit}.json"))).unwrap(),
-                )
-                .unwrap();
-                close(
-                    r.worst_dg_mg.unwrap(),
-                    uj["max_abs_dg_mg_method1"].as_f64().unwrap(),
-                );
-                assert_eq!(r.model.as_deref(), uj["model"].as_str());
-                assert!(r.at_t0.unwrap().sigma.is_some());
-            }
+            assert_default_store_matches_the_files(&root, &dir, n);
         }
     }
     assert_eq!(records(&shared).len(), made);

@@ -1,45 +1,18 @@
 //! The blind suite's cases: what each tests, its name, and the test profile.
-use crate::diagnose::EFFECT_IDS;
-use crate::rng::Rng;
+use crate::blind::forms::{Class, Form};
+use crate::diagnose::EffectId;
 use crate::simulate::{SimConfig, Stop};
 
 /// Every catalogue effect the simulator conceals.
-pub const EFFECTS: [&str; 8] = EFFECT_IDS;
-
-/// What a case tests.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Class {
-    /// Catalogue effects in the catalogue's own form (and clean recordings).
-    Catalogue,
-    /// A catalogue effect in another physically plausible form.
-    OtherForm,
-    /// An effect outside the catalogue.
-    Outside,
-    /// A clean recording with a real-world nuisance.
-    Nuisance,
-}
-
-impl Class {
-    /// The class's name in reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Class::Catalogue => "catalogue effects, catalogue form",
-            Class::OtherForm => "catalogue effects, other forms",
-            Class::Outside => "effects outside the catalogue",
-            Class::Nuisance => "clean recordings with nuisances",
-        }
-    }
-}
+pub const EFFECTS: [EffectId; 8] = EffectId::ALL;
 
 /// One blind case.
 #[derive(Debug, Clone)]
 pub struct Case {
-    /// What it tests.
-    pub class: Class,
-    /// The form concealed (classes other than the catalogue's), a [`forms`] name.
-    pub form: &'static str,
-    /// The effects expected to be named (catalogue ids); empty = none.
-    pub effects: Vec<&'static str>,
+    /// The form concealed; None: the catalogue's own forms of [`Case::effects`].
+    pub form: Option<Form>,
+    /// The effects expected to be named; empty = none.
+    pub effects: Vec<EffectId>,
     /// Magnitude in units of the effect's nominal size (1 = clearly visible).
     pub scale: f64,
     /// Seed of the simulation and of the random axes/signs.
@@ -50,10 +23,9 @@ pub struct Case {
 
 impl Case {
     /// A catalogue case: `effects` in the catalogue's form.
-    pub fn catalogue(effects: Vec<&'static str>, scale: f64, seed: u64) -> Case {
+    pub fn catalogue(effects: Vec<EffectId>, scale: f64, seed: u64) -> Case {
         Case {
-            class: Class::Catalogue,
-            form: "",
+            form: None,
             effects,
             scale,
             seed,
@@ -61,14 +33,33 @@ impl Case {
         }
     }
 
+    /// A case of `form` at its nominal size.
+    pub fn of_form(form: Form, seed: u64) -> Case {
+        Case {
+            form: Some(form),
+            effects: form.expect().to_vec(),
+            scale: 1.0,
+            seed,
+            tp_only: false,
+        }
+    }
+
+    /// What it tests.
+    pub fn class(&self) -> Class {
+        self.form.map_or(Class::Catalogue, Form::class)
+    }
+
     /// The case's name in reports.
     pub fn name(&self) -> String {
-        let base = if !self.form.is_empty() {
-            self.form.to_string()
-        } else if self.effects.is_empty() {
-            "clean".to_string()
-        } else {
-            self.effects.join("+")
+        let base = match self.form {
+            Some(f) => f.name().to_string(),
+            None if self.effects.is_empty() => "clean".to_string(),
+            None => self
+                .effects
+                .iter()
+                .map(|e| e.as_str())
+                .collect::<Vec<_>>()
+                .join("+"),
         };
         base + if self.tp_only { " (TP only)" } else { "" }
     }
@@ -101,18 +92,4 @@ pub fn stops(temps: &[f64], positions: &[String]) -> Vec<Stop> {
             positions: Some(positions.to_vec()),
         })
         .collect()
-}
-
-/// Per-axis sizes: one or two axes, random signs, 0.7..1.3 of `size` times `scale`.
-pub fn axes3(rng: &mut Rng, scale: f64, size: f64) -> [f64; 3] {
-    // one or two axes, random signs, 0.7..1.3 of the size
-    let main = (rng.next_u64() % 3) as usize;
-    let mut v = [0.0; 3];
-    for (i, x) in v.iter_mut().enumerate() {
-        if i == main || rng.uniform() < 0.3 {
-            let s = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
-            *x = s * size * scale * rng.range(0.7, 1.3);
-        }
-    }
-    v
 }

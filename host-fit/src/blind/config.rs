@@ -1,7 +1,8 @@
 //! A blind case as a twin configuration: the catalogue's forms here, the others in
 //! [`crate::blind::forms`].
-use crate::blind::cases::{axes3, profile, Case, Class};
-use crate::blind::forms;
+use crate::blind::cases::{profile, Case};
+use crate::blind::forms::axes3;
+use crate::diagnose::EffectId;
 use crate::rng::Rng;
 use crate::simulate::{Curvature, Fixture, PerAxis, SimConfig, Warmup};
 
@@ -10,39 +11,39 @@ pub fn configure(case: &Case) -> SimConfig {
     let mut c = profile(case.tp_only);
     c.seed = case.seed;
     let mut rng = Rng::new(case.seed ^ 0xB11D);
-    if case.class != Class::Catalogue {
-        forms::apply(case, &mut c, &mut rng);
+    if let Some(form) = case.form {
+        form.apply(case.scale, &mut c, &mut rng);
         return c;
     }
     for e in &case.effects {
         let s = case.scale;
         match *e {
-            "thermal_lag" => {
+            EffectId::ThermalLag => {
                 c.effects.thermal_lag = Some(PerAxis {
                     value: [rng.range(300.0, 900.0); 3],
                 })
             }
-            "temp_rate" => {
+            EffectId::TempRate => {
                 c.effects.temp_rate = Some(PerAxis {
                     value: axes3(&mut rng, s, 0.02),
                 })
             }
-            "hysteresis" => {
+            EffectId::Hysteresis => {
                 c.effects.hysteresis = Some(PerAxis {
                     value: axes3(&mut rng, s, 1e-4),
                 })
             }
-            "nonlinearity_k2" => {
+            EffectId::NonlinearityK2 => {
                 c.effects.nonlinearity_k2 = Some(PerAxis {
                     value: axes3(&mut rng, s, 1e-4),
                 })
             }
-            "scale_asymmetry" => {
+            EffectId::ScaleAsymmetry => {
                 c.effects.scale_asymmetry = Some(PerAxis {
                     value: axes3(&mut rng, s, 2e-4),
                 })
             }
-            "fixture_error" => {
+            EffectId::FixtureError => {
                 let p = ["TP2", "TP3", "TP5", "PP1", "PP4"][(rng.next_u64() % 5) as usize];
                 c.effects.fixture_error = Some(Fixture {
                     position: p.into(),
@@ -52,20 +53,19 @@ pub fn configure(case: &Case) -> SimConfig {
                     ],
                 });
             }
-            "warmup_drift" => {
+            EffectId::WarmupDrift => {
                 c.effects.warmup_drift = Some(Warmup {
                     d_v: axes3(&mut rng, s, 2e-4),
                     tau_s: rng.range(600.0, 2400.0),
                 })
             }
-            "temp_curvature" => {
+            EffectId::TempCurvature => {
                 c.effects.temp_curvature = Some(Curvature {
                     u0_v: axes3(&mut rng, s, 1e-4),
                     k_rel: [0.0; 3],
                     period_c: 25.0,
                 })
             }
-            _ => {}
         }
     }
     c

@@ -1,128 +1,388 @@
 //! The blind suite's cases beyond the catalogue's own forms, written from physics (not
 //! from the diagnosis): other forms of each effect, effects outside the catalogue, and
-//! clean recordings with the nuisances real data has.
-use crate::blind::cases::{axes3, Case, Class};
+//! clean recordings with the nuisances real data has. Each class is its own enum, so
+//! every form is concealed by an exhaustive match: a form without physics cannot compile.
+use crate::diagnose::quality::NoteKind;
+use crate::diagnose::EffectId;
 use crate::rng::Rng;
-use crate::simulate::{
-    Bend, BiasStep, Fixture, Gradient, PerAxis, Periodic, SimConfig, Stop, Warmup,
-};
+use crate::simulate::{Bend, Fixture, Gradient, PerAxis, SimConfig, Stop, Warmup};
 
-/// One form.
-pub struct Form {
-    /// Its class.
-    pub class: Class,
-    /// Its name.
-    pub name: &'static str,
-    /// The catalogue effects a correct diagnosis names.
-    pub expect: &'static [&'static str],
-    /// The data-quality note a correct diagnosis raises (nuisances).
-    pub note: Option<&'static str>,
+/// What a case tests.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Class {
+    /// Catalogue effects in the catalogue's own form (and clean recordings).
+    Catalogue,
+    /// A catalogue effect in another physically plausible form.
+    OtherForm,
+    /// An effect outside the catalogue.
+    Outside,
+    /// A clean recording with a real-world nuisance.
+    Nuisance,
 }
 
-const fn form(
-    class: Class,
-    name: &'static str,
-    expect: &'static [&'static str],
-    note: Option<&'static str>,
-) -> Form {
-    Form {
-        class,
-        name,
-        expect,
-        note,
+impl Class {
+    /// The class's name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Class::Catalogue => "catalogue effects, catalogue form",
+            Class::OtherForm => "catalogue effects, other forms",
+            Class::Outside => "effects outside the catalogue",
+            Class::Nuisance => "clean recordings with nuisances",
+        }
     }
 }
 
-/// Every form of the suite.
-pub const FORMS: [Form; 22] = [
-    form(
-        Class::OtherForm,
-        "thermal_lag: two poles",
-        &["thermal_lag"],
-        None,
-    ),
-    form(
-        Class::OtherForm,
-        "thermal_lag: a time constant per axis",
-        &["thermal_lag"],
-        None,
-    ),
-    form(
-        Class::OtherForm,
-        "temp_rate: a thermal gradient",
-        &["temp_rate"],
-        None,
-    ),
-    form(
-        Class::OtherForm,
-        "hysteresis: cooled before the first change",
-        &["hysteresis"],
-        None,
-    ),
-    form(
-        Class::OtherForm,
-        "hysteresis: switching over 2 C",
-        &["hysteresis"],
-        None,
-    ),
-    form(
-        Class::OtherForm,
-        "hysteresis: of the scale factors",
-        &["hysteresis"],
-        None,
-    ),
-    form(
-        Class::OtherForm,
-        "warmup_drift: two time constants",
-        &["warmup_drift"],
-        None,
-    ),
-    form(
-        Class::OtherForm,
-        "warmup_drift: restarts after a power-off",
-        &["warmup_drift"],
-        None,
-    ),
-    form(
-        Class::OtherForm,
-        "temp_curvature: a local bend",
-        &["temp_curvature"],
-        None,
-    ),
-    form(
-        Class::OtherForm,
-        "fixture_error: two positions off",
-        &["fixture_error"],
-        None,
-    ),
-    form(Class::Outside, "a sudden bias shift", &[], None),
-    form(Class::Outside, "a random wander of the bias", &[], None),
-    form(Class::Outside, "a cubic response (K3)", &[], None),
-    form(Class::Outside, "a periodic disturbance", &[], None),
-    form(Class::Outside, "scale factors ageing", &[], None),
-    form(
-        Class::Nuisance,
-        "coloured voltage noise",
-        &[],
-        Some("coloured_noise"),
-    ),
-    form(Class::Nuisance, "spikes", &[], Some("spikes")),
-    form(Class::Nuisance, "logger dropouts", &[], Some("gaps")),
-    form(
-        Class::Nuisance,
-        "a sensor off the chamber",
-        &[],
-        Some("sensor_vs_chamber"),
-    ),
-    form(Class::Nuisance, "three heat-cool cycles", &[], None),
-    form(
-        Class::Nuisance,
-        "dwell means only",
-        &[],
-        Some("one_sample_per_dwell"),
-    ),
-    form(Class::Nuisance, "a noisy voltmeter", &[], None),
-];
+/// One form of the suite beyond the catalogue's own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Form {
+    /// A catalogue effect in another physically plausible form.
+    Other(OtherForm),
+    /// An effect outside the catalogue.
+    Outside(Outside),
+    /// A clean unit with a real-world nuisance.
+    Nuisance(Nuisance),
+}
+
+/// A catalogue effect in another form.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OtherForm {
+    /// thermal_lag through two cascaded poles.
+    LagTwoPoles,
+    /// thermal_lag with a time constant per axis.
+    LagPerAxis,
+    /// temp_rate as a thermal gradient across the unit.
+    RateGradient,
+    /// hysteresis, cooled before the first change.
+    HysteresisCooledFirst,
+    /// hysteresis switching gradually over 2 C.
+    HysteresisWide,
+    /// hysteresis of the scale factors.
+    HysteresisOfScale,
+    /// warmup_drift with two time constants.
+    WarmupTwoTimeConstants,
+    /// warmup_drift restarting after a power-off.
+    WarmupRestarts,
+    /// temp_curvature as one local bend.
+    CurvatureLocalBend,
+    /// fixture_error of two positions.
+    FixtureTwoPositions,
+}
+
+/// An effect outside the catalogue.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outside {
+    /// A step of the bias mid-test.
+    BiasStep,
+    /// A random walk of the bias.
+    BiasWander,
+    /// A cubic response.
+    CubicResponse,
+    /// A periodic disturbance.
+    Periodic,
+    /// Scale factors drifting with time.
+    ScaleAgeing,
+}
+
+/// A real-world nuisance on a clean unit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Nuisance {
+    /// Time-correlated voltage noise.
+    ColouredNoise,
+    /// Spikes in the samples.
+    Spikes,
+    /// The logger drops out twice.
+    Dropouts,
+    /// The temperature sensor is off the chamber.
+    SensorOffChamber,
+    /// Three heating-cooling cycles instead of the profile.
+    HeatCoolCycles,
+    /// One mean per dwell instead of samples.
+    DwellMeans,
+    /// A voltmeter five times noisier.
+    NoisyVoltmeter,
+}
+
+impl Form {
+    /// Every form of the suite, in the order of its report.
+    pub const ALL: [Form; 22] = [
+        Form::Other(OtherForm::LagTwoPoles),
+        Form::Other(OtherForm::LagPerAxis),
+        Form::Other(OtherForm::RateGradient),
+        Form::Other(OtherForm::HysteresisCooledFirst),
+        Form::Other(OtherForm::HysteresisWide),
+        Form::Other(OtherForm::HysteresisOfScale),
+        Form::Other(OtherForm::WarmupTwoTimeConstants),
+        Form::Other(OtherForm::WarmupRestarts),
+        Form::Other(OtherForm::CurvatureLocalBend),
+        Form::Other(OtherForm::FixtureTwoPositions),
+        Form::Outside(Outside::BiasStep),
+        Form::Outside(Outside::BiasWander),
+        Form::Outside(Outside::CubicResponse),
+        Form::Outside(Outside::Periodic),
+        Form::Outside(Outside::ScaleAgeing),
+        Form::Nuisance(Nuisance::ColouredNoise),
+        Form::Nuisance(Nuisance::Spikes),
+        Form::Nuisance(Nuisance::Dropouts),
+        Form::Nuisance(Nuisance::SensorOffChamber),
+        Form::Nuisance(Nuisance::HeatCoolCycles),
+        Form::Nuisance(Nuisance::DwellMeans),
+        Form::Nuisance(Nuisance::NoisyVoltmeter),
+    ];
+
+    /// Its class.
+    pub fn class(self) -> Class {
+        match self {
+            Form::Other(_) => Class::OtherForm,
+            Form::Outside(_) => Class::Outside,
+            Form::Nuisance(_) => Class::Nuisance,
+        }
+    }
+
+    /// Its name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Form::Other(f) => f.name(),
+            Form::Outside(f) => f.name(),
+            Form::Nuisance(f) => f.name(),
+        }
+    }
+
+    /// The catalogue effects a correct diagnosis names.
+    pub fn expect(self) -> &'static [EffectId] {
+        match self {
+            Form::Other(f) => f.expect(),
+            Form::Outside(_) | Form::Nuisance(_) => &[],
+        }
+    }
+
+    /// The data-quality note a correct diagnosis raises (nuisances).
+    pub fn note(self) -> Option<NoteKind> {
+        match self {
+            Form::Nuisance(f) => f.note(),
+            Form::Other(_) | Form::Outside(_) => None,
+        }
+    }
+
+    /// Conceal this form in `c` at magnitude `scale` (1 = the nominal size), its random
+    /// sizes, signs and axes drawn from `rng`.
+    pub fn apply(self, scale: f64, c: &mut SimConfig, rng: &mut Rng) {
+        match self {
+            Form::Other(f) => f.apply(scale, c, rng),
+            Form::Outside(f) => f.apply(scale, c, rng),
+            Form::Nuisance(f) => f.apply(c),
+        }
+    }
+}
+
+impl OtherForm {
+    fn name(self) -> &'static str {
+        match self {
+            OtherForm::LagTwoPoles => "thermal_lag: two poles",
+            OtherForm::LagPerAxis => "thermal_lag: a time constant per axis",
+            OtherForm::RateGradient => "temp_rate: a thermal gradient",
+            OtherForm::HysteresisCooledFirst => "hysteresis: cooled before the first change",
+            OtherForm::HysteresisWide => "hysteresis: switching over 2 C",
+            OtherForm::HysteresisOfScale => "hysteresis: of the scale factors",
+            OtherForm::WarmupTwoTimeConstants => "warmup_drift: two time constants",
+            OtherForm::WarmupRestarts => "warmup_drift: restarts after a power-off",
+            OtherForm::CurvatureLocalBend => "temp_curvature: a local bend",
+            OtherForm::FixtureTwoPositions => "fixture_error: two positions off",
+        }
+    }
+
+    fn expect(self) -> &'static [EffectId] {
+        match self {
+            OtherForm::LagTwoPoles | OtherForm::LagPerAxis => &[EffectId::ThermalLag],
+            OtherForm::RateGradient => &[EffectId::TempRate],
+            OtherForm::HysteresisCooledFirst
+            | OtherForm::HysteresisWide
+            | OtherForm::HysteresisOfScale => &[EffectId::Hysteresis],
+            OtherForm::WarmupTwoTimeConstants | OtherForm::WarmupRestarts => {
+                &[EffectId::WarmupDrift]
+            }
+            OtherForm::CurvatureLocalBend => &[EffectId::TempCurvature],
+            OtherForm::FixtureTwoPositions => &[EffectId::FixtureError],
+        }
+    }
+
+    fn apply(self, s: f64, c: &mut SimConfig, rng: &mut Rng) {
+        let e = &mut c.effects;
+        match self {
+            OtherForm::LagTwoPoles => {
+                e.thermal_lag = Some(PerAxis {
+                    value: [rng.range(200.0, 500.0); 3],
+                });
+                e.thermal_lag2 = Some(PerAxis {
+                    value: [rng.range(200.0, 500.0); 3],
+                });
+            }
+            OtherForm::LagPerAxis => {
+                let mut v = [300.0, 600.0, 900.0];
+                let k = (rng.next_u64() % 3) as usize;
+                v.rotate_left(k);
+                e.thermal_lag = Some(PerAxis { value: v });
+            }
+            OtherForm::RateGradient => {
+                let tau = rng.range(60.0, 300.0);
+                e.temp_gradient = Some(Gradient {
+                    value: axes3(rng, s, 0.02 / tau),
+                    tau_s: tau,
+                });
+            }
+            OtherForm::HysteresisCooledFirst => {
+                e.hysteresis = Some(PerAxis {
+                    value: axes3(rng, s, 1e-4),
+                });
+                e.hysteresis_initial = Some(-1.0);
+            }
+            OtherForm::HysteresisWide => {
+                e.hysteresis = Some(PerAxis {
+                    value: axes3(rng, s, 1e-4),
+                });
+                e.hysteresis_width_c = Some(2.0);
+            }
+            OtherForm::HysteresisOfScale => {
+                e.scale_hysteresis = Some(PerAxis {
+                    value: axes3(rng, s, 3e-4),
+                });
+            }
+            OtherForm::WarmupTwoTimeConstants => {
+                e.warmup_drift = Some(Warmup {
+                    d_v: axes3(rng, s, 2e-4),
+                    tau_s: rng.range(600.0, 1200.0),
+                });
+                e.warmup_drift2 = Some(Warmup {
+                    d_v: axes3(rng, s, 1.5e-4),
+                    tau_s: rng.range(3000.0, 6000.0),
+                });
+            }
+            OtherForm::WarmupRestarts => {
+                e.warmup_drift = Some(Warmup {
+                    d_v: axes3(rng, s, 2e-4),
+                    tau_s: rng.range(600.0, 2400.0),
+                });
+                c.schedule.power_offs = vec![[9000.0, 900.0]];
+            }
+            OtherForm::CurvatureLocalBend => {
+                e.temp_bend = Some(Bend {
+                    knot_c: rng.range(0.0, 30.0),
+                    u0_v_per_c: main_axis(rng, 5e-5 * s),
+                    k_rel_per_c: [0.0; 3],
+                });
+            }
+            OtherForm::FixtureTwoPositions => {
+                let angle = |rng: &mut Rng| [rng.range(2e-4, 4e-4) * s, rng.range(-2e-4, 2e-4) * s];
+                e.fixture_error = Some(Fixture {
+                    position: "TP2".into(),
+                    angles_rad: angle(rng),
+                });
+                e.fixture_error2 = Some(Fixture {
+                    position: "PP5".into(),
+                    angles_rad: angle(rng),
+                });
+            }
+        }
+    }
+}
+
+impl Outside {
+    fn name(self) -> &'static str {
+        match self {
+            Outside::BiasStep => "a sudden bias shift",
+            Outside::BiasWander => "a random wander of the bias",
+            Outside::CubicResponse => "a cubic response (K3)",
+            Outside::Periodic => "a periodic disturbance",
+            Outside::ScaleAgeing => "scale factors ageing",
+        }
+    }
+
+    fn apply(self, s: f64, c: &mut SimConfig, rng: &mut Rng) {
+        let e = &mut c.effects;
+        match self {
+            Outside::BiasStep => {
+                e.bias_step = Some(crate::simulate::BiasStep {
+                    at_s: rng.range(6000.0, 12000.0),
+                    value: main_axis(rng, 2e-4 * s),
+                })
+            }
+            Outside::BiasWander => {
+                e.bias_walk = Some(PerAxis {
+                    value: main_axis(rng, 3e-6 * s),
+                })
+            }
+            Outside::CubicResponse => {
+                e.nonlinearity_k3 = Some(PerAxis {
+                    value: main_axis(rng, 3e-4 * s),
+                })
+            }
+            Outside::Periodic => {
+                e.periodic = Some(crate::simulate::Periodic {
+                    period_s: rng.range(1800.0, 3600.0),
+                    value: main_axis(rng, 1e-4 * s),
+                })
+            }
+            Outside::ScaleAgeing => {
+                e.scale_aging = Some(PerAxis {
+                    value: main_axis(rng, 1e-4 * s),
+                })
+            }
+        }
+    }
+}
+
+impl Nuisance {
+    fn name(self) -> &'static str {
+        match self {
+            Nuisance::ColouredNoise => "coloured voltage noise",
+            Nuisance::Spikes => "spikes",
+            Nuisance::Dropouts => "logger dropouts",
+            Nuisance::SensorOffChamber => "a sensor off the chamber",
+            Nuisance::HeatCoolCycles => "three heat-cool cycles",
+            Nuisance::DwellMeans => "dwell means only",
+            Nuisance::NoisyVoltmeter => "a noisy voltmeter",
+        }
+    }
+
+    fn note(self) -> Option<NoteKind> {
+        match self {
+            Nuisance::ColouredNoise => Some(NoteKind::ColouredNoise),
+            Nuisance::Spikes => Some(NoteKind::Spikes),
+            Nuisance::Dropouts => Some(NoteKind::Gaps),
+            Nuisance::SensorOffChamber => Some(NoteKind::SensorVsChamber),
+            Nuisance::DwellMeans => Some(NoteKind::OneSamplePerDwell),
+            Nuisance::HeatCoolCycles | Nuisance::NoisyVoltmeter => None,
+        }
+    }
+
+    fn apply(self, c: &mut SimConfig) {
+        match self {
+            Nuisance::ColouredNoise => c.unit.noise_corr_s = 20.0,
+            Nuisance::Spikes => {
+                c.unit.spike_rate = 2e-4;
+                c.unit.spike_v = 2e-3;
+            }
+            Nuisance::Dropouts => c.schedule.dropouts = vec![[5000.0, 600.0], [13000.0, 900.0]],
+            Nuisance::SensorOffChamber => {
+                c.sensor.offset_c = 1.5;
+                c.sensor.gain_error = 0.03;
+            }
+            Nuisance::HeatCoolCycles => {
+                let pos = c.schedule.positions.clone();
+                c.schedule.stops = [20.0, -20.0, 40.0, -20.0, 40.0, 10.0]
+                    .iter()
+                    .map(|t| Stop {
+                        temp_c: *t,
+                        soak_s: 900.0,
+                        ramp_c_per_min: 1.5,
+                        positions: Some(pos.clone()),
+                    })
+                    .collect();
+            }
+            Nuisance::DwellMeans => c.schedule.dwell_means = true,
+            Nuisance::NoisyVoltmeter => c.unit.noise_v = 1e-4,
+        }
+    }
+}
 
 fn main_axis(rng: &mut Rng, size: f64) -> [f64; 3] {
     let mut v = [0.0; 3];
@@ -131,162 +391,18 @@ fn main_axis(rng: &mut Rng, size: f64) -> [f64; 3] {
     v
 }
 
-/// Conceal `case`'s form in `c`.
-pub fn apply(case: &Case, c: &mut SimConfig, rng: &mut Rng) {
-    match case.class {
-        Class::OtherForm => other_form(case, c, rng),
-        Class::Outside => outside(case, c, rng),
-        _ => nuisance(case, c),
+/// Per-axis sizes: one or two axes, random signs, 0.7..1.3 of `size` times `scale`.
+pub fn axes3(rng: &mut Rng, scale: f64, size: f64) -> [f64; 3] {
+    // one or two axes, random signs, 0.7..1.3 of the size
+    let main = (rng.next_u64() % 3) as usize;
+    let mut v = [0.0; 3];
+    for (i, x) in v.iter_mut().enumerate() {
+        if i == main || rng.uniform() < 0.3 {
+            let s = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+            *x = s * size * scale * rng.range(0.7, 1.3);
+        }
     }
-}
-
-/// A catalogue effect in another form.
-fn other_form(case: &Case, c: &mut SimConfig, rng: &mut Rng) {
-    let e = &mut c.effects;
-    let s = case.scale;
-    match case.form {
-        "thermal_lag: two poles" => {
-            e.thermal_lag = Some(PerAxis {
-                value: [rng.range(200.0, 500.0); 3],
-            });
-            e.thermal_lag2 = Some(PerAxis {
-                value: [rng.range(200.0, 500.0); 3],
-            });
-        }
-        "thermal_lag: a time constant per axis" => {
-            let mut v = [300.0, 600.0, 900.0];
-            let k = (rng.next_u64() % 3) as usize;
-            v.rotate_left(k);
-            e.thermal_lag = Some(PerAxis { value: v });
-        }
-        "temp_rate: a thermal gradient" => {
-            let tau = rng.range(60.0, 300.0);
-            e.temp_gradient = Some(Gradient {
-                value: axes3(rng, s, 0.02 / tau),
-                tau_s: tau,
-            });
-        }
-        "hysteresis: cooled before the first change" => {
-            e.hysteresis = Some(PerAxis {
-                value: axes3(rng, s, 1e-4),
-            });
-            e.hysteresis_initial = Some(-1.0);
-        }
-        "hysteresis: switching over 2 C" => {
-            e.hysteresis = Some(PerAxis {
-                value: axes3(rng, s, 1e-4),
-            });
-            e.hysteresis_width_c = Some(2.0);
-        }
-        "hysteresis: of the scale factors" => {
-            e.scale_hysteresis = Some(PerAxis {
-                value: axes3(rng, s, 3e-4),
-            });
-        }
-        "warmup_drift: two time constants" => {
-            e.warmup_drift = Some(Warmup {
-                d_v: axes3(rng, s, 2e-4),
-                tau_s: rng.range(600.0, 1200.0),
-            });
-            e.warmup_drift2 = Some(Warmup {
-                d_v: axes3(rng, s, 1.5e-4),
-                tau_s: rng.range(3000.0, 6000.0),
-            });
-        }
-        "warmup_drift: restarts after a power-off" => {
-            e.warmup_drift = Some(Warmup {
-                d_v: axes3(rng, s, 2e-4),
-                tau_s: rng.range(600.0, 2400.0),
-            });
-            c.schedule.power_offs = vec![[9000.0, 900.0]];
-        }
-        "temp_curvature: a local bend" => {
-            e.temp_bend = Some(Bend {
-                knot_c: rng.range(0.0, 30.0),
-                u0_v_per_c: main_axis(rng, 5e-5 * s),
-                k_rel_per_c: [0.0; 3],
-            });
-        }
-        "fixture_error: two positions off" => {
-            let angle = |rng: &mut Rng| [rng.range(2e-4, 4e-4) * s, rng.range(-2e-4, 2e-4) * s];
-            e.fixture_error = Some(Fixture {
-                position: "TP2".into(),
-                angles_rad: angle(rng),
-            });
-            e.fixture_error2 = Some(Fixture {
-                position: "PP5".into(),
-                angles_rad: angle(rng),
-            });
-        }
-        _ => {}
-    }
-}
-
-/// An effect outside the catalogue.
-fn outside(case: &Case, c: &mut SimConfig, rng: &mut Rng) {
-    let e = &mut c.effects;
-    let s = case.scale;
-    match case.form {
-        "a sudden bias shift" => {
-            e.bias_step = Some(BiasStep {
-                at_s: rng.range(6000.0, 12000.0),
-                value: main_axis(rng, 2e-4 * s),
-            })
-        }
-        "a random wander of the bias" => {
-            e.bias_walk = Some(PerAxis {
-                value: main_axis(rng, 3e-6 * s),
-            })
-        }
-        "a cubic response (K3)" => {
-            e.nonlinearity_k3 = Some(PerAxis {
-                value: main_axis(rng, 3e-4 * s),
-            })
-        }
-        "a periodic disturbance" => {
-            e.periodic = Some(Periodic {
-                period_s: rng.range(1800.0, 3600.0),
-                value: main_axis(rng, 1e-4 * s),
-            })
-        }
-        "scale factors ageing" => {
-            e.scale_aging = Some(PerAxis {
-                value: main_axis(rng, 1e-4 * s),
-            })
-        }
-        _ => {}
-    }
-}
-
-/// A clean unit with a real-world nuisance.
-fn nuisance(case: &Case, c: &mut SimConfig) {
-    match case.form {
-        "coloured voltage noise" => c.unit.noise_corr_s = 20.0,
-        "spikes" => {
-            c.unit.spike_rate = 2e-4;
-            c.unit.spike_v = 2e-3;
-        }
-        "logger dropouts" => c.schedule.dropouts = vec![[5000.0, 600.0], [13000.0, 900.0]],
-        "a sensor off the chamber" => {
-            c.sensor.offset_c = 1.5;
-            c.sensor.gain_error = 0.03;
-        }
-        "three heat-cool cycles" => {
-            let pos = c.schedule.positions.clone();
-            c.schedule.stops = [20.0, -20.0, 40.0, -20.0, 40.0, 10.0]
-                .iter()
-                .map(|t| Stop {
-                    temp_c: *t,
-                    soak_s: 900.0,
-                    ramp_c_per_min: 1.5,
-                    positions: Some(pos.clone()),
-                })
-                .collect();
-        }
-        "dwell means only" => c.schedule.dwell_means = true,
-        "a noisy voltmeter" => c.unit.noise_v = 1e-4,
-        _ => {}
-    }
+    v
 }
 
 /// The axes an outside effect of configuration `c` is on (all three for other cases).
@@ -305,10 +421,39 @@ pub fn axes(c: &SimConfig) -> Vec<usize> {
     }
 }
 
-/// The data-quality note a nuisance case should raise.
-pub fn note(case: &Case) -> Option<&'static str> {
-    FORMS
-        .iter()
-        .find(|f| f.name == case.form)
-        .and_then(|f| f.note)
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blind::cases::Case;
+    use crate::blind::config::configure;
+    use crate::simulate::simulate;
+
+    /// Every form conceals something: its recording differs from the clean unit's of the
+    /// same seed (same noise), so no form silently injects nothing.
+    #[test]
+    fn every_form_changes_the_twins_recording() {
+        let seed = 1;
+        let clean = simulate(&configure(&Case::catalogue(vec![], 1.0, seed)), |_| {})
+            .unwrap()
+            .csv;
+        for form in Form::ALL {
+            let cfg = configure(&Case::of_form(form, seed));
+            let csv = simulate(&cfg, |_| {}).unwrap().csv;
+            assert_ne!(
+                csv,
+                clean,
+                "{}: the same recording as a clean unit",
+                form.name()
+            );
+        }
+    }
+
+    #[test]
+    fn form_names_are_distinct() {
+        for (i, a) in Form::ALL.iter().enumerate() {
+            for b in &Form::ALL[i + 1..] {
+                assert_ne!(a.name(), b.name());
+            }
+        }
+    }
 }

@@ -1,7 +1,14 @@
 //! The blind suite's report: every case, the catalogue class's confusion matrix,
 //! detection by magnitude and scores, and the other classes form by form.
-use crate::blind::cases::{Class, EFFECTS};
+use crate::blind::cases::EFFECTS;
+use crate::blind::forms::Class;
 use crate::blind::outcome::Outcome;
+use crate::diagnose::EffectId;
+
+/// Effect ids joined by `sep`.
+fn ids(v: &[EffectId], sep: &str) -> String {
+    v.iter().map(|e| e.as_str()).collect::<Vec<_>>().join(sep)
+}
 
 /// One line per case: what was concealed and what was named.
 fn case_lines(outcomes: &[Outcome]) -> String {
@@ -11,7 +18,7 @@ fn case_lines(outcomes: &[Outcome]) -> String {
         let amb = o
             .ambiguous
             .iter()
-            .map(|a| format!("{{{}}}", a.join("|")))
+            .map(|a| format!("{{{}}}", ids(a, "|")))
             .collect::<Vec<_>>()
             .join(" ");
         s.push_str(&format!(
@@ -23,7 +30,7 @@ fn case_lines(outcomes: &[Outcome]) -> String {
                 if o.found.is_empty() {
                     "none".to_string()
                 } else {
-                    o.found.join(",")
+                    ids(&o.found, ",")
                 }
             ),
             if o.passed() { "yes" } else { "NO" },
@@ -33,62 +40,47 @@ fn case_lines(outcomes: &[Outcome]) -> String {
                 None => "-",
             },
             o.final_over_noise,
-            o.verdict,
+            o.verdict.map(|v| v.as_str()).unwrap_or(""),
             o.note
         ));
     }
     s
 }
 
-/// A column head for an effect id, distinct for every id.
-fn short_name(id: &str) -> &str {
-    match id {
-        "temp_curvature" => "curv",
-        "thermal_lag" => "lag",
-        "temp_rate" => "rate",
-        "hysteresis" => "hyst",
-        "nonlinearity_k2" => "k2",
-        "scale_asymmetry" => "asym",
-        "fixture_error" => "fixt",
-        "warmup_drift" => "warm",
-        other => other,
-    }
-}
-
-/// Concealed single effect (rows) against the effects named (columns).
+/// Concealed single effect (rows) against the effects named (columns); `None` is the
+/// clean row and the "none named" column.
 fn confusion(outcomes: &[Outcome]) -> String {
-    let cols: Vec<&str> = std::iter::once("none").chain(EFFECTS).collect();
-    let mut s = String::from("\nconfusion (concealed single effect -> effects named, counts; curv = temp_curvature, lag = thermal_lag, rate = temp_rate, hyst = hysteresis, k2 = nonlinearity_k2, asym = scale_asymmetry, fixt = fixture_error, warm = warmup_drift):\n");
+    let all = || std::iter::once(None).chain(EFFECTS.map(Some));
+    let legend: Vec<String> = EFFECTS
+        .iter()
+        .map(|e| format!("{} = {e}", e.short()))
+        .collect();
+    let mut s = format!(
+        "\nconfusion (concealed single effect -> effects named, counts; {}):\n",
+        legend.join(", ")
+    );
     s.push_str(&format!("{:<16}", ""));
-    for c in &cols {
-        s.push_str(&format!("{:>6}", short_name(c)));
+    for c in all() {
+        s.push_str(&format!("{:>6}", c.map_or("none", EffectId::short)));
     }
     s.push('\n');
-    for row in std::iter::once("clean").chain(EFFECTS) {
+    for row in all() {
         let cases: Vec<&Outcome> = outcomes
             .iter()
-            .filter(|o| {
-                !o.case.tp_only
-                    && if row == "clean" {
-                        o.case.effects.is_empty()
-                    } else {
-                        o.case.effects == [row]
-                    }
-            })
+            .filter(|o| !o.case.tp_only && o.case.effects == Vec::from_iter(row))
             .collect();
         if cases.is_empty() {
             continue;
         }
-        s.push_str(&format!("{row:<16}"));
-        for c in &cols {
+        s.push_str(&format!("{:<16}", row.map_or("clean", EffectId::as_str)));
+        for c in all() {
             let n = cases
                 .iter()
                 .filter(|o| {
                     let named = o.named();
-                    if *c == "none" {
-                        named.is_empty()
-                    } else {
-                        named.iter().any(|x| x == c)
+                    match c {
+                        None => named.is_empty(),
+                        Some(c) => named.contains(&c),
                     }
                 })
                 .count();
@@ -167,7 +159,10 @@ fn scores(outcomes: &[Outcome]) -> String {
 fn by_form(outcomes: &[Outcome]) -> String {
     let mut s = String::new();
     for class in [Class::OtherForm, Class::Outside, Class::Nuisance] {
-        let of: Vec<&Outcome> = outcomes.iter().filter(|o| o.case.class == class).collect();
+        let of: Vec<&Outcome> = outcomes
+            .iter()
+            .filter(|o| o.case.class() == class)
+            .collect();
         if of.is_empty() {
             continue;
         }
@@ -177,7 +172,7 @@ fn by_form(outcomes: &[Outcome]) -> String {
             class.name(),
             of.len()
         ));
-        let mut forms: Vec<&str> = Vec::new();
+        let mut forms: Vec<_> = Vec::new();
         for o in &of {
             if !forms.contains(&o.case.form) {
                 forms.push(o.case.form);
@@ -186,8 +181,9 @@ fn by_form(outcomes: &[Outcome]) -> String {
         for f in forms {
             let cases: Vec<&&Outcome> = of.iter().filter(|o| o.case.form == f).collect();
             let ok = cases.iter().filter(|o| o.passed()).count();
-            let mut named: Vec<String> = cases.iter().flat_map(|o| o.named()).collect();
-            named.sort();
+            let mut named: Vec<EffectId> = cases.iter().flat_map(|o| o.named()).collect();
+            // by name, as the report always listed them
+            named.sort_by_key(|e| e.as_str());
             named.dedup();
             let detail = match class {
                 Class::Outside => format!(
@@ -200,16 +196,17 @@ fn by_form(outcomes: &[Outcome]) -> String {
                     cases.iter().filter(|o| o.named().is_empty()).count(),
                     cases.iter().filter(|o| o.noted()).count()
                 ),
-                _ => format!(
+                Class::OtherForm | Class::Catalogue => format!(
                     "named: {}",
                     if named.is_empty() {
                         "nothing".into()
                     } else {
-                        named.join(", ")
+                        ids(&named, ", ")
                     }
                 ),
             };
-            s.push_str(&format!("  {f:<44} {ok}/{}  ({detail})\n", cases.len()));
+            let name = f.map_or("", |f| f.name());
+            s.push_str(&format!("  {name:<44} {ok}/{}  ({detail})\n", cases.len()));
         }
     }
     s
@@ -220,7 +217,7 @@ fn by_form(outcomes: &[Outcome]) -> String {
 pub fn report(outcomes: &[Outcome]) -> String {
     let cat: Vec<Outcome> = outcomes
         .iter()
-        .filter(|o| o.case.class == Class::Catalogue)
+        .filter(|o| o.case.class() == Class::Catalogue)
         .cloned()
         .collect();
     case_lines(outcomes)

@@ -1,6 +1,8 @@
-//! The command line's grammar: every command and option, with its help text.
+//! The command line's grammar: every command and option, with its help text. Its enums
+//! are the command line's own (clap's `ValueEnum`); each maps onto the library's.
 use crate::fit::pipeline::{ModelKind, Route};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use firmware_core::compensate::ErrorModel;
 use std::path::PathBuf;
 
 /// Calibration and temperature compensation of a triaxial accelerometer: the bench tool.
@@ -21,6 +23,75 @@ pub enum ErrModel {
     Simplified,
 }
 
+impl From<ErrModel> for ErrorModel {
+    fn from(e: ErrModel) -> Self {
+        match e {
+            ErrModel::Full => ErrorModel::Full,
+            ErrModel::Simplified => ErrorModel::Simplified,
+        }
+    }
+}
+
+/// The compensation method of `verify`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MethodArg {
+    /// Correct the constants.
+    #[value(name = "1")]
+    One,
+    /// Correct the result.
+    #[value(name = "2")]
+    Two,
+}
+
+impl MethodArg {
+    /// `1` or `2`, as the outputs name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            MethodArg::One => "1",
+            MethodArg::Two => "2",
+        }
+    }
+}
+
+/// A temperature model family.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelArg {
+    /// Piecewise-linear through breakpoints.
+    Pwl,
+    /// Polynomial of dT.
+    Poly,
+}
+
+impl From<ModelArg> for ModelKind {
+    fn from(m: ModelArg) -> Self {
+        match m {
+            ModelArg::Pwl => ModelKind::Pwl,
+            ModelArg::Poly => ModelKind::Poly,
+        }
+    }
+}
+
+/// An identification route.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RouteArg {
+    /// The dwells in thermal equilibrium.
+    Static,
+    /// Every dwell, ramps included.
+    Joint,
+    /// The paper's: formula (10) per stop, then a fit across stops.
+    PerStop,
+}
+
+impl From<RouteArg> for Route {
+    fn from(r: RouteArg) -> Self {
+        match r {
+            RouteArg::Static => Route::Static,
+            RouteArg::Joint => Route::Joint,
+            RouteArg::PerStop => Route::PerStop,
+        }
+    }
+}
+
 /// The temperature model options.
 #[derive(Args, Debug, Clone)]
 pub struct ModelArgs {
@@ -28,7 +99,7 @@ pub struct ModelArgs {
     /// cross-validation over the calibration dwells, which also choose the order or
     /// breakpoints within a family given alone; for a table: pwl).
     #[arg(long, value_enum)]
-    pub model: Option<ModelKind>,
+    pub model: Option<ModelArg>,
     /// Polynomial order (poly only; default: chosen by the data).
     #[arg(long)]
     pub order: Option<usize>,
@@ -127,7 +198,7 @@ pub struct FitArgs {
     /// Identification route: static (the dwells in thermal equilibrium), joint (every
     /// dwell, ramps included), per-stop (the paper's).
     #[arg(long, value_enum, default_value = "static")]
-    pub route: Route,
+    pub route: RouteArg,
     /// The serial written into the blob (default: the recording's `unit`).
     #[arg(long)]
     pub serial: Option<String>,
@@ -136,7 +207,7 @@ pub struct FitArgs {
     #[arg(long, value_delimiter = ',')]
     pub positions_for_check: Option<Vec<String>>,
     /// Recompute the firmware's cached matrices after this temperature change, C.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = crate::fit::temperature::UPDATE_STEP_C)]
     pub update_step: f64,
     /// Clamp the temperature to the valid range instead of extrapolating.
     #[arg(long)]
@@ -165,11 +236,11 @@ pub struct VerifyArgs {
     #[arg(long)]
     pub blob: PathBuf,
     /// 1: correct the constants; 2: correct the result.
-    #[arg(long, value_parser = ["1", "2"], default_value = "1")]
-    pub method: String,
-    /// Error model of method 2.
-    #[arg(long, value_enum, default_value = "full")]
-    pub error_model: ErrModel,
+    #[arg(long, value_enum, default_value = "1")]
+    pub method: MethodArg,
+    /// Error model of method 2 (default: full); an error with method 1, which has none.
+    #[arg(long, value_enum)]
+    pub error_model: Option<ErrModel>,
     /// Positions to check (default: those whose role is verification).
     #[arg(long, value_delimiter = ',')]
     pub positions_for_check: Option<Vec<String>>,
@@ -240,7 +311,7 @@ pub struct BatchArgs {
     pub jobs: Option<usize>,
     /// Temperature model (default: chosen by the data for every unit).
     #[arg(long, value_enum)]
-    pub model: Option<ModelKind>,
+    pub model: Option<ModelArg>,
     /// The acceptance specification.
     #[command(flatten)]
     pub accept: AcceptArgs,

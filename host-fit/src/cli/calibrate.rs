@@ -11,8 +11,9 @@ use crate::fit::noise::noise;
 use crate::fit::orientation::PoseEstimate;
 use crate::fit::pipeline::{
     fit_chosen, fit_recording, identify_stops, FitOutcome, ModelChoice, ModelKind, ModelRequest,
+    Route,
 };
-use crate::fit::predict::{directions, predict, Prediction};
+use crate::fit::predict::{directions, predict, Prediction, Request};
 use crate::fit::select::Selection;
 use crate::fit::temperature::fit_table;
 use crate::output::{check_writable, json, write_atomic};
@@ -24,7 +25,7 @@ use std::io::Write;
 impl From<&super::args::ModelArgs> for ModelRequest {
     fn from(m: &super::args::ModelArgs) -> Self {
         ModelRequest {
-            kind: m.model,
+            kind: m.model.map(ModelKind::from),
             order: m.order,
             breakpoints: m.breakpoints.clone(),
         }
@@ -47,8 +48,7 @@ pub(super) fn temp_fit(a: TempFitArgs, out: &mut dyn Write) -> Result<()> {
         breakpoints: req.breakpoints,
     };
     let basis = choice.basis(&temps);
-    let fit =
-        fit_table(&rows, &basis, a.t0).map_err(|e| HostError::in_file(&a.coeffs, e.message))?;
+    let fit = fit_table(&rows, &basis, a.t0).map_err(|e| e.within(&a.coeffs))?;
     let d = ModelDescription::of(&fit, a.relative);
     if a.json {
         w(out, json(&d)?)
@@ -216,33 +216,40 @@ struct StopSummary<'a> {
     positions: &'a [String],
 }
 
+/// The blob `fit` wrote.
+struct Written<'a> {
+    serial: &'a str,
+    bytes: usize,
+    f32_departure_g: f64,
+}
+
 fn fitted<'a>(
     a: &'a FitArgs,
     rec: &'a crate::data::recording::Recording,
     oc: &'a FitOutcome,
     cal: &firmware_core::temperature::Calibration<f64>,
-    (bytes, dep): (usize, f64),
-    serial: &'a str,
+    written: &Written<'a>,
 ) -> Fitted<'a> {
     let prediction = (!oc.fit.axis_cov.is_empty()).then(|| {
-        let r = oc.orientation.as_ref().map(|o| {
-            let mut r = rec.clone();
-            r.positions = o.positions.clone();
-            r
-        });
-        let (dirs, n) = directions(r.as_ref().unwrap_or(rec));
-        predict(
-            &oc.fit,
-            &oc.noise,
-            &dirs,
-            (cal.t_min_c, cal.t_max_c),
-            (n, cal.update_step_c),
-        )
+        // the estimated poses' vectors, carried with the fit
+        let positions = oc
+            .orientation
+            .as_ref()
+            .map_or(&rec.positions, |o| &o.positions);
+        let (directions, dwell_samples) = directions(rec, positions);
+        let req = Request {
+            directions,
+            dwell_samples,
+            t_min_c: cal.t_min_c,
+            t_max_c: cal.t_max_c,
+            update_step_c: cal.update_step_c,
+        };
+        predict(&oc.fit, &oc.noise, &req)
     });
     let one_temp = crate::fit::predict::is_constant(&oc.fit.basis);
     Fitted {
-        unit: serial,
-        route: a.route.name(),
+        unit: written.serial,
+        route: Route::from(a.route).name(),
         model: oc.fit.basis.describe(),
         chosen_by: oc.selection.as_ref(),
         no_temperature_model: one_temp.then(|| format!(
@@ -253,11 +260,7 @@ fn fitted<'a>(
         t_min_c: cal.t_min_c,
         t_max_c: cal.t_max_c,
         noise_sigma: oc.noise.sigma,
-        noise_source: if oc.noise.dof > 0 {
-            "in-dwell (successive samples)"
-        } else {
-            "none in the dwells (one sample each): the fit's residual scatter is used"
-        },
+        noise_source: oc.noise.source(),
         predicted_error: prediction,
         excluded_not_in_equilibrium: oc.excluded,
         orientations: oc.orientation.as_ref().map(|o| Orientations {
@@ -275,10 +278,10 @@ fn fitted<'a>(
                 positions: &s.positions,
             })
             .collect(),
-        f32_departure_g: dep,
+        f32_departure_g: written.f32_departure_g,
         f32_bound_g: F32_BOUND_G,
         blob: a.out.display().to_string(),
-        blob_bytes: bytes,
+        blob_bytes: written.bytes,
         temperature_model: ModelDescription::of(&oc.fit, false),
         warnings: &rec.warnings,
     }
@@ -289,8 +292,8 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     let req = ModelRequest::from(&a.model);
     req.check()?;
     let rec = load(&a.input, a.positions_for_check.as_deref(), err)?;
-    let oc = match (req.kind, a.route) {
-        (_, crate::fit::pipeline::Route::Static) => fit_chosen(&rec, &req)?,
+    let oc = match (req.kind, Route::from(a.route)) {
+        (_, Route::Static) => fit_chosen(&rec, &req)?,
         (None, route) => {
             return Err(HostError::msg(format!(
                 "the model is chosen by the data on the static route only; with --route {} give --model",
@@ -318,7 +321,12 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     };
     let bytes = super::records::fit(run, &oc, &cal, bytes)?;
     write_atomic(&a.out, &bytes, a.force)?;
-    let j = fitted(&a, &rec, &oc, &cal, (bytes.len(), dep), serial_name);
+    let written = Written {
+        serial: serial_name,
+        bytes: bytes.len(),
+        f32_departure_g: dep,
+    };
+    let j = fitted(&a, &rec, &oc, &cal, &written);
     if a.json {
         return w(out, json(&j)?);
     }
@@ -391,7 +399,7 @@ fn fit_text(j: &Fitted<'_>) -> String {
         ));
         s.push(format!(
             "a verification dwell of {} samples adds {:.4} mg of its own noise (noise: {}); the firmware's {} C cache step up to {:.4} mg; valid range {:.2}..{:.2} C",
-            p.dwell_samples, p.dwell_noise_1sigma_mg, p.noise_source, p.cache_step_c, p.cache_lag_max_mg, p.t_min_c, p.t_max_c
+            p.dwell_samples, p.dwell_noise_1sigma_mg, j.noise_source, p.cache_step_c, p.cache_lag_max_mg, p.t_min_c, p.t_max_c
         ));
     }
     if !j.stops.is_empty() {

@@ -1,6 +1,6 @@
 //! `verify`, `inspect` and `fw-vectors`: a blob against a recording, a blob alone, and
 //! the firmware's expected outputs.
-use super::args::{ErrModel, FwVectorsArgs, InspectArgs, VerifyArgs};
+use super::args::{ErrModel, FwVectorsArgs, InspectArgs, MethodArg, VerifyArgs};
 use super::common::Outcome;
 use super::common::{load, serial, w};
 use crate::acceptance::{judge, Acceptance, Spec, Verdict};
@@ -9,7 +9,7 @@ use crate::data::positions::Role;
 use crate::error::{HostError, Result};
 use crate::output::{json, write_atomic};
 use crate::verify::{verify as run_verify, DwellCheck, TempMax};
-use firmware_core::compensate::{ErrorModel, Method};
+use firmware_core::compensate::Method;
 use serde::Serialize;
 use std::io::Write;
 
@@ -25,7 +25,22 @@ struct Verified<'a> {
     acceptance: &'a Acceptance,
 }
 
+/// The firmware's method of `--method` and `--error-model`: an error model given with
+/// method 1 (which has none) is an error, never ignored.
+fn method(m: MethodArg, error_model: Option<ErrModel>) -> Result<Method> {
+    match (m, error_model) {
+        (MethodArg::One, None) => Ok(Method::CorrectConstants),
+        (MethodArg::One, Some(_)) => Err(HostError::msg(
+            "--error-model applies to method 2 (correct the result); method 1 corrects the constants and has no error model: give --method 2, or leave --error-model out",
+        )),
+        (MethodArg::Two, e) => Ok(Method::CorrectResult(
+            e.unwrap_or(ErrModel::Full).into(),
+        )),
+    }
+}
+
 pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
+    let m = method(a.method, a.error_model)?;
     let spec = Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?;
     let (b, blob_bytes) = read_blob(&a.blob)?;
     let rec = load(&a.input, a.positions_for_check.as_deref(), err)?;
@@ -46,11 +61,6 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
             b.serial
         );
     }
-    let m = match (a.method.as_str(), a.error_model) {
-        ("1", _) => Method::CorrectConstants,
-        (_, ErrModel::Full) => Method::CorrectResult(ErrorModel::Full),
-        (_, ErrModel::Simplified) => Method::CorrectResult(ErrorModel::Simplified),
-    };
     let check = |p: usize| rec.positions.has_role(p, Role::Verification);
     let v = run_verify(&rec, &b, m, &check)
         .ok_or_else(|| HostError::in_file(&a.blob, "K(T0) of the blob is singular"))?;
@@ -70,7 +80,7 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
         f64::from(cal.t0_c),
         (f64::from(cal.t_min_c), f64::from(cal.t_max_c)),
     )
-    .map_err(|e| HostError::in_file(&a.input.recording, e.message))?;
+    .map_err(|e| e.within(&a.input.recording))?;
     let run = super::records::Run {
         args: &a.record,
         serial: unit,
@@ -86,7 +96,7 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
         let j = Verified {
             unit,
             blob_serial: b.serial.as_str(),
-            method: &a.method,
+            method: a.method.name(),
             dwells: &v.dwells,
             max_by_temperature: &v.max_by_temperature,
             acceptance: &acc,
@@ -98,7 +108,7 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
         out,
         format!(
             "dg = |a| - 1 g of every verification dwell (formula (13)), uncompensated (T0 constants) and compensated sample by sample by firmware-core (method {})\n{:<8} {:>9} {:>20} {:>17} {:>8} {:>8}",
-            a.method, "position", "temp, C", "uncompensated, mg", "compensated, mg", "samples", "flagged"
+            a.method.name(), "position", "temp, C", "uncompensated, mg", "compensated, mg", "samples", "flagged"
         ),
     )?;
     let mut flagged = 0;
@@ -126,7 +136,10 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
             out,
             format!(
                 "max |dg| at {:>7.2} C: uncompensated {:.4} mg, method {} {:.4} mg",
-                t.temp_c, t.max_abs_dg_mg_uncompensated, a.method, t.max_abs_dg_mg
+                t.temp_c,
+                t.max_abs_dg_mg_uncompensated,
+                a.method.name(),
+                t.max_abs_dg_mg
             ),
         )?;
     }

@@ -4,6 +4,7 @@ use super::args::Input;
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::error::{HostError, Result};
+use std::borrow::Cow;
 use std::io::Write;
 
 /// How a command that ran ended (`cli::run` makes it the exit code: 0, or
@@ -63,8 +64,8 @@ pub(super) fn load(
 /// `rec` with its poses of unknown orientation estimated (a note on `err`), for the
 /// commands that need every vector.
 pub(super) fn oriented(rec: Recording, err: &mut dyn Write) -> Result<Recording> {
-    let (est, o) = crate::fit::pipeline::with_orientations(&rec, None)?;
-    if let Some(o) = &o {
+    let oriented = crate::fit::pipeline::with_orientations(&rec, None)?;
+    if let Some(o) = &oriented.orientation {
         let _ = writeln!(
             err,
             "note: {} poses of unknown orientation estimated from the data ({} alternations){}",
@@ -76,7 +77,10 @@ pub(super) fn oriented(rec: Recording, err: &mut dyn Write) -> Result<Recording>
                 .unwrap_or_default()
         );
     }
-    Ok(est.unwrap_or(rec))
+    Ok(match oriented.rec {
+        Cow::Owned(r) => r,
+        Cow::Borrowed(_) => rec,
+    })
 }
 
 /// The unit's serial, `UNKNOWN` when the recording has none.

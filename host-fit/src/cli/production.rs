@@ -3,7 +3,7 @@ use super::args::{BatchArgs, DemoArgs, SimulateArgs};
 use super::common::w;
 use super::common::Outcome;
 use crate::acceptance::Spec;
-use crate::batch::BatchOptions;
+use crate::batch::{BatchOptions, UnitStatus};
 use crate::error::{HostError, Result};
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::simulate::SimConfig;
@@ -14,15 +14,19 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
     let t = std::time::Instant::now();
     let o = BatchOptions {
         jobs: a.jobs,
-        model: a.model,
+        model: a.model.map(Into::into),
         spec: Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?,
         diagnose: a.diagnose,
         force: a.force,
         store: super::records::batch_store(&a.dir, &a.out, &a.record, a.no_db),
     };
     let res = crate::batch::run(&a.dir, &a.out, &o)?;
-    let count = |s: &str| res.units.iter().filter(|r| r.acceptance == s).count();
-    for r in res.units.iter().filter(|r| r.acceptance != "pass") {
+    let count = |s: UnitStatus| res.units.iter().filter(|r| r.acceptance == s).count();
+    for r in res
+        .units
+        .iter()
+        .filter(|r| r.acceptance != UnitStatus::Pass)
+    {
         let _ = writeln!(err, "{}: {}: {}", r.file.display(), r.acceptance, r.reason);
     }
     w(
@@ -31,9 +35,9 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
             "{} units in {:.1} s: {} pass, {} fail, {} error ({}); summary {}",
             res.units.len(),
             t.elapsed().as_secs_f64(),
-            count("pass"),
-            count("fail"),
-            count("error"),
+            count(UnitStatus::Pass),
+            count(UnitStatus::Fail),
+            count(UnitStatus::Error),
             o.spec.text(),
             a.out.join("summary.csv").display()
         ),

@@ -15,7 +15,7 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
     }
     let rec = oriented(load(&a.input, None, err)?, err)?;
     let d = crate::diagnose::diagnose(&rec)?;
-    let mut c = d.contract(&rec);
+    let mut c = d.contract();
     let name = a.serial.as_deref().unwrap_or(serial(&rec));
     let built = match &a.out {
         Some(_) => Some(build_blob(name, &d.calibration(rec.t0_c)?)?),
@@ -38,7 +38,7 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
         });
     }
     if let Some(r) = &a.report {
-        let html = crate::report::diagnosis::diagnosis_report(&rec, &d)?;
+        let html = crate::report::diagnosis::diagnosis_report(&d)?;
         write_atomic(r, html.as_bytes(), a.force)?;
     }
     if a.json {

@@ -347,15 +347,6 @@ impl Recording {
     pub fn dwell_rows(&self, d: &Dwell) -> &[Row] {
         self.rows.get(d.start..d.end).unwrap_or(&[])
     }
-
-    /// The line numbers a dwell spans.
-    pub fn dwell_lines(&self, d: &Dwell) -> (usize, usize) {
-        let rows = self.dwell_rows(d);
-        (
-            rows.first().map(|r| r.line).unwrap_or(0),
-            rows.last().map(|r| r.line).unwrap_or(0),
-        )
-    }
 }
 
 struct Columns {

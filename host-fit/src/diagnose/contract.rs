@@ -2,15 +2,68 @@
 //! the same structs). Fields beyond the first version: `floor`, `dispersion`, `quality`,
 //! `unexplained`, the verdict `unexplained`, and per finding `form`, `share`,
 //! `heldout_gain`.
-use crate::data::recording::Recording;
 use crate::diagnose::findings::{Ambiguity, Finding};
 use crate::diagnose::location::Hotspot;
 use crate::diagnose::metrics::{dispersion, max_dg, normalized_rms, residual_rms};
 use crate::diagnose::quality::QualityNote;
-use crate::diagnose::search::AT_FLOOR_RMS;
 use crate::diagnose::Diagnosis;
 use firmware_core::model::AXES;
 use serde::Serialize;
+use std::fmt;
+
+/// What the diagnosis concludes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// At the floor, nothing found: the model fits to the noise.
+    None,
+    /// Findings bring the residual to the floor.
+    Explained,
+    /// Findings, but the residual stays above the floor.
+    PartlyExplained,
+    /// Above the floor, and nothing in the catalogue explains it.
+    Unexplained,
+}
+
+impl Verdict {
+    /// The verdict of a diagnosis with (or without) findings, at (or above) the floor.
+    pub fn of(found: bool, at_floor: bool) -> Verdict {
+        match (found, at_floor) {
+            (false, true) => Verdict::None,
+            (false, false) => Verdict::Unexplained,
+            (true, true) => Verdict::Explained,
+            (true, false) => Verdict::PartlyExplained,
+        }
+    }
+
+    /// The contract's name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Verdict::None => "none",
+            Verdict::Explained => "explained",
+            Verdict::PartlyExplained => "partly_explained",
+            Verdict::Unexplained => "unexplained",
+        }
+    }
+
+    /// What it means, in words.
+    pub fn meaning(self) -> &'static str {
+        match self {
+            Verdict::None => "nothing beyond the floor: the model fits to the noise",
+            Verdict::Explained => "the findings bring the residual to the floor",
+            Verdict::PartlyExplained => "the findings explain part; what is left is located above",
+            Verdict::Unexplained => {
+                "above the floor, and nothing in the catalogue explains it; located above"
+            }
+        }
+    }
+}
+
+impl fmt::Display for Verdict {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
 
 /// The whole contract.
 #[derive(Debug, Clone, Serialize)]
@@ -50,7 +103,7 @@ pub struct Contract {
     /// `none` (at the floor, nothing found), `explained` (findings bring it to the
     /// floor), `partly_explained` (findings, but above the floor), `unexplained` (above
     /// the floor, nothing in the catalogue explains it).
-    pub verdict: &'static str,
+    pub verdict: Verdict,
     /// The blob written with `--out`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub blob: Option<BlobNote>,
@@ -157,9 +210,9 @@ pub struct BlobNote {
     pub f32_departure_g: f64,
 }
 
-impl Diagnosis {
+impl Diagnosis<'_> {
     fn floor_figures(&self) -> FloorFigures {
-        let mut ns: Vec<f64> = self.obs.iter().map(|o| o.n as f64).collect();
+        let mut ns: Vec<f64> = self.data.obs.iter().map(|o| o.n as f64).collect();
         ns.sort_by(f64::total_cmp);
         let n = ns.get(ns.len() / 2).copied().unwrap_or(1.0);
         FloorFigures {
@@ -180,27 +233,22 @@ impl Diagnosis {
     }
 
     /// The verdict (see [`Contract::verdict`]).
-    pub fn verdict(&self, at_floor: bool) -> &'static str {
-        match (
-            self.findings.is_empty() && self.ambiguous.is_empty(),
-            at_floor,
-        ) {
-            (true, true) => "none",
-            (true, false) => "unexplained",
-            (false, true) => "explained",
-            (false, false) => "partly_explained",
-        }
+    pub fn verdict(&self) -> Verdict {
+        let found = !(self.findings.is_empty() && self.ambiguous.is_empty());
+        let at_floor = normalized_rms(&self.data, &self.final_fit) <= self.data.rules.at_floor_rms;
+        Verdict::of(found, at_floor)
     }
 
-    /// The contract of this diagnosis of `rec`.
-    pub fn contract(&self, rec: &Recording) -> Contract {
-        let data = self.data(rec);
+    /// The contract of this diagnosis.
+    pub fn contract(&self) -> Contract {
+        let data = &self.data;
+        let rec = data.rec;
         let (b, f) = (&self.baseline, &self.final_fit);
-        let final_rms = normalized_rms(&data, f);
+        let final_rms = normalized_rms(data, f);
         let (held_before, held_after) = data.heldout_pair(b, f);
         let sigma: [f64; 3] = std::array::from_fn(|i| match self.floor.axes[i].sample_sigma() {
             Some(s) if self.floor_measured => s,
-            _ => (1.0 / self.w[i]).sqrt(),
+            _ => (1.0 / data.w[i]).sqrt(),
         });
         Contract {
             format: "at-diagnosis/1",
@@ -209,8 +257,8 @@ impl Diagnosis {
             output_unit: rec.output_unit.clone(),
             floor: self.floor_figures(),
             dispersion: Dispersion {
-                baseline: dispersion(&data, b),
-                final_model: dispersion(&data, f),
+                baseline: dispersion(data, b),
+                final_model: dispersion(data, f),
             },
             baseline: ModelFigures {
                 temperature_model: format!(
@@ -223,8 +271,8 @@ impl Diagnosis {
                     }
                 ),
                 residual_rms: residual_rms(b),
-                residual_rms_over_noise: normalized_rms(&data, b),
-                max_abs_dg_mg: max_dg(&data, b),
+                residual_rms_over_noise: normalized_rms(data, b),
+                max_abs_dg_mg: max_dg(data, b),
             },
             located: self.hotspots.iter().take(12).cloned().collect(),
             findings: self.findings.clone(),
@@ -245,23 +293,24 @@ impl Diagnosis {
                     .collect(),
                 residual_rms: residual_rms(f),
                 residual_rms_over_noise: final_rms,
-                max_abs_dg_mg: max_dg(&data, f),
+                max_abs_dg_mg: max_dg(data, f),
                 heldout_chi2_before: held_before,
                 heldout_chi2_after: held_after,
             },
             flashed: FlashedFigures {
-                same_as_final: self.flashed.spec == f.spec,
+                same_as_final: self.flashed.fit.spec == f.spec,
                 model: self
                     .flashed
+                    .fit
                     .spec
                     .extras
                     .iter()
                     .map(|e| format!("{}: {}", e.id(), e.form()))
                     .collect(),
-                residual_rms_over_noise: normalized_rms(&data, &self.flashed),
-                max_abs_dg_mg: max_dg(&data, &self.flashed),
+                residual_rms_over_noise: normalized_rms(data, &self.flashed.fit),
+                max_abs_dg_mg: max_dg(data, &self.flashed.fit),
             },
-            verdict: self.verdict(final_rms <= AT_FLOOR_RMS),
+            verdict: self.verdict(),
             blob: None,
         }
     }
@@ -347,12 +396,7 @@ impl Contract {
             f.heldout_chi2_before,
             f.heldout_chi2_after,
             self.verdict,
-            match self.verdict {
-                "none" => "nothing beyond the floor: the model fits to the noise",
-                "explained" => "the findings bring the residual to the floor",
-                "partly_explained" => "the findings explain part; what is left is located above",
-                _ => "above the floor, and nothing in the catalogue explains it; located above",
-            }
+            self.verdict.meaning()
         ));
         s
     }

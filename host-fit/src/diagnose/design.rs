@@ -1,14 +1,14 @@
-//! What the diagnosis fits: a baseline (per axis the temperature models of the K row and
-//! offset) plus candidate effects as extra columns, all three axes in one weighted least
-//! squares (weights from the error floor), with the chi-square of held-out time chunks.
-use crate::data::recording::Recording;
+//! The columns of a diagnosis fit: what is fitted ([`Spec`]: the baseline's temperature
+//! basis, cross terms, the effects added), per axis the baseline's temperature models of
+//! the K row and offset, and every effect's columns (through firmware-core's own filters, see
+//! [`crate::diagnose::regressors`]), three residual rows per window. What the columns
+//! mean at a temperature (K and U0, bends included) is read back by [`static_at`].
+use crate::diagnose::data::Data;
 use crate::diagnose::effects::{Extra, Restart};
-use crate::diagnose::observations::{window_means, DObs};
 use crate::diagnose::params::{Param, Term};
-use crate::diagnose::regressors::{self, Events};
-use crate::fit::lsq::Normal;
+use crate::diagnose::regressors;
 use crate::fit::temperature::Basis;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 /// What is fitted.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,84 +36,31 @@ impl Spec {
         s
     }
 
+    /// The spec with its extra number `e` replaced by `extra`.
+    pub fn replaced(&self, e: usize, extra: Extra) -> Spec {
+        let mut s = self.clone();
+        s.extras[e] = extra;
+        s
+    }
+
     /// Structural unknowns profiled, over all extras.
     pub fn structural(&self) -> usize {
         self.extras.iter().map(Extra::structural).sum()
     }
 }
 
-/// A fitted spec.
-#[derive(Debug, Clone)]
-pub struct Fit {
-    /// What was fitted.
-    pub spec: Spec,
-    /// Chi-square (weights from the floor).
-    pub chi2: f64,
-    /// Number of linear parameters.
-    pub k: usize,
-    /// Parameters.
-    pub x: DVector<f64>,
-    /// Covariance of the parameters at unit dispersion (None when only profiling).
-    pub cov: Option<DMatrix<f64>>,
-    /// Heteroscedasticity- and autocorrelation-consistent standard error of every
-    /// parameter (Newey-West, Bartlett kernel over neighbouring windows in time; None
-    /// when only profiling): it holds residuals correlated in time, which the covariance
-    /// does not.
-    pub hac: Option<Vec<f64>>,
-    /// What each parameter is.
-    pub labels: Vec<Param>,
-    /// Residual per observation and axis (output units).
-    pub resid: Vec<[f64; 3]>,
-    /// Model K(T) at each observation (row i at axis i's temperature), bends included.
-    pub k_at: Vec<[[f64; 3]; 3]>,
-    /// Model U0(T) at each observation, bends included.
-    pub u0_at: Vec<[f64; 3]>,
-    /// Held-out chi-square: every time chunk predicted by the fit without it.
-    pub heldout: f64,
-    /// Held-out chi-square per observation row (3 per observation).
-    pub heldout_rows: Vec<f64>,
-    /// In-sample chi-square per row.
-    pub insample_rows: Vec<f64>,
-}
-
-impl Fit {
-    /// All parameters, linear and structural.
-    pub fn params(&self) -> usize {
-        self.k + self.spec.structural()
-    }
-}
-
-/// The data of a diagnosis.
-pub struct Data<'a> {
-    /// The recording.
-    pub rec: &'a Recording,
-    /// Observations.
-    pub obs: Vec<DObs>,
-    /// Rows left out as spikes (sorted).
-    pub spikes: Vec<usize>,
-    /// Weight of every residual row (observation x axis): 1 / floor variance.
-    pub w: Vec<f64>,
-    /// Reference temperature.
-    pub t0: f64,
-    /// Gaps and handling.
-    pub events: Events,
-    /// Each observation's temperature rate (the firmware's estimate, 60 s), C/s: where
-    /// the temperature moves (for locating and for the static dg).
-    pub rate: Vec<f64>,
-    /// Each observation's direction of the last change of more than 0.5 C (0 before
-    /// the first), for locating.
-    pub dir: Vec<f64>,
-}
-
 /// One row of the design: `(column, value)` of its nonzero entries.
-type Row = Vec<(usize, f64)>;
+pub type Row = Vec<(usize, f64)>;
 
 /// A built design: rows (3 per observation), labels, and each observation's temperature
 /// per axis.
-struct Design {
-    rows: Vec<Row>,
-    labels: Vec<Param>,
-    temps: Vec<[f64; 3]>,
+pub struct Design {
+    /// The rows, 3 per observation (axes x, y, z).
+    pub rows: Vec<Row>,
+    /// What every column is.
+    pub labels: Vec<Param>,
+    /// Each observation's temperature per axis (the element's, through a lag).
+    pub temps: Vec<[f64; 3]>,
 }
 
 impl Design {
@@ -126,39 +73,38 @@ impl Design {
             }
         }
     }
+
+    /// The prediction of row `r` by parameters `x`.
+    pub fn predict(&self, x: &DVector<f64>, r: usize) -> f64 {
+        self.rows[r].iter().map(|(c, v)| v * x[*c]).sum::<f64>()
+    }
 }
 
-impl<'a> Data<'a> {
-    /// A copy of the data (to fit it with other weights).
-    pub fn clone_parts(&self) -> Data<'a> {
-        Data {
-            rec: self.rec,
-            obs: self.obs.clone(),
-            spikes: self.spikes.clone(),
-            w: self.w.clone(),
-            t0: self.t0,
-            events: self.events.clone(),
-            rate: self.rate.clone(),
-            dir: self.dir.clone(),
+impl Data<'_> {
+    /// The design of `spec`; `base_k` gives K(T) at every observation for fixture
+    /// columns (without it they are left out).
+    pub fn design(&self, spec: &Spec, base_k: Option<&[[[f64; 3]; 3]]>) -> Design {
+        let mut d = Design {
+            rows: vec![Vec::new(); self.n_rows()],
+            labels: Vec::new(),
+            temps: self.temps(spec),
+        };
+        self.baseline_columns(spec, &mut d);
+        for (e, x) in spec.extras.iter().enumerate() {
+            self.extra_columns(e, x, &mut d, base_k);
         }
-    }
-
-    /// Residual rows.
-    pub fn n_rows(&self) -> usize {
-        3 * self.obs.len()
-    }
-
-    /// Window means of a per-row series.
-    fn means(&self, series: &[f64]) -> Vec<f64> {
-        window_means(&self.obs, series, &self.spikes)
+        d
     }
 
     /// Each observation's temperature per axis: the sensor's, or the element's through
     /// the spec's thermal lag.
     fn temps(&self, spec: &Spec) -> Vec<[f64; 3]> {
-        let lag = spec.extras.iter().find_map(|e| match e {
-            Extra::Lag { taus } => Some(taus),
-            _ => None,
+        let lag = spec.extras.iter().find_map(|e| {
+            if let Extra::Lag { taus } = e {
+                Some(taus)
+            } else {
+                None
+            }
         });
         match lag {
             Some(taus) => {
@@ -173,7 +119,7 @@ impl<'a> Data<'a> {
 
     /// The baseline's columns: per axis, K row (or scale only) and offset times the
     /// temperature basis (the offsets' basis is the fine one of a `Curvature` extra).
-    fn baseline(&self, spec: &Spec, d: &mut Design) {
+    fn baseline_columns(&self, spec: &Spec, d: &mut Design) {
         let obasis = offset_basis(spec);
         for i in 0..3 {
             let phis: Vec<Vec<f64>> = d
@@ -228,8 +174,14 @@ impl<'a> Data<'a> {
         v
     }
 
-    /// The columns of extra number `e`; `base` gives K(T) for fixture columns.
-    fn extra(&self, e: usize, extra: &Extra, d: &mut Design, base: Option<&Fit>) {
+    /// The columns of extra number `e`; `base_k` gives K(T) for fixture columns.
+    fn extra_columns(
+        &self,
+        e: usize,
+        extra: &Extra,
+        d: &mut Design,
+        base_k: Option<&[[[f64; 3]; 3]]>,
+    ) {
         let obs = &self.obs;
         match extra {
             Extra::Curvature(_) | Extra::Lag { .. } => {}
@@ -270,220 +222,58 @@ impl<'a> Data<'a> {
                 self.per_axis(d, Term::Warmup, e, &|r, _| m[r]);
             }
             Extra::Fixture(p) => {
-                let Some(b) = base else { return };
-                for (n, dirv) in fixture_directions(self.rec.positions.vector(*p))
-                    .iter()
-                    .enumerate()
-                {
-                    let mut col = Vec::new();
-                    for (r, o) in obs.iter().enumerate().filter(|(_, o)| o.position == *p) {
-                        let _ = o;
-                        for (i, row) in b.k_at[r].iter().enumerate() {
-                            col.push((
-                                3 * r + i,
-                                row[0] * dirv[0] + row[1] * dirv[1] + row[2] * dirv[2],
-                            ));
-                        }
-                    }
-                    d.push_column(
-                        Param::FixtureAngle {
-                            n: n as u8 + 1,
-                            extra: e,
-                        },
-                        col,
-                    );
+                if let Some(k) = base_k {
+                    self.fixture_columns(e, *p, k, d);
                 }
             }
         }
     }
 
-    fn design(&self, spec: &Spec, base: Option<&Fit>) -> Design {
-        let mut d = Design {
-            rows: vec![Vec::new(); self.n_rows()],
-            labels: Vec::new(),
-            temps: self.temps(spec),
-        };
-        self.baseline(spec, &mut d);
-        for (e, x) in spec.extras.iter().enumerate() {
-            self.extra(e, x, &mut d, base);
-        }
-        d
-    }
-
-    /// Fit a spec; `None` when the data do not determine it. With `full`, also the
-    /// covariance and the held-out chi-square (profiling needs neither). A spec with
-    /// fixture errors linearises them around `base`'s K(T) (or the spec's own without them).
-    pub fn fit(&self, spec: &Spec, base: Option<&Fit>, full: bool) -> Option<Fit> {
-        let own_base;
-        let base = match base {
-            Some(b) => Some(b),
-            None if spec.extras.iter().any(|e| matches!(e, Extra::Fixture(_))) => {
-                let mut s = spec.clone();
-                s.extras.retain(|e| !matches!(e, Extra::Fixture(_)));
-                own_base = self.fit(&s, None, false)?;
-                Some(&own_base)
-            }
-            None => None,
-        };
-        let d = self.design(spec, base);
-        let p = d.labels.len();
-        let b: Vec<f64> = self.obs.iter().flat_map(|o| o.u).collect();
-        let n_chunks = self.obs.iter().map(|o| o.chunk + 1).max().unwrap_or(1);
-        let mut chunks: Vec<Normal> = (0..n_chunks).map(|_| Normal::new(p)).collect();
-        for (r, row) in d.rows.iter().enumerate() {
-            chunks[self.obs[r / 3].chunk].add_sparse(row, b[r], self.w[r]);
-        }
-        let total = chunks.iter().fold(Normal::new(p), |a, f| a.plus(f));
-        let predict =
-            |x: &DVector<f64>, r: usize| d.rows[r].iter().map(|(c, v)| v * x[*c]).sum::<f64>();
-        let (x, cov) = if full {
-            let s = total.solve()?;
-            (s.x, Some(s.cov))
-        } else {
-            (total.solve_x()?, None)
-        };
-        let resid_rows: Vec<f64> = (0..b.len()).map(|r| b[r] - predict(&x, r)).collect();
-        let chi2 = resid_rows.iter().zip(&self.w).map(|(r, w)| w * r * r).sum();
-        // each chunk predicted by the fit without it (a chunk the others cannot predict
-        // keeps its in-sample residual)
-        let mut heldout_rows = vec![0.0; b.len()];
-        let mut hac = None;
-        if full {
-            let sols: Vec<DVector<f64>> = chunks
-                .iter()
-                .map(|c| total.minus(c).solve_x().unwrap_or_else(|| x.clone()))
-                .collect();
-            for (r, h) in heldout_rows.iter_mut().enumerate() {
-                let e = b[r] - predict(&sols[self.obs[r / 3].chunk], r);
-                *h = self.w[r] * e * e;
-            }
-            if let Some(c) = &cov {
-                hac = Some(hac_sigma(&d.rows, c, &resid_rows, &self.w, self.obs.len()));
-            }
-        }
-        let (k_at, u0_at): (Vec<_>, Vec<_>) = d
-            .temps
+    /// A fixture error of position `p`: its two rotation angles, linearised around the
+    /// K(T) `base_k` of every observation.
+    fn fixture_columns(&self, e: usize, p: usize, base_k: &[[[f64; 3]; 3]], d: &mut Design) {
+        for (n, dirv) in fixture_directions(self.rec.positions.vector(p))
             .iter()
-            .map(|t| static_at(spec, &d.labels, &x, self.t0, *t))
-            .unzip();
-        Some(Fit {
-            spec: spec.clone(),
-            chi2,
-            k: p,
-            cov,
-            hac,
-            labels: d.labels,
-            resid: resid_rows.chunks(3).map(|c| [c[0], c[1], c[2]]).collect(),
-            k_at,
-            u0_at,
-            heldout: heldout_rows.iter().sum(),
-            heldout_rows,
-            insample_rows: resid_rows
-                .iter()
-                .zip(&self.w)
-                .map(|(r, w)| w * r * r)
-                .collect(),
-            x,
-        })
-    }
-
-    /// K(T) and U0(T) of a fitted spec at the temperatures `temps` (bends included).
-    pub fn coefficients_at(&self, f: &Fit, temps: &[f64]) -> Vec<([[f64; 3]; 3], [f64; 3])> {
-        temps
-            .iter()
-            .map(|&t| static_at(&f.spec, &f.labels, &f.x, self.t0, [t; 3]))
-            .collect()
-    }
-}
-
-/// A chunk is an extrapolation, not a test, when its held-out chi-square is more than
-/// this many times its in-sample one (plus one per row): the rest of the data does not
-/// determine the model there (the only calibration dwells at an end temperature, say).
-pub const EXTRAPOLATION: f64 = 10.0;
-
-impl Data<'_> {
-    /// Per chunk: whether both fits predict it from the other chunks (not an
-    /// extrapolation for either).
-    pub fn predictable(&self, a: &Fit, b: &Fit) -> Vec<bool> {
-        let n = self.obs.iter().map(|o| o.chunk + 1).max().unwrap_or(0);
-        let mut sums = vec![[0.0f64; 5]; n];
-        for (r, o) in self.obs.iter().enumerate() {
-            for row in 3 * r..3 * r + 3 {
-                let s = &mut sums[o.chunk];
-                s[0] += a.heldout_rows.get(row).copied().unwrap_or(0.0);
-                s[1] += a.insample_rows.get(row).copied().unwrap_or(0.0);
-                s[2] += b.heldout_rows.get(row).copied().unwrap_or(0.0);
-                s[3] += b.insample_rows.get(row).copied().unwrap_or(0.0);
-                s[4] += 1.0;
-            }
-        }
-        sums.iter()
-            .map(|s| s[0] <= EXTRAPOLATION * (s[1] + s[4]) && s[2] <= EXTRAPOLATION * (s[3] + s[4]))
-            .collect()
-    }
-
-    /// The held-out chi-squares of `a` and `b` over the chunks both predict.
-    pub fn heldout_pair(&self, a: &Fit, b: &Fit) -> (f64, f64) {
-        let ok = self.predictable(a, b);
-        let mut out = (0.0, 0.0);
-        for (r, o) in self.obs.iter().enumerate() {
-            if ok[o.chunk] {
-                for row in 3 * r..3 * r + 3 {
-                    out.0 += a.heldout_rows.get(row).copied().unwrap_or(0.0);
-                    out.1 += b.heldout_rows.get(row).copied().unwrap_or(0.0);
+            .enumerate()
+        {
+            let mut col = Vec::new();
+            for (r, _) in self.obs.iter().enumerate().filter(|(_, o)| o.position == p) {
+                for (i, row) in base_k[r].iter().enumerate() {
+                    col.push((
+                        3 * r + i,
+                        row[0] * dirv[0] + row[1] * dirv[1] + row[2] * dirv[2],
+                    ));
                 }
             }
-        }
-        out
-    }
-}
-
-/// Newey-West standard errors: each observation's influence on every parameter
-/// (`C x_r w_r e_r`, summed over its three axes), then the influences' sum of squares and
-/// of cross products with up to `L` neighbours in time, Bartlett-weighted.
-fn hac_sigma(rows: &[Row], cov: &DMatrix<f64>, resid: &[f64], w: &[f64], n_obs: usize) -> Vec<f64> {
-    let p = cov.ncols();
-    let lags = (4.0 * (n_obs as f64 / 100.0).powf(2.0 / 9.0))
-        .floor()
-        .max(5.0) as usize;
-    let mut infl = vec![vec![0.0; p]; n_obs];
-    for (r, row) in rows.iter().enumerate() {
-        let we = w[r] * resid[r];
-        if we == 0.0 {
-            continue;
-        }
-        let target = &mut infl[r / 3];
-        for (j, t) in target.iter_mut().enumerate() {
-            *t += row.iter().map(|(c, v)| cov[(j, *c)] * v).sum::<f64>() * we;
+            d.push_column(
+                Param::FixtureAngle {
+                    n: n as u8 + 1,
+                    extra: e,
+                },
+                col,
+            );
         }
     }
-    (0..p)
-        .map(|j| {
-            let mut v: f64 = infl.iter().map(|a| a[j] * a[j]).sum();
-            for l in 1..=lags {
-                let k = 1.0 - l as f64 / (lags + 1) as f64;
-                v += 2.0 * k * (l..n_obs).map(|t| infl[t][j] * infl[t - l][j]).sum::<f64>();
-            }
-            v.max(0.0).sqrt()
-        })
-        .collect()
 }
 
 /// The offsets' temperature basis: a `Curvature` extra's fine one, else the baseline's.
 fn offset_basis(spec: &Spec) -> Basis {
     spec.extras
         .iter()
-        .find_map(|e| match e {
-            Extra::Curvature(b) => Some(Basis::Pwl {
-                breakpoints: b.clone(),
-            }),
-            _ => None,
+        .find_map(|e| {
+            if let Extra::Curvature(b) = e {
+                Some(Basis::Pwl {
+                    breakpoints: b.clone(),
+                })
+            } else {
+                None
+            }
         })
         .unwrap_or_else(|| spec.basis.clone())
 }
 
 /// K and U0 of a fitted spec (baseline and bends), row i at temperature `temps[i]`.
-fn static_at(
+pub fn static_at(
     spec: &Spec,
     labels: &[Param],
     x: &DVector<f64>,
@@ -506,7 +296,12 @@ fn static_at(
                     match term {
                         Term::BendOffset => u0[axis] += v * h,
                         Term::BendScale => k[axis][axis] += v * h,
-                        _ => {}
+                        Term::Rate
+                        | Term::Hysteresis
+                        | Term::HysteresisScale
+                        | Term::K2
+                        | Term::Asymmetry
+                        | Term::Warmup => {}
                     }
                 }
             }

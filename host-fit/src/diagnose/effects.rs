@@ -1,6 +1,7 @@
 //! The catalogue's effects as candidate extensions of the baseline model, each with the
 //! structural unknowns of its form (time constants, thresholds, initial states, restart
 //! events, where a bend sits), which the search profiles instead of assuming.
+use serde::Serialize;
 
 /// When a warm-up clock restarts (besides the start of the recording).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,30 +63,108 @@ pub enum Extra {
     },
 }
 
-/// The catalogue's effect ids, in the order candidates are tried.
-pub const EFFECT_IDS: [&str; 8] = [
-    "temp_curvature",
-    "thermal_lag",
-    "temp_rate",
-    "hysteresis",
-    "nonlinearity_k2",
-    "scale_asymmetry",
-    "fixture_error",
-    "warmup_drift",
-];
+/// The catalogue's effects (physics-catalogue.md), by their ids; the JSON contract and
+/// the text name them by [`EffectId::as_str`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EffectId {
+    /// The coefficients bend between the temperatures more than the baseline follows.
+    TempCurvature,
+    /// The sensing element lags the temperature sensor.
+    ThermalLag,
+    /// The offsets depend on the rate of temperature change.
+    TempRate,
+    /// The coefficients depend on the direction of the last temperature change.
+    Hysteresis,
+    /// The output grows with the square of the specific force.
+    NonlinearityK2,
+    /// The scale factors differ for positive and negative specific force.
+    ScaleAsymmetry,
+    /// A position of the fixture is off its nominal direction.
+    FixtureError,
+    /// The offsets settle after power-on.
+    WarmupDrift,
+}
+
+impl EffectId {
+    /// Every effect, in the order candidates are tried.
+    pub const ALL: [EffectId; 8] = [
+        EffectId::TempCurvature,
+        EffectId::ThermalLag,
+        EffectId::TempRate,
+        EffectId::Hysteresis,
+        EffectId::NonlinearityK2,
+        EffectId::ScaleAsymmetry,
+        EffectId::FixtureError,
+        EffectId::WarmupDrift,
+    ];
+
+    /// The catalogue id.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            EffectId::TempCurvature => "temp_curvature",
+            EffectId::ThermalLag => "thermal_lag",
+            EffectId::TempRate => "temp_rate",
+            EffectId::Hysteresis => "hysteresis",
+            EffectId::NonlinearityK2 => "nonlinearity_k2",
+            EffectId::ScaleAsymmetry => "scale_asymmetry",
+            EffectId::FixtureError => "fixture_error",
+            EffectId::WarmupDrift => "warmup_drift",
+        }
+    }
+
+    /// A short name, distinct for every id (column heads).
+    pub fn short(self) -> &'static str {
+        match self {
+            EffectId::TempCurvature => "curv",
+            EffectId::ThermalLag => "lag",
+            EffectId::TempRate => "rate",
+            EffectId::Hysteresis => "hyst",
+            EffectId::NonlinearityK2 => "k2",
+            EffectId::ScaleAsymmetry => "asym",
+            EffectId::FixtureError => "fixt",
+            EffectId::WarmupDrift => "warm",
+        }
+    }
+
+    /// The effect of catalogue id `s`.
+    pub fn parse(s: &str) -> Option<EffectId> {
+        EffectId::ALL.into_iter().find(|e| e.as_str() == s)
+    }
+
+    /// How many times the effect may be added (a second warm-up time constant, a second
+    /// bend, more than one position off).
+    pub fn max_count(self) -> usize {
+        match self {
+            EffectId::TempCurvature | EffectId::WarmupDrift => 2,
+            EffectId::FixtureError => 3,
+            EffectId::ThermalLag
+            | EffectId::TempRate
+            | EffectId::Hysteresis
+            | EffectId::NonlinearityK2
+            | EffectId::ScaleAsymmetry => 1,
+        }
+    }
+}
+
+impl std::fmt::Display for EffectId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
 
 impl Extra {
     /// The catalogue id.
-    pub fn id(&self) -> &'static str {
+    pub fn id(&self) -> EffectId {
         match self {
-            Extra::Curvature(_) | Extra::Bend { .. } => "temp_curvature",
-            Extra::Lag { .. } => "thermal_lag",
-            Extra::Rate { .. } => "temp_rate",
-            Extra::Hysteresis { .. } => "hysteresis",
-            Extra::K2 => "nonlinearity_k2",
-            Extra::Asymmetry => "scale_asymmetry",
-            Extra::Warmup { .. } => "warmup_drift",
-            Extra::Fixture(_) => "fixture_error",
+            Extra::Curvature(_) | Extra::Bend { .. } => EffectId::TempCurvature,
+            Extra::Lag { .. } => EffectId::ThermalLag,
+            Extra::Rate { .. } => EffectId::TempRate,
+            Extra::Hysteresis { .. } => EffectId::Hysteresis,
+            Extra::K2 => EffectId::NonlinearityK2,
+            Extra::Asymmetry => EffectId::ScaleAsymmetry,
+            Extra::Warmup { .. } => EffectId::WarmupDrift,
+            Extra::Fixture(_) => EffectId::FixtureError,
         }
     }
 
@@ -106,16 +185,6 @@ impl Extra {
             }
             Extra::Hysteresis { .. } => 2,
             Extra::Warmup { restart, .. } => 1 + usize::from(*restart != Restart::Start),
-        }
-    }
-
-    /// How many times the effect may be added (a second warm-up time constant, a second
-    /// bend, more than one position off).
-    pub fn max_count(id: &str) -> usize {
-        match id {
-            "temp_curvature" | "warmup_drift" => 2,
-            "fixture_error" => 3,
-            _ => 1,
         }
     }
 

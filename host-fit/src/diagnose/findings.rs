@@ -2,12 +2,13 @@
 //! the axes where it matters, its parameters with uncertainties scaled by the dispersion,
 //! where it shows, and how much it improves held-out data; and the candidates the data
 //! cannot tell apart, with the measurement that would.
-use crate::diagnose::design::{Data, Fit, Spec};
-use crate::diagnose::effects::Extra;
-use crate::diagnose::location::locate;
-use crate::diagnose::metrics::{dispersion, max_dg, residual_rms};
+use crate::diagnose::data::Data;
+use crate::diagnose::design::Spec;
+use crate::diagnose::effects::{EffectId, Extra};
+use crate::diagnose::fit::{Depth, Fit};
+use crate::diagnose::location::{locate, Grouping};
+use crate::diagnose::metrics::{contribution, dispersion, judge, max_dg, residual_rms, sigma};
 use crate::diagnose::params::{Param, Term};
-use crate::diagnose::search::{contribution, judge, sigma, Z_SIGNIFICANT};
 use firmware_core::model::AXES;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -16,7 +17,7 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Finding {
     /// Catalogue id.
-    pub effect: String,
+    pub effect: EffectId,
     /// The form found (time constants, switching, restarts, where a bend sits).
     pub form: String,
     /// Axes where the effect matters (removing it worsens that axis significantly).
@@ -51,7 +52,7 @@ pub struct Finding {
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Ambiguity {
     /// Catalogue ids.
-    pub candidates: Vec<String>,
+    pub candidates: Vec<EffectId>,
     /// The measurement that separates them.
     pub needed: String,
 }
@@ -77,17 +78,17 @@ fn linear_parameters(full: &Fit, e: usize, phi: f64) -> Vec<(String, f64, f64)> 
         .filter(|(_, l)| l.extra() == Some(e))
         .map(|(j, l)| {
             let (v, s) = (full.x[j], sigma(full, j, phi));
-            match *l {
-                Param::Effect {
-                    term: Term::Asymmetry,
-                    axis,
-                    ..
-                } => {
-                    // c_i = K_ii delta_i: reported as delta_i, relative
-                    let kii = full.k_at.first().map(|k| k[axis][axis]).unwrap_or(1.0);
-                    (format!("delta_{}", AXES[axis]), v / kii, s / kii.abs())
-                }
-                _ => (l.to_string(), v, s),
+            if let Param::Effect {
+                term: Term::Asymmetry,
+                axis,
+                ..
+            } = *l
+            {
+                // c_i = K_ii delta_i: reported as delta_i, relative
+                let kii = full.k_at.first().map(|k| k[axis][axis]).unwrap_or(1.0);
+                (format!("delta_{}", AXES[axis]), v / kii, s / kii.abs())
+            } else {
+                (l.to_string(), v, s)
             }
         })
         .collect()
@@ -101,8 +102,8 @@ fn linear_parameters(full: &Fit, e: usize, phi: f64) -> Vec<(String, f64, f64)> 
 fn profile_sigma(data: &Data, full: &Fit, phi: f64, v: f64, make: &dyn Fn(f64) -> Spec) -> f64 {
     let h = 0.02 * v.abs().max(1e-3);
     let (Some(up), Some(down)) = (
-        data.fit(&make(v + h), None, false),
-        data.fit(&make(v - h), None, false),
+        data.fit(&make(v + h), None, Depth::Profile),
+        data.fit(&make(v - h), None, Depth::Profile),
     ) else {
         return f64::INFINITY;
     };
@@ -110,8 +111,7 @@ fn profile_sigma(data: &Data, full: &Fit, phi: f64, v: f64, make: &dyn Fn(f64) -
     if curv.is_nan() || curv <= 0.0 {
         return f64::INFINITY;
     }
-    let n_chunks = data.obs.iter().map(|o| o.chunk + 1).max().unwrap_or(1);
-    let mut slope = vec![0.0; n_chunks];
+    let mut slope = vec![0.0; data.n_chunks()];
     for (r, o) in data.obs.iter().enumerate() {
         for row in 3 * r..3 * r + 3 {
             slope[o.chunk] += (up.insample_rows[row] - down.insample_rows[row]) / (2.0 * h);
@@ -127,13 +127,9 @@ fn profile_sigma(data: &Data, full: &Fit, phi: f64, v: f64, make: &dyn Fn(f64) -
 
 /// The structural parameters of a form, with their 1-sigma where a profile defines one.
 fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<(String, f64, f64)> {
-    let with = |x: Extra| {
-        let mut s = full.spec.clone();
-        s.extras[e] = x;
-        s
+    let sigma = |v: f64, make: &dyn Fn(f64) -> Extra| {
+        profile_sigma(data, full, phi, v, &|t| full.spec.replaced(e, make(t)))
     };
-    let sigma =
-        |v: f64, make: &dyn Fn(f64) -> Extra| profile_sigma(data, full, phi, v, &|t| with(make(t)));
     match full.spec.extras[e].clone() {
         Extra::Warmup { tau_s, restart } => {
             vec![(
@@ -190,7 +186,7 @@ fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<(St
             sigma(knot_c, &|k| Extra::Bend { knot_c: k }),
         )],
         Extra::Curvature(b) => vec![("breakpoints".into(), b.len() as f64, 0.0)],
-        _ => Vec::new(),
+        Extra::K2 | Extra::Asymmetry | Extra::Fixture(_) => Vec::new(),
     }
 }
 
@@ -199,6 +195,7 @@ fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<(St
 pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Finding> {
     let phi = dispersion(data, full);
     let gains = axis_gains(data, full, reduced, phi);
+    let zs = data.rules.z_significant;
     // where the effect has its own per-axis terms, one of them must be significant too
     let term_z = |i: usize| {
         (0..full.k)
@@ -209,10 +206,7 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
             .reduce(f64::max)
     };
     let axes: Vec<String> = (0..3)
-        .filter(|&i| {
-            gains[i] >= Z_SIGNIFICANT * Z_SIGNIFICANT
-                && term_z(i).is_none_or(|z| z >= Z_SIGNIFICANT)
-        })
+        .filter(|&i| gains[i] >= zs * zs && term_z(i).is_none_or(|z| z >= zs))
         .map(|i| AXES[i].to_string())
         .collect();
     if axes.is_empty() {
@@ -235,7 +229,7 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
         .collect();
     Some(Finding {
         units,
-        effect: extra.id().into(),
+        effect: extra.id(),
         form: extra.form(),
         axes,
         parameters,
@@ -247,9 +241,10 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
         residual_rms_after: residual_rms(full),
         max_abs_dg_mg_after: max_dg(data, full),
         evidence: evidence(data, full, reduced, extra),
-        position: match extra {
-            Extra::Fixture(p) => Some(data.rec.positions.name(*p).to_string()),
-            _ => None,
+        position: if let Extra::Fixture(p) = extra {
+            Some(data.rec.positions.name(*p).to_string())
+        } else {
+            None
         },
     })
 }
@@ -276,9 +271,10 @@ fn unit_of(name: &str, ou: &str) -> String {
 
 /// Whether extra `e` shows the same signature on both halves of the data (even and odd
 /// time chunks, each spanning the whole recording): on each half alone, the residual
-/// without the effect projects onto the effect's contribution with an amplitude of 0.5 to
-/// 1.5 of the joint fit's, at least [`Z_SIGNIFICANT`] sigmas from zero. The rest of the
-/// model is held at the joint fit (a half alone need not determine it).
+/// without the effect projects onto the effect's contribution with an amplitude within
+/// [`crate::diagnose::rules::Rules::reproduced_amplitude`] of the joint fit's, at least
+/// `z_significant` sigmas from zero. The rest of the model is held at the joint fit (a
+/// half alone need not determine it).
 pub fn reproduced(data: &Data, full: &Fit, reduced: &Fit) -> bool {
     let c = contribution(data, full, reduced);
     (0..2).all(|half| {
@@ -297,7 +293,8 @@ pub fn reproduced(data: &Data, full: &Fit, reduced: &Fit) -> bool {
         let s = rc / cc;
         let phi = ((rr - s * rc) / n.saturating_sub(1).max(1) as f64).max(1.0);
         let z = s / (phi / cc).sqrt();
-        (0.5..=1.5).contains(&s) && z >= Z_SIGNIFICANT
+        let (lo, hi) = data.rules.reproduced_amplitude;
+        (lo..=hi).contains(&s) && z >= data.rules.z_significant
     })
 }
 
@@ -312,7 +309,7 @@ fn evidence(data: &Data, full: &Fit, reduced: &Fit, extra: &Extra) -> String {
     let spots = locate(data, &z, &raw, 0.0);
     let top: Vec<String> = spots
         .iter()
-        .filter(|h| h.group != "direction" || matches!(extra, Extra::Hysteresis { .. }))
+        .filter(|h| h.group != Grouping::Direction || matches!(extra, Extra::Hysteresis { .. }))
         .take(2)
         .map(|h| {
             format!(
@@ -342,20 +339,28 @@ fn evidence(data: &Data, full: &Fit, reduced: &Fit, extra: &Extra) -> String {
     )
 }
 
-/// The measurement that would separate candidates `a` and `b`.
-pub fn needed(a: &str, b: &str) -> String {
-    let pair = |x: &str, y: &str| (a == x && b == y) || (a == y && b == x);
-    if pair("nonlinearity_k2", "scale_asymmetry") {
+/// The measurement that would separate the candidates of an ambiguous group (the first
+/// against the second; a group of one needs nothing the data lack but more of them).
+pub fn needed(group: &[EffectId]) -> String {
+    use EffectId::{Hysteresis, NonlinearityK2, ScaleAsymmetry, TempRate, ThermalLag, WarmupDrift};
+    let (a, b) = match group {
+        [a, b, ..] => (*a, Some(*b)),
+        [a] => (*a, None),
+        [] => return String::new(),
+    };
+    let pair = |x: EffectId, y: EffectId| b.is_some_and(|b| (a, b) == (x, y) || (a, b) == (y, x));
+    if pair(NonlinearityK2, ScaleAsymmetry) {
         "tilted positions (e.g. PP1..PP6) where a_i^2 and |a_i| differ".into()
-    } else if pair("thermal_lag", "temp_rate") {
+    } else if pair(ThermalLag, TempRate) {
         "a soak after a ramp long enough to watch the error decay (lag) or vanish with dT/dt (rate), or ramps at two rates".into()
-    } else if pair("hysteresis", "thermal_lag") || pair("hysteresis", "temp_rate") {
+    } else if pair(Hysteresis, ThermalLag) || pair(Hysteresis, TempRate) {
         "a temperature visited from both directions after a long soak".into()
-    } else if pair("warmup_drift", "thermal_lag") || pair("warmup_drift", "temp_rate") {
+    } else if pair(WarmupDrift, ThermalLag) || pair(WarmupDrift, TempRate) {
         "a power cycle or handling at a steady temperature, away from any temperature change".into()
     } else {
         format!(
-            "data that changes {a} and {b} differently (other positions, temperatures or timing)"
+            "data that changes {a} and {} differently (other positions, temperatures or timing)",
+            b.map(EffectId::as_str).unwrap_or("")
         )
     }
 }

@@ -3,18 +3,10 @@
 //! robust statistics (so spikes do not inflate it) and second differences of block means
 //! (so a slow drift through the dwell, a settling temperature, does not count as noise).
 use crate::data::recording::Recording;
+use crate::diagnose::rules::Rules;
 
 /// Median of a chi-square with one degree of freedom: robust variance from squares.
 const CHI2_1_MEDIAN: f64 = 0.454_936_423_119_572_8;
-/// A scale is measured when at least this many second differences support it.
-const MIN_SUPPORT: usize = 12;
-/// A piece is steady when the means of its thirds differ by at most this (C) end to end
-/// (the second difference removes a linear drift) ...
-const STEADY_SPAN_C: f64 = 1.0;
-/// ... and bend by at most this (C).
-const STEADY_BEND_C: f64 = 0.02;
-/// A sample whose second difference is this many robust sigmas out is a spike.
-pub const SPIKE_Z: f64 = 8.0;
 
 /// The measured floor of one axis.
 #[derive(Debug, Clone, PartialEq)]
@@ -92,9 +84,9 @@ fn robust_var(sq: &mut [f64]) -> f64 {
     sq[sq.len() / 2] / CHI2_1_MEDIAN
 }
 
-/// Spikes: samples whose second difference inside a dwell is more than [`SPIKE_Z`] robust
-/// sigmas out, on any axis.
-fn spikes(rec: &Recording) -> Vec<usize> {
+/// Spikes: samples whose second difference inside a dwell is more than
+/// [`Rules::spike_z`] robust sigmas out, on any axis.
+fn spikes(rec: &Recording, rules: &Rules) -> Vec<usize> {
     let mut out = Vec::new();
     for axis in 0..3 {
         let mut d2: Vec<(usize, f64)> = Vec::new();
@@ -105,14 +97,14 @@ fn spikes(rec: &Recording) -> Vec<usize> {
                 d2.push((d.start + k, v));
             }
         }
-        if d2.len() < MIN_SUPPORT {
+        if d2.len() < rules.floor_min_support {
             continue;
         }
         let mut sq: Vec<f64> = d2.iter().map(|(_, v)| v * v).collect();
         let sigma = robust_var(&mut sq).sqrt();
         out.extend(
             d2.iter()
-                .filter(|(_, v)| v.abs() > SPIKE_Z * sigma && sigma > 0.0)
+                .filter(|(_, v)| v.abs() > rules.spike_z * sigma && sigma > 0.0)
                 .map(|(r, _)| *r),
         );
     }
@@ -126,7 +118,14 @@ fn spikes(rec: &Recording) -> Vec<usize> {
 /// pieces overlap by three quarters (more support; the median does not mind). Far-apart
 /// blocks are (nearly) independent even when the noise is correlated, and the second
 /// difference removes a linear drift.
-fn triples(rec: &Recording, spikes: &[usize], axis: usize, m: usize, piece: usize) -> Vec<f64> {
+fn triples(
+    rec: &Recording,
+    spikes: &[usize],
+    rules: &Rules,
+    axis: usize,
+    m: usize,
+    piece: usize,
+) -> Vec<f64> {
     let mut sq = Vec::new();
     let stride = (piece / 4).max(1);
     for d in &rec.dwells {
@@ -146,7 +145,9 @@ fn triples(rec: &Recording, spikes: &[usize], axis: usize, m: usize, piece: usiz
                     / third as f64
             };
             let (ta, tb, tc) = (tm(0), tm(1), tm(2));
-            if (tc - ta).abs() > STEADY_SPAN_C || (tc - 2.0 * tb + ta).abs() > STEADY_BEND_C {
+            if (tc - ta).abs() > rules.floor_steady_span_c
+                || (tc - 2.0 * tb + ta).abs() > rules.floor_steady_bend_c
+            {
                 continue;
             }
             let mean = |k: usize| p[k..k + m].iter().map(|r| r.u[axis]).sum::<f64>() / m as f64;
@@ -157,17 +158,15 @@ fn triples(rec: &Recording, spikes: &[usize], axis: usize, m: usize, piece: usiz
     sq
 }
 
-/// Pieces this long (samples) keep the three blocks of a second difference far apart;
-/// recordings without such steady spans fall back to adjacent blocks (white noise assumed
-/// between neighbours).
-const PIECE: usize = 120;
-
-/// Measure the floor of `rec`.
-pub fn floor(rec: &Recording) -> Floor {
-    let spikes = spikes(rec);
+/// Measure the floor of `rec`: pieces of [`Rules::floor_piece`] samples keep the three
+/// blocks of a second difference far apart; recordings without such steady spans fall
+/// back to adjacent blocks (white noise assumed between neighbours).
+pub fn floor(rec: &Recording, rules: &Rules) -> Floor {
+    let spikes = spikes(rec, rules);
     let longest = rec.dwells.iter().map(|d| d.len()).max().unwrap_or(0);
-    let base = if triples(rec, &spikes, 0, 1, PIECE).len() >= MIN_SUPPORT {
-        PIECE
+    let piece = rules.floor_piece;
+    let base = if triples(rec, &spikes, rules, 0, 1, piece).len() >= rules.floor_min_support {
+        piece
     } else {
         3
     };
@@ -177,8 +176,8 @@ pub fn floor(rec: &Recording) -> Floor {
         // physics of the outputs as noise; beyond, the floor is extrapolated
         let mut m = 1usize;
         while 3 * m <= longest.min(base.max(3)) {
-            let mut sq = triples(rec, &spikes, axis, m, base.max(3 * m));
-            if sq.len() >= MIN_SUPPORT {
+            let mut sq = triples(rec, &spikes, rules, axis, m, base.max(3 * m));
+            if sq.len() >= rules.floor_min_support {
                 // the middle block sits (piece - m) / 2 from both ends: independent blocks
                 // give Var(b2 - 2 b1 + b0) = 6 Var(b)
                 let n = sq.len() as f64;

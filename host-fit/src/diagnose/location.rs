@@ -1,15 +1,55 @@
 //! Where a residual (or an effect's contribution) stands out from the floor: grouped by
 //! position, temperature, time, temperature rate and heating/cooling direction, per axis.
-use crate::diagnose::design::Data;
+use crate::diagnose::data::Data;
 use crate::fit::temperature::temperature_clusters;
 use firmware_core::model::AXES;
 use serde::Serialize;
+
+/// How windows are grouped to locate a residual.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Grouping {
+    /// By position.
+    #[serde(rename = "position")]
+    Position,
+    /// By the stop temperature nearest the window's.
+    #[serde(rename = "temperature")]
+    Temperature,
+    /// By an eighth of the recording's time.
+    #[serde(rename = "time")]
+    Time,
+    /// Heating, cooling or steady.
+    #[serde(rename = "dT/dt")]
+    Rate,
+    /// After heating, after cooling, or before the first change.
+    #[serde(rename = "direction")]
+    Direction,
+}
+
+impl Grouping {
+    /// The contract's name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Grouping::Position => "position",
+            Grouping::Temperature => "temperature",
+            Grouping::Time => "time",
+            Grouping::Rate => "dT/dt",
+            Grouping::Direction => "direction",
+        }
+    }
+}
+
+impl std::fmt::Display for Grouping {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        // padding and alignment as for a string
+        f.pad(self.as_str())
+    }
+}
 
 /// One located group: its values in floor units.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Hotspot {
     /// Grouping (position, temperature, time, dT/dt, direction).
-    pub group: String,
+    pub group: Grouping,
     /// The group's value.
     pub value: String,
     /// Axis.
@@ -24,14 +64,27 @@ pub struct Hotspot {
     pub count: usize,
 }
 
-/// The groups every observation belongs to: `(group, value)`.
-fn groups(data: &Data) -> Vec<(String, String, Vec<usize>)> {
-    let mut groups: Vec<(String, String, Vec<usize>)> = Vec::new();
-    let mut add =
-        |g: &str, v: String, idx: usize| match groups.iter_mut().find(|x| x.0 == g && x.1 == v) {
-            Some(x) => x.2.push(idx),
-            None => groups.push((g.to_string(), v, vec![idx])),
-        };
+/// One group of windows.
+struct Group {
+    by: Grouping,
+    value: String,
+    windows: Vec<usize>,
+}
+
+/// The groups every observation belongs to.
+fn groups(data: &Data) -> Vec<Group> {
+    let mut groups: Vec<Group> = Vec::new();
+    let mut add = |by: Grouping, value: String, idx: usize| match groups
+        .iter_mut()
+        .find(|x| x.by == by && x.value == value)
+    {
+        Some(x) => x.windows.push(idx),
+        None => groups.push(Group {
+            by,
+            value,
+            windows: vec![idx],
+        }),
+    };
     let temps: Vec<f64> = data.obs.iter().map(|o| o.temp_c).collect();
     let clusters = temperature_clusters(&temps);
     let (t_lo, t_hi) = data
@@ -43,7 +96,7 @@ fn groups(data: &Data) -> Vec<(String, String, Vec<usize>)> {
     let span = (t_hi - t_lo).max(1.0);
     for (r, o) in data.obs.iter().enumerate() {
         add(
-            "position",
+            Grouping::Position,
             data.rec.positions.name(o.position).to_string(),
             r,
         );
@@ -52,36 +105,40 @@ fn groups(data: &Data) -> Vec<(String, String, Vec<usize>)> {
             .min_by(|a, b| (*a - o.temp_c).abs().total_cmp(&(*b - o.temp_c).abs()))
             .copied()
             .unwrap_or(0.0);
-        add("temperature", format!("{c:.0} C"), r);
+        add(Grouping::Temperature, format!("{c:.0} C"), r);
         let bin = (((o.t_s - t_lo) / span) * 8.0).floor().min(7.0);
         let h = |b: f64| (t_lo + b * span / 8.0) / 3600.0;
-        add("time", format!("{:.1}-{:.1} h", h(bin), h(bin + 1.0)), r);
-        let rate = data.rate[r];
-        let rate_group = if rate > 0.002 {
-            "heating >0.002 C/s"
-        } else if rate < -0.002 {
-            "cooling >0.002 C/s"
+        add(
+            Grouping::Time,
+            format!("{:.1}-{:.1} h", h(bin), h(bin + 1.0)),
+            r,
+        );
+        let (rate, steady) = (data.rate[r], data.rules.steady_rate_c_per_s);
+        let rate_group = if rate > steady {
+            format!("heating >{steady} C/s")
+        } else if rate < -steady {
+            format!("cooling >{steady} C/s")
         } else {
-            "steady"
+            "steady".to_string()
         };
-        add("dT/dt", rate_group.to_string(), r);
-        let dir = match data.dir[r] {
-            d if d > 0.5 => "after heating",
-            d if d < -0.5 => "after cooling",
-            _ => "before the first change",
+        add(Grouping::Rate, rate_group, r);
+        let (d, m) = (data.dir[r], data.rules.direction_majority);
+        let dir = if d > m {
+            "after heating"
+        } else if d < -m {
+            "after cooling"
+        } else {
+            "before the first change"
         };
-        add("direction", dir.to_string(), r);
+        add(Grouping::Direction, dir.to_string(), r);
     }
     groups
 }
 
-/// The least share of the sum of squares a located group carries.
-const MIN_SHARE: f64 = 0.01;
-
 /// Every group where `z` (per observation and axis, floor units) has an RMS above
-/// `min_rms` and at least 1% of the sum of squares, worst first; `raw` gives the means in
-/// output units. (A group of two windows can be extreme and still not be where the
-/// mismatch is.)
+/// `min_rms` and at least [`crate::diagnose::rules::Rules::located_share`] of the sum of
+/// squares, worst first; `raw` gives the means in output units. (A group of two windows
+/// can be extreme and still not be where the mismatch is.)
 pub fn locate(data: &Data, z: &[[f64; 3]], raw: &[[f64; 3]], min_rms: f64) -> Vec<Hotspot> {
     let total: f64 = z
         .iter()
@@ -90,14 +147,19 @@ pub fn locate(data: &Data, z: &[[f64; 3]], raw: &[[f64; 3]], min_rms: f64) -> Ve
         .sum::<f64>()
         .max(f64::MIN_POSITIVE);
     let mut out = Vec::new();
-    for (g, v, idx) in groups(data) {
+    for Group {
+        by,
+        value,
+        windows: idx,
+    } in groups(data)
+    {
         for i in 0..3 {
             let ss: f64 = idx.iter().map(|&r| z[r][i] * z[r][i]).sum();
             let rms = (ss / idx.len() as f64).sqrt();
-            if rms > min_rms && ss / total >= MIN_SHARE {
+            if rms > min_rms && ss / total >= data.rules.located_share {
                 out.push(Hotspot {
-                    group: g.clone(),
-                    value: v.clone(),
+                    group: by,
+                    value: value.clone(),
                     axis: AXES[i].into(),
                     rms_sigma: rms,
                     mean: idx.iter().map(|&r| raw[r][i]).sum::<f64>() / idx.len() as f64,

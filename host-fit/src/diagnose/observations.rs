@@ -1,6 +1,7 @@
 //! The diagnosis's observations: windows of every dwell of a known position (spikes
 //! left out), and the contiguous time chunks that make its held-out folds.
 use crate::data::recording::Recording;
+use crate::diagnose::rules::Rules;
 use crate::fit::identify::windows;
 
 /// One observation: the mean of a window of a dwell.
@@ -18,8 +19,8 @@ pub struct DObs {
     pub end: usize,
     /// Dwell index.
     pub dwell: usize,
-    /// Contiguous time chunk (about [`CHUNK_OBS`] observations each, in time order): the
-    /// held-out blocks.
+    /// Contiguous time chunk (about [`Rules::chunk_windows`] observations each, in time
+    /// order): the held-out blocks.
     pub chunk: usize,
     /// Mean sensor temperature, C.
     pub temp_c: f64,
@@ -29,19 +30,14 @@ pub struct DObs {
     pub u: [f64; 3],
 }
 
-/// Chunks of about this many observations each (at least [`MIN_CHUNKS`] chunks).
-pub const CHUNK_OBS: usize = 40;
-/// The fewest chunks a recording is cut into.
-pub const MIN_CHUNKS: usize = 8;
-
-/// Windows of every dwell of a known position: at most `span_c` of temperature and
-/// `max_s` of time each, at least two per dwell of 4 or more samples. `spikes` (sorted
-/// row indices) are left out of the means.
-pub fn observations(rec: &Recording, spikes: &[usize], span_c: f64, max_s: f64) -> Vec<DObs> {
+/// Windows of every dwell of a known position: at most [`Rules::window_span_c`] of
+/// temperature and [`Rules::window_max_s`] of time each, at least two per dwell of 4 or
+/// more samples. `spikes` (sorted row indices) are left out of the means.
+pub fn observations(rec: &Recording, spikes: &[usize], rules: &Rules) -> Vec<DObs> {
     let mut out = Vec::new();
     for (di, d) in rec.dwells.iter().enumerate() {
         let a = rec.positions.vector(d.position);
-        let mut ws = windows(rec, d, span_c, max_s);
+        let mut ws = windows(rec, d, rules.window_span_c, rules.window_max_s);
         if ws.len() == 1 && d.len() >= 4 {
             let mid = d.start + d.len() / 2;
             ws = vec![(d.start, mid), (mid, d.end)];
@@ -69,16 +65,18 @@ pub fn observations(rec: &Recording, spikes: &[usize], span_c: f64, max_s: f64) 
             });
         }
     }
-    assign_chunks(&mut out);
+    assign_chunks(&mut out, rules);
     out
 }
 
-/// Contiguous chunks of about [`CHUNK_OBS`] observations in time order: each is held out
-/// whole, predicted from all the others (short enough that the others span the same
-/// temperatures, so a held-out chunk tests the effects, not extrapolation).
-fn assign_chunks(obs: &mut [DObs]) {
+/// Contiguous chunks of about [`Rules::chunk_windows`] observations in time order: each
+/// is held out whole, predicted from all the others (short enough that the others span
+/// the same temperatures, so a held-out chunk tests the effects, not extrapolation).
+fn assign_chunks(obs: &mut [DObs], rules: &Rules) {
     let n = obs.len();
-    let chunks = (n / CHUNK_OBS).max(MIN_CHUNKS).min(n.max(1));
+    let chunks = (n / rules.chunk_windows)
+        .max(rules.min_chunks)
+        .min(n.max(1));
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| obs[a].t_s.total_cmp(&obs[b].t_s));
     for (rank, &i) in order.iter().enumerate() {

@@ -83,7 +83,7 @@ impl Param {
     pub fn effect_axis(self) -> Option<usize> {
         match self {
             Param::Effect { axis, .. } => Some(axis),
-            _ => None,
+            Param::K { .. } | Param::U0 { .. } | Param::FixtureAngle { .. } => None,
         }
     }
 
@@ -91,7 +91,7 @@ impl Param {
     pub fn extra(self) -> Option<usize> {
         match self {
             Param::Effect { extra, .. } | Param::FixtureAngle { extra, .. } => Some(extra),
-            _ => None,
+            Param::K { .. } | Param::U0 { .. } => None,
         }
     }
 }

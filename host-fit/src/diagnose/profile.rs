@@ -1,8 +1,10 @@
 //! The structural unknowns of each effect's form, profiled: every candidate form is fitted
 //! and the best kept (time constants on a log grid refined by golden-section search,
 //! thresholds and initial states on grids, a bend's place over the data's temperatures).
-use crate::diagnose::design::{Data, Fit, Spec};
+use crate::diagnose::data::Data;
+use crate::diagnose::design::Spec;
 use crate::diagnose::effects::{Extra, Restart};
+use crate::diagnose::fit::{Depth, Fit};
 
 /// The best (lowest chi-square) of several fits.
 fn best(fits: impl IntoIterator<Item = Option<Fit>>) -> Option<Fit> {
@@ -13,32 +15,48 @@ fn best(fits: impl IntoIterator<Item = Option<Fit>>) -> Option<Fit> {
 
 /// `spec` with `extra`, fitted for profiling (no covariance, no held-out chunks).
 fn try_fit(data: &Data, spec: &Spec, extra: Extra, base: &Fit) -> Option<Fit> {
-    data.fit(&spec.with(extra), Some(base), false)
+    data.fit(&spec.with(extra), Some(base), Depth::Profile)
 }
 
-/// A time constant profiled: a log grid from `lo_s` (x1.7), then golden-section search
-/// in log tau around the best grid point.
-pub fn time_constant(
-    make: &dyn Fn(f64) -> Option<Fit>,
-    lo_s: f64,
-    steps: i32,
-) -> Option<(f64, Fit)> {
-    time_constant_within(make, lo_s, steps, f64::INFINITY)
+/// The log grid a time constant is profiled on.
+#[derive(Debug, Clone, Copy)]
+pub struct Grid {
+    /// The first point, s.
+    pub lo_s: f64,
+    /// Points.
+    pub steps: i32,
+    /// Ratio between neighbours ([`crate::diagnose::rules::Rules::grid_ratio`]).
+    pub ratio: f64,
+    /// No time constant beyond this, s.
+    pub max_s: f64,
 }
 
-/// [`time_constant`] never beyond `max_s`.
-fn time_constant_within(
-    make: &dyn Fn(f64) -> Option<Fit>,
-    lo_s: f64,
-    steps: i32,
-    max_s: f64,
-) -> Option<(f64, Fit)> {
-    let make = |t: f64| if t <= max_s { make(t) } else { None };
-    let grid = (0..steps).map(|k| lo_s * 1.7f64.powi(k));
-    let (mut tau, mut fit) = grid
+impl Grid {
+    /// `steps` points from `lo_s` by the rules' ratio, unbounded.
+    pub fn new(data: &Data, lo_s: f64, steps: i32) -> Grid {
+        Grid {
+            lo_s,
+            steps,
+            ratio: data.rules.grid_ratio,
+            max_s: f64::INFINITY,
+        }
+    }
+
+    /// `steps` points ending `below` steps under `around` (a refinement around it).
+    pub fn around(data: &Data, around: f64, below: i32, steps: i32) -> Grid {
+        Grid::new(data, around / data.rules.grid_ratio.powi(below), steps)
+    }
+}
+
+/// A time constant profiled: the log grid, then golden-section search in log tau around
+/// the best grid point.
+pub fn time_constant(make: &dyn Fn(f64) -> Option<Fit>, grid: Grid) -> Option<(f64, Fit)> {
+    let make = |t: f64| if t <= grid.max_s { make(t) } else { None };
+    let points = (0..grid.steps).map(|k| grid.lo_s * grid.ratio.powi(k));
+    let (mut tau, mut fit) = points
         .filter_map(|t| make(t).map(|f| (t, f)))
         .min_by(|a, b| a.1.chi2.total_cmp(&b.1.chi2))?;
-    let (mut lo, mut hi) = ((tau / 1.7).ln(), (tau * 1.7).ln());
+    let (mut lo, mut hi) = ((tau / grid.ratio).ln(), (tau * grid.ratio).ln());
     let g = 0.618_033_988_75;
     for _ in 0..10 {
         let (m1, m2) = (hi - g * (hi - lo), lo + g * (hi - lo));
@@ -65,7 +83,8 @@ pub fn lag(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
     let common = |t1: f64, t2: f64| Extra::Lag {
         taus: [[t1, t2]; 3],
     };
-    let Some((tau, one)) = time_constant(&|t| try_fit(data, spec, common(t, 0.0), base), 20.0, 14)
+    let first = Grid::new(data, 20.0, 14);
+    let Some((tau, one)) = time_constant(&|t| try_fit(data, spec, common(t, 0.0), base), first)
     else {
         return Vec::new();
     };
@@ -90,8 +109,8 @@ pub fn lag(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
                     p[pole] = t;
                     try_fit(data, spec, common(p[0], p[1]), base)
                 };
-                let lo = pair[pole] / 1.7f64.powi(3);
-                if let Some((t, f)) = time_constant(&make, lo, 7).filter(|(_, f)| f.chi2 < two.chi2)
+                let grid = Grid::around(data, pair[pole], 3, 7);
+                if let Some((t, f)) = time_constant(&make, grid).filter(|(_, f)| f.chi2 < two.chi2)
                 {
                     pair[pole] = t;
                     two = f;
@@ -111,9 +130,8 @@ pub fn lag(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
                 v[axis][0] = t;
                 try_fit(data, spec, Extra::Lag { taus: v }, base)
             };
-            let lo = taus[axis][0] / 1.7f64.powi(4);
-            if let Some((t, f)) =
-                time_constant(&make, lo, 9).filter(|(_, f)| f.chi2 < per_axis.chi2)
+            let grid = Grid::around(data, taus[axis][0], 4, 9);
+            if let Some((t, f)) = time_constant(&make, grid).filter(|(_, f)| f.chi2 < per_axis.chi2)
             {
                 taus[axis][0] = t;
                 per_axis = f;
@@ -157,7 +175,8 @@ pub fn hysteresis(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
 }
 
 /// warmup_drift: the time constant for each way the clock may restart; never longer than
-/// half the recording (a settling must be seen settling: beyond, it is a drift).
+/// [`crate::diagnose::rules::Rules::warmup_max_fraction`] of the recording (a settling
+/// must be seen settling: beyond, it is a drift).
 pub fn warmup(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
     let rows = &data.rec.rows;
     let span =
@@ -172,11 +191,13 @@ pub fn warmup(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
     restarts
         .into_iter()
         .filter_map(|restart| {
-            time_constant_within(
+            let grid = Grid {
+                max_s: span * data.rules.warmup_max_fraction,
+                ..Grid::new(data, 20.0, 16)
+            };
+            time_constant(
                 &|t| try_fit(data, spec, Extra::Warmup { tau_s: t, restart }, base),
-                20.0,
-                16,
-                span / 2.0,
+                grid,
             )
             .map(|(_, f)| f)
         })
@@ -191,8 +212,10 @@ pub fn curvature(data: &Data, spec: &Spec, base: &Fit, broad: bool) -> Vec<Fit> 
     let (tmin, tmax) = (temps[0], temps[temps.len() - 1]);
     let mut out = Vec::new();
     if broad {
-        let nb = 16usize
-            .min(((tmax - tmin) / 4.0).floor() as usize + 1)
+        let nb = data
+            .rules
+            .max_breakpoints
+            .min(((tmax - tmin) / data.rules.curvature_step_c).floor() as usize + 1)
             .max(2);
         let fine: Vec<f64> = (0..nb)
             .map(|k| tmin + (tmax - tmin) * k as f64 / (nb - 1) as f64)
@@ -208,40 +231,54 @@ pub fn curvature(data: &Data, spec: &Spec, base: &Fit, broad: bool) -> Vec<Fit> 
 }
 
 /// Whether extra `e` of `f` has a determined structure (see
-/// [`crate::diagnose::search::Judgement::determined`]): the chi-square profile over its time
-/// constant (in log) or bend place curves up by the dispersion `phi` within the limit.
+/// [`crate::diagnose::metrics::Judgement::determined`]): the chi-square profile over its
+/// time constant (in log) or bend place curves up by the dispersion `phi` within the
+/// limit.
 pub fn determined(data: &Data, f: &Fit, e: usize, phi: f64) -> bool {
     let at = |x: Extra| {
-        let mut s = f.spec.clone();
-        s.extras[e] = x;
-        data.fit(&s, None, false)
+        data.fit(&f.spec.replaced(e, x), None, Depth::Profile)
             .map(|g| g.chi2)
             .unwrap_or(f64::INFINITY)
     };
+    let r = &data.rules;
+    let (k, kc) = (r.tau_profile_step, r.bend_profile_step_c);
     // (the chi-square at both sides of the value, the step, the limit on 1 sigma)
     let (up, down, h, limit) = match f.spec.extras[e].clone() {
         Extra::Warmup { tau_s, restart } => {
             let w = |t: f64| Extra::Warmup { tau_s: t, restart };
-            (at(w(tau_s * 1.2)), at(w(tau_s / 1.2)), 1.2f64.ln(), 0.5)
+            (
+                at(w(tau_s * k)),
+                at(w(tau_s / k)),
+                k.ln(),
+                r.tau_determined_ln,
+            )
         }
         Extra::Lag { taus } if taus.iter().all(|t| *t == taus[0]) => {
             let [t1, t2] = taus[0];
-            let l = |k: f64| Extra::Lag {
-                taus: [[t1 * k, t2 * k]; 3],
+            let l = |m: f64| Extra::Lag {
+                taus: [[t1 * m, t2 * m]; 3],
             };
-            (at(l(1.2)), at(l(1.0 / 1.2)), 1.2f64.ln(), 0.5)
+            (at(l(k)), at(l(1.0 / k)), k.ln(), r.tau_determined_ln)
         }
         Extra::Bend { knot_c } => (
             at(Extra::Bend {
-                knot_c: knot_c + 1.0,
+                knot_c: knot_c + kc,
             }),
             at(Extra::Bend {
-                knot_c: knot_c - 1.0,
+                knot_c: knot_c - kc,
             }),
-            1.0,
-            5.0,
+            kc,
+            r.bend_determined_c,
         ),
-        _ => return true,
+        // no continuous structure profiled here: rate and hysteresis take grid values, and
+        // a per-axis or two-pole lag earns its place against the one-pole form
+        Extra::Lag { .. }
+        | Extra::Curvature(_)
+        | Extra::Rate { .. }
+        | Extra::Hysteresis { .. }
+        | Extra::K2
+        | Extra::Asymmetry
+        | Extra::Fixture(_) => return true,
     };
     let curv = (up + down - 2.0 * f.chi2) / (h * h);
     curv > 0.0 && (2.0 * phi / curv).sqrt() <= limit

@@ -5,32 +5,83 @@ use crate::data::recording::Recording;
 use crate::diagnose::floor::Floor;
 use crate::diagnose::observations::DObs;
 use crate::diagnose::regressors::{median_step, Events};
+use crate::diagnose::rules::Rules;
 use firmware_core::model::AXES;
 use serde::Serialize;
+
+/// What a note is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NoteKind {
+    /// Samples far from their neighbours, left out.
+    Spikes,
+    /// Gaps in time (the unit may have been off).
+    Gaps,
+    /// Time-correlated noise.
+    ColouredNoise,
+    /// The unit's sensor and the chamber disagree at steady temperature.
+    SensorVsChamber,
+    /// No dwell has two samples: no floor can be measured.
+    OneSamplePerDwell,
+    /// All data at one temperature.
+    OneTemperature,
+}
+
+impl NoteKind {
+    /// The contract's name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            NoteKind::Spikes => "spikes",
+            NoteKind::Gaps => "gaps",
+            NoteKind::ColouredNoise => "coloured_noise",
+            NoteKind::SensorVsChamber => "sensor_vs_chamber",
+            NoteKind::OneSamplePerDwell => "one_sample_per_dwell",
+            NoteKind::OneTemperature => "one_temperature",
+        }
+    }
+}
+
+impl std::fmt::Display for NoteKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
 
 /// One note.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct QualityNote {
-    /// `spikes`, `gaps`, `coloured_noise`, `sensor_vs_chamber`, `one_sample_per_dwell`,
-    /// `one_temperature`.
-    pub kind: &'static str,
+    /// What it is about.
+    pub kind: NoteKind,
     /// What was found and what it means for the diagnosis.
     pub text: String,
 }
 
-/// A window mean scatters this many times what white noise predicts: noted.
-const COLOUR_NOTE: f64 = 2.0;
-/// Steady sensor-vs-chamber offsets beyond this (C), or spread across soaks beyond it: noted.
-const CHAMBER_NOTE_C: f64 = 1.0;
+/// What the notes are taken from: the recording, its floor and windows, its events.
+pub struct Inputs<'a> {
+    /// The recording.
+    pub rec: &'a Recording,
+    /// Its floor.
+    pub floor: &'a Floor,
+    /// Its windows.
+    pub obs: &'a [DObs],
+    /// Its gaps and handling.
+    pub events: &'a Events,
+    /// Its distinct temperatures.
+    pub n_temps: usize,
+    /// The rules (note thresholds).
+    pub rules: &'a Rules,
+}
 
 /// The notes of a recording.
-pub fn notes(
-    rec: &Recording,
-    floor: &Floor,
-    obs: &[DObs],
-    events: &Events,
-    n_temps: usize,
-) -> Vec<QualityNote> {
+pub fn notes(inputs: &Inputs) -> Vec<QualityNote> {
+    let Inputs {
+        rec,
+        floor,
+        obs,
+        events,
+        n_temps,
+        rules,
+    } = *inputs;
     let mut out = Vec::new();
     if !floor.spikes.is_empty() {
         let lines: Vec<String> = floor
@@ -40,11 +91,11 @@ pub fn notes(
             .map(|&r| rec.rows[r].line.to_string())
             .collect();
         out.push(QualityNote {
-            kind: "spikes",
+            kind: NoteKind::Spikes,
             text: format!(
                 "{} samples jump more than {} floor sigmas from their neighbours (lines {}{}); left out of the window means",
                 floor.spikes.len(),
-                crate::diagnose::floor::SPIKE_Z,
+                rules.spike_z,
                 lines.join(", "),
                 if floor.spikes.len() > 5 { ", ..." } else { "" }
             ),
@@ -57,7 +108,7 @@ pub fn notes(
             .map(|&k| rec.rows[k].t_s - rec.rows[k - 1].t_s)
             .fold(0.0, f64::max);
         out.push(QualityNote {
-            kind: "gaps",
+            kind: NoteKind::Gaps,
             text: format!(
                 "{} gaps in time (longest {longest:.0} s, the step is {:.3} s); a warm-up may restart after them",
                 events.gaps.len(),
@@ -72,13 +123,13 @@ pub fn notes(
         .filter_map(|i| {
             floor.axes[i]
                 .colour(n_mid)
-                .filter(|c| *c > COLOUR_NOTE)
+                .filter(|c| *c > rules.colour_note)
                 .map(|c| format!("{} {c:.1}x", AXES[i]))
         })
         .collect();
     if !coloured.is_empty() {
         out.push(QualityNote {
-            kind: "coloured_noise",
+            kind: NoteKind::ColouredNoise,
             text: format!(
                 "the noise is time-correlated: a window of {n_mid:.0} samples scatters more than white noise predicts ({}); the floor, and every weight and uncertainty, uses the measured scatter",
                 coloured.join(", ")
@@ -87,24 +138,25 @@ pub fn notes(
     }
     if floor.axes.iter().all(|a| a.scales.is_empty()) {
         out.push(QualityNote {
-            kind: "one_sample_per_dwell",
+            kind: NoteKind::OneSamplePerDwell,
             text: "no dwell has enough samples to measure the noise: the floor is the baseline's own scatter, and effects that need a time series (thermal_lag, temp_rate, hysteresis, warmup_drift) are not judged".into(),
         });
     }
     if n_temps <= 1 {
         out.push(QualityNote {
-            kind: "one_temperature",
+            kind: NoteKind::OneTemperature,
             text: "all data at one temperature: no temperature model can be fitted, and only nonlinearity_k2, scale_asymmetry and fixture_error can be judged".into(),
         });
     }
-    out.extend(chamber(rec));
+    out.extend(chamber(rec, rules));
     out
 }
 
 /// The sensor against the chamber at the end of every steady soak.
-fn chamber(rec: &Recording) -> Option<QualityNote> {
+fn chamber(rec: &Recording, rules: &Rules) -> Option<QualityNote> {
     let step = median_step(rec);
-    let hold = (600.0 / step).ceil() as usize;
+    let hold = (rules.chamber_hold_s / step).ceil() as usize;
+    let steady = rules.chamber_steady_c;
     let mut offsets = Vec::new();
     let mut k = hold;
     while k < rec.rows.len() {
@@ -115,13 +167,13 @@ fn chamber(rec: &Recording) -> Option<QualityNote> {
                 (l.min(r.temp_c), h.max(r.temp_c))
             });
         let ch: Vec<f64> = w.iter().filter_map(|r| r.chamber_c).collect();
-        if ch.len() == w.len() && hi - lo < 0.2 {
+        if ch.len() == w.len() && hi - lo < steady {
             let (cl, chh) = ch
                 .iter()
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
                     (l.min(*v), h.max(*v))
                 });
-            if chh - cl < 0.2 {
+            if chh - cl < steady {
                 let mean = |v: &mut dyn Iterator<Item = f64>| v.sum::<f64>() / w.len() as f64;
                 offsets.push(mean(&mut w.iter().map(|r| r.temp_c)) - mean(&mut ch.iter().copied()));
                 k += hold;
@@ -139,8 +191,9 @@ fn chamber(rec: &Recording) -> Option<QualityNote> {
             (l.min(*v), h.max(*v))
         });
     let mean = offsets.iter().sum::<f64>() / offsets.len() as f64;
-    (mean.abs() > CHAMBER_NOTE_C || hi - lo > CHAMBER_NOTE_C).then(|| QualityNote {
-        kind: "sensor_vs_chamber",
+    let note = rules.chamber_note_c;
+    (mean.abs() > note || hi - lo > note).then(|| QualityNote {
+        kind: NoteKind::SensorVsChamber,
         text: format!(
             "at steady temperature the unit's sensor reads {mean:+.2} C from the chamber on average ({lo:+.2} to {hi:+.2} C over {} steady spans): one of the two is off; the model uses the unit's sensor",
             offsets.len()

@@ -2,13 +2,8 @@
 //! machines (`firmware_core::inflight`) over the recording's rows, so the diagnosis fits
 //! exactly what the firmware will apply; plus the recording's restart events.
 use crate::data::recording::Recording;
+use crate::diagnose::rules::Rules;
 use firmware_core::inflight::{Direction, Lag, Rate, Warmup};
-
-/// A `-` run longer than this (s) is handling (the unit re-mounted, turned by hand).
-pub const HANDLING_S: f64 = 120.0;
-/// A time step this many times the median one (and at least a minute) is a gap in the
-/// recording: the unit may have been powered off.
-const GAP_FACTOR: f64 = 10.0;
 
 /// The low-pass constant of a step of `dt` for time constant `tau` (1 = no lag).
 pub fn alpha(dt: f64, tau: f64) -> f64 {
@@ -40,13 +35,15 @@ pub struct Events {
     pub handling: Vec<usize>,
 }
 
-/// The recording's gaps and handling runs.
-pub fn events(rec: &Recording) -> Events {
+/// The recording's gaps (a step of [`Rules::gap_factor`] times the median one, and at
+/// least [`Rules::gap_min_s`]: the unit may have been powered off) and handling runs (a
+/// `-` run longer than [`Rules::handling_s`]: the unit re-mounted, turned by hand).
+pub fn events(rec: &Recording, rules: &Rules) -> Events {
     let step = median_step(rec);
     let mut e = Events::default();
     let rows = &rec.rows;
     for k in 1..rows.len() {
-        if rows[k].t_s - rows[k - 1].t_s > (GAP_FACTOR * step).max(60.0) {
+        if rows[k].t_s - rows[k - 1].t_s > (rules.gap_factor * step).max(rules.gap_min_s) {
             e.gaps.push(k);
         }
     }
@@ -61,7 +58,7 @@ pub fn events(rec: &Recording) -> Events {
                 .get(k)
                 .map(|r| r.t_s)
                 .unwrap_or(rows[rows.len() - 1].t_s);
-            if end_t - rows[s].t_s > HANDLING_S && k < rows.len() {
+            if end_t - rows[s].t_s > rules.handling_s && k < rows.len() {
                 e.handling.push(k);
             }
             continue;

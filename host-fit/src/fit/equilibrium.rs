@@ -17,6 +17,12 @@ use serde::Serialize;
 /// and ramp at 1 C/min; a unit warming by 1 C an hour moves at 0.017 C/min.
 pub const MAX_RATE_C_PER_MIN: f64 = 0.05;
 
+/// A window of a dwell spans at most this much temperature: small enough that every
+/// coefficient's temperature dependence is linear across it, so the window's mean belongs
+/// to its mean temperature (on a 1 C/min ramp, 15 s of data). The static fits and the
+/// diagnosis cut the same windows.
+pub const WINDOW_SPAN_C: f64 = 0.25;
+
 /// What the rule left out.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct Excluded {
@@ -72,14 +78,13 @@ fn slow(ws: &[&Obs]) -> Vec<bool> {
 }
 
 /// The static observations of the positions `select` accepts (windows of at most
-/// `span_c`, each at its own temperature), and what was left out.
+/// [`WINDOW_SPAN_C`], each at its own temperature), and what was left out.
 pub fn static_observations(
     rec: &Recording,
     select: &dyn Fn(usize) -> bool,
-    span_c: f64,
 ) -> (Vec<Obs>, Excluded) {
     let mut ex = Excluded::default();
-    let all = observations(rec, select, span_c);
+    let all = observations(rec, select, WINDOW_SPAN_C);
     let mut keep = vec![true; all.len()];
     let mut i = 0;
     while i < all.len() {
@@ -141,7 +146,7 @@ mod tests {
             Positions::default(),
         )
         .unwrap();
-        let (obs, ex) = static_observations(&rec, &|_| true, 0.25);
+        let (obs, ex) = static_observations(&rec, &|_| true);
         let n = |p: &str| {
             let i = rec.positions.index(p).unwrap();
             obs.iter()

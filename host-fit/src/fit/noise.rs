@@ -10,6 +10,17 @@ pub struct Noise {
     pub dof: usize,
 }
 
+impl Noise {
+    /// Where the noise level comes from, in words (the one statement of it in outputs).
+    pub fn source(&self) -> &'static str {
+        if self.dof > 0 {
+            "in-dwell (successive samples)"
+        } else {
+            "none in the dwells (one sample each): the fit's residual scatter is used"
+        }
+    }
+}
+
 /// Estimate the per-sample noise from successive differences inside dwells: half the
 /// mean squared difference is the variance, and a slow drift (temperature settling)
 /// barely touches it, unlike the plain in-dwell variance.

@@ -21,7 +21,7 @@ use crate::fit::equilibrium::static_observations;
 use crate::fit::identify::Obs;
 use crate::fit::lsq::weighted_lsq;
 use crate::fit::noise::{noise, Noise};
-use crate::fit::temperature::{fit_joint, fit_joint_frame, temperature_clusters, Basis, ModelFit};
+use crate::fit::temperature::{fit_joint, temperature_clusters, Basis, Frame, ModelFit, Setting};
 use firmware_core::model::{invert, Coeffs};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use serde::Serialize;
@@ -68,14 +68,6 @@ pub fn provisional_basis(temps: &[f64]) -> Basis {
     Basis::Poly {
         order: temperature_clusters(temps).len().saturating_sub(1).min(2),
     }
-}
-
-/// Estimate the unknown poses of `rec` with the provisional model.
-pub fn estimate(rec: &Recording) -> Result<Orientation> {
-    let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
-    let (obs, _) = static_observations(rec, &cal, 0.25);
-    let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
-    estimate_with(rec, &provisional_basis(&temps))
 }
 
 /// Whether `rec` has a position of unknown orientation with dwells.
@@ -153,7 +145,7 @@ fn unit(v: Vector3<f64>) -> Option<[f64; 3]> {
 /// Estimate the unknown poses of `rec` with the temperature model `basis`.
 pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
-    let (mut obs, _) = static_observations(rec, &cal, 0.25);
+    let (mut obs, _) = static_observations(rec, &cal);
     let nz = noise(rec);
     let mut poses: Vec<usize> = obs
         .iter()
@@ -167,32 +159,32 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
         .filter(|o| rec.positions.is_known(o.position))
         .cloned()
         .collect();
-    let free_frame = known_directions(&known) < 2;
-    let start = match fit_joint(&known, &nz, basis, rec.t0_c, &rec.path) {
-        Ok(f) if !free_frame => read_poses(&f, &obs, &nz, &poses)
+    let frame = if known_directions(&known) < 2 {
+        Frame::LowerTriangular
+    } else {
+        Frame::Given
+    };
+    let setting = Setting {
+        noise: &nz,
+        t0_c: rec.t0_c,
+        frame,
+        path: &rec.path,
+    };
+    let known_fit = fit_joint(
+        &known,
+        basis,
+        &Setting {
+            frame: Frame::Given,
+            ..setting
+        },
+    );
+    // the known poses fix the frame: their model reads the others
+    let start = match known_fit {
+        Ok(f) if frame == Frame::Given => read_poses(&f, &obs, &nz, &poses)
             .iter()
             .map(|(h, r, _)| h.try_inverse().and_then(|hi| unit(hi * r)))
             .collect::<Option<Vec<_>>>(),
-        _ => ellipsoid(&obs).map(|(n, c)| {
-            // K = N^-1 is upper triangular; turn the start into the lower frame
-            let q = n
-                .try_inverse()
-                .map(|k| lower_frame(&k))
-                .unwrap_or_else(Matrix3::identity);
-            let n = q.transpose() * n;
-            poses
-                .iter()
-                .map(|p| {
-                    let (s, k) = obs
-                        .iter()
-                        .filter(|o| o.position == *p)
-                        .fold((Vector3::zeros(), 0.0), |(s, k), o| {
-                            (s + Vector3::from(o.u) * o.n as f64, k + o.n as f64)
-                        });
-                    unit(n * (s / k - c)).unwrap_or([0.0, 0.0, 1.0])
-                })
-                .collect()
-        }),
+        _ => ellipsoid_start(&obs, &poses),
     };
     let mut dirs = start.ok_or_else(|| {
         HostError::in_file(
@@ -210,7 +202,7 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
                 o.estimated = true;
             }
         }
-        fit_joint_frame(obs, &nz, basis, rec.t0_c, &rec.path, free_frame)
+        fit_joint(obs, basis, &setting)
     };
     let mut fit = fit_at(&mut obs, &dirs)?;
     let mut iterations = 0;
@@ -249,12 +241,10 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
             .zip(&best_dirs)
             .map(|(a, b)| (Vector3::from(*a) - Vector3::from(*b)).norm())
             .fold(0.0, f64::max);
-        if std::env::var_os("HOSTFIT_DEBUG").is_some() {
-            eprintln!(
-                "orientation {iterations}: chi2 {} stretch {stretch} moved {moved:e}",
-                best.chi2
-            );
-        }
+        log::debug!(
+            "orientation {iterations}: chi2 {} stretch {stretch} moved {moved:e}",
+            best.chi2
+        );
         dirs = best_dirs;
         fit = best;
         if moved < CONVERGED_RAD || iterations >= MAX_ITERATIONS {
@@ -268,9 +258,34 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
         poses: &poses,
         dirs: &dirs,
         iterations,
-        free_frame,
+        frame,
     };
     finish(rec, &nz, &done, fit)
+}
+
+/// The directions the alternation starts from when no known pose fixes the frame: read
+/// through the ellipsoid of the poses' mean readings, turned into the lower frame.
+fn ellipsoid_start(obs: &[Obs], poses: &[usize]) -> Option<Vec<[f64; 3]>> {
+    ellipsoid(obs).map(|(n, c)| {
+        // K = N^-1 is upper triangular; turn the start into the lower frame
+        let q = n
+            .try_inverse()
+            .map(|k| lower_frame(&k))
+            .unwrap_or_else(Matrix3::identity);
+        let n = q.transpose() * n;
+        poses
+            .iter()
+            .map(|p| {
+                let (s, k) = obs
+                    .iter()
+                    .filter(|o| o.position == *p)
+                    .fold((Vector3::zeros(), 0.0), |(s, k), o| {
+                        (s + Vector3::from(o.u) * o.n as f64, k + o.n as f64)
+                    });
+                unit(n * (s / k - c)).unwrap_or([0.0, 0.0, 1.0])
+            })
+            .collect()
+    })
 }
 
 /// Where the alternation ended.
@@ -279,7 +294,7 @@ struct Alternated<'a> {
     poses: &'a [usize],
     dirs: &'a [[f64; 3]],
     iterations: usize,
-    free_frame: bool,
+    frame: Frame,
 }
 
 /// How many non-parallel directions the known poses have (0, 1 or 2 = enough).
@@ -322,7 +337,7 @@ fn finish(
         poses,
         dirs,
         iterations,
-        free_frame,
+        frame,
     } = *done;
     let mut positions = rec.positions.clone();
     let scale = (0..3).map(|i| fit.axis_scale(i, nz.dof > 0)).sum::<f64>() / 3.0;
@@ -349,7 +364,7 @@ fn finish(
     Ok(Orientation {
         positions,
         poses: out,
-        frame: free_frame.then(|| {
+        frame: (frame == Frame::LowerTriangular).then(|| {
             "no pose of known orientation: frame fixed by convention, K(T0) lower triangular with a positive diagonal (a rotation or reflection of the whole unit is not observable from gravity)".to_string()
         }),
         iterations,

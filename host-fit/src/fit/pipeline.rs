@@ -8,15 +8,18 @@ use crate::data::positions::Role;
 use crate::data::recording::Recording;
 use crate::data::table::TableRow;
 use crate::error::{HostError, Result};
-use crate::fit::equilibrium::{static_observations, Excluded};
+use crate::fit::equilibrium::{static_observations, Excluded, WINDOW_SPAN_C};
 use crate::fit::identify::{identify_stop, observations, stops, Obs, StopCoeffs};
 use crate::fit::noise::{noise, Noise};
 use crate::fit::orientation::{estimate_with, has_unknown, provisional_basis, Orientation};
 use crate::fit::select::{choose_among, Selection};
-use crate::fit::temperature::{fit_joint_frame, fit_table, temperature_clusters, Basis, ModelFit};
+use crate::fit::temperature::{
+    fit_joint, fit_table, temperature_clusters, Basis, Frame, ModelFit, Setting,
+};
+use std::borrow::Cow;
 
 /// Temperature model kind.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ModelKind {
     /// Piecewise-linear through breakpoints.
     Pwl,
@@ -25,7 +28,7 @@ pub enum ModelKind {
 }
 
 /// Identification route.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Route {
     /// The dwells taken in thermal equilibrium (temperature span <= 0.5 C), each window
     /// at its own temperature, all at once.
@@ -85,7 +88,7 @@ pub fn identify_stops(rec: &Recording) -> Result<Vec<StopCoeffs>> {
                 .filter(|p| rec.positions.has_role(*p, Role::Calibration)),
             "identification per stop",
         )
-        .map_err(|e| HostError::in_file(&rec.path, e.message))?;
+        .map_err(|e| e.within(&rec.path))?;
     let nz = noise(rec);
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
     let st = stops(rec, &cal, 3.0);
@@ -116,8 +119,8 @@ pub struct FitOutcome {
 }
 
 /// What the user asked of the model: a family (or the data's choice) and, for it, an
-/// order or breakpoints.
-#[derive(Clone, Debug, PartialEq)]
+/// order or breakpoints. The default leaves everything to the data.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct ModelRequest {
     /// The family; None: chosen by the data.
     pub kind: Option<ModelKind>,
@@ -165,15 +168,34 @@ impl ModelRequest {
     }
 }
 
-/// The recording with its poses of unknown orientation estimated (with the
-/// temperature model `basis`, or the provisional one), and the estimate; the recording
-/// unchanged when it has none.
-pub fn with_orientations(
-    rec: &Recording,
-    basis: Option<&Basis>,
-) -> Result<(Option<Recording>, Option<Orientation>)> {
+/// A recording with its poses of unknown orientation estimated, and the estimate.
+#[derive(Debug, Clone)]
+pub struct Oriented<'r> {
+    /// The recording, every position with a vector (borrowed when none was unknown).
+    pub rec: Cow<'r, Recording>,
+    /// The estimate, when the recording had poses of unknown orientation.
+    pub orientation: Option<Orientation>,
+}
+
+impl Oriented<'_> {
+    /// The frame every fit of the recording keeps: lower triangular when the estimated
+    /// poses left it to the convention (no known pose fixed it), as the estimate did.
+    pub fn frame(&self) -> Frame {
+        match &self.orientation {
+            Some(o) if o.frame.is_some() => Frame::LowerTriangular,
+            _ => Frame::Given,
+        }
+    }
+}
+
+/// `rec` with its poses of unknown orientation estimated with the temperature model
+/// `basis`, or the provisional one (the recording borrowed unchanged when it has none).
+pub fn with_orientations<'r>(rec: &'r Recording, basis: Option<&Basis>) -> Result<Oriented<'r>> {
     if !has_unknown(rec) {
-        return Ok((None, None));
+        return Ok(Oriented {
+            rec: Cow::Borrowed(rec),
+            orientation: None,
+        });
     }
     let basis = match basis {
         Some(b) => b.clone(),
@@ -185,30 +207,39 @@ pub fn with_orientations(
     let o = estimate_with(rec, &basis)?;
     let mut r = rec.clone();
     r.positions = o.positions.clone();
-    Ok((Some(r), Some(o)))
-}
-
-/// Whether the estimated poses left the frame to the convention (no known pose fixed
-/// it): then every fit keeps K(T) lower triangular, as the estimate did.
-fn free_frame(o: Option<&Orientation>) -> bool {
-    o.is_some_and(|o| o.frame.is_some())
+    Ok(Oriented {
+        rec: Cow::Owned(r),
+        orientation: Some(o),
+    })
 }
 
 fn static_calibration(rec: &Recording) -> (Vec<Obs>, Excluded) {
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
-    static_observations(rec, &cal, 0.25)
+    static_observations(rec, &cal)
 }
 
 fn require_known(rec: &Recording, obs: &[Obs]) -> Result<()> {
     rec.positions
         .require_known(obs.iter().map(|o| o.position), "the fit")
-        .map_err(|e| HostError::in_file(&rec.path, e.message))
+        .map_err(|e| e.within(&rec.path))
+}
+
+/// The joint fits' setting of `rec` weighted by `noise` in `frame`.
+fn setting<'a>(rec: &'a Recording, noise: &'a Noise, frame: Frame) -> Setting<'a> {
+    Setting {
+        noise,
+        t0_c: rec.t0_c,
+        frame,
+        path: &rec.path,
+    }
 }
 
 /// The static route with the model the request leaves to the data (see the module
 /// doc): the family and its order or breakpoints, or only the order or breakpoints
-/// within a family the user named; poses of unknown orientation are estimated with the provisional model, the
-/// model chosen, and the poses estimated again with it.
+/// within a family the user named. Poses of unknown orientation are estimated with the
+/// provisional model and the model chosen on them; when the model chosen is another,
+/// the poses are estimated again with it (the directions depend on the model they are
+/// read with).
 pub fn fit_chosen(rec: &Recording, req: &ModelRequest) -> Result<FitOutcome> {
     req.check()?;
     let family: &dyn Fn(&Basis) -> bool = match (req.kind, &req.order, &req.breakpoints) {
@@ -225,28 +256,31 @@ pub fn fit_chosen(rec: &Recording, req: &ModelRequest) -> Result<FitOutcome> {
         (Some(ModelKind::Poly), None, None) => &|b| matches!(b, Basis::Poly { .. }),
         (Some(ModelKind::Pwl), None, None) => &|b| matches!(b, Basis::Pwl { .. }),
     };
-    let (est, first) = with_orientations(rec, None)?;
-    let lower = free_frame(first.as_ref());
-    let r = est.as_ref().unwrap_or(rec);
+    let provisional = with_orientations(rec, None)?;
+    let frame = provisional.frame();
+    let r = &*provisional.rec;
     let (obs, excluded) = static_calibration(r);
     require_known(r, &obs)?;
     if obs.is_empty() {
         return Err(no_static(rec, &excluded));
     }
     let nz = noise(r);
-    let selection = choose_among(&obs, &nz, (r.t0_c, lower), &r.path, family)?;
+    let selection = choose_among(&obs, &setting(r, &nz, frame), family)?;
     let basis = req.refine(&selection.basis)?;
-    let (est, orientation) = with_orientations(rec, Some(&basis))?;
-    let r = est.as_ref().unwrap_or(rec);
+    let oriented = match &provisional.orientation {
+        Some(o) if o.fit.basis != basis => with_orientations(rec, Some(&basis))?,
+        _ => provisional,
+    };
+    let r = &*oriented.rec;
     let (obs, _) = static_calibration(r);
-    let fit = fit_joint_frame(&obs, &nz, &basis, r.t0_c, &r.path, lower)?;
+    let fit = fit_joint(&obs, &basis, &setting(r, &nz, frame))?;
     Ok(FitOutcome {
         fit,
         stops: identify_stops(r).unwrap_or_default(),
         noise: nz,
         selection: Some(selection),
         excluded,
-        orientation,
+        orientation: oriented.orientation,
     })
 }
 
@@ -268,19 +302,18 @@ fn no_static(rec: &Recording, ex: &Excluded) -> HostError {
 /// The stops' distinct temperatures, rounded to 0.01 C (the default breakpoints).
 pub fn stop_temperatures(stops: &[StopCoeffs]) -> Vec<f64> {
     let temps: Vec<f64> = stops.iter().map(|s| s.temp_c).collect();
-    let mut b: Vec<f64> = temperature_clusters(&temps)
-        .iter()
-        .map(|t| (t * 100.0).round() / 100.0)
-        .collect();
-    b.dedup();
-    b
+    rounded_clusters(&temps)
 }
 
 /// The distinct temperatures of observations, rounded to 0.01 C (the default
 /// breakpoints of the static and joint routes).
 fn obs_temperatures(obs: &[Obs]) -> Vec<f64> {
     let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
-    let mut b: Vec<f64> = temperature_clusters(&temps)
+    rounded_clusters(&temps)
+}
+
+fn rounded_clusters(temps: &[f64]) -> Vec<f64> {
+    let mut b: Vec<f64> = temperature_clusters(temps)
         .iter()
         .map(|t| (t * 100.0).round() / 100.0)
         .collect();
@@ -298,47 +331,43 @@ pub fn fit_recording(rec: &Recording, choice: &ModelChoice, route: Route) -> Res
 }
 
 fn fit_windows(rec: &Recording, choice: &ModelChoice, route: Route) -> Result<FitOutcome> {
-    {
-        let (obs0, _) = static_calibration(rec);
-        let temps = obs_temperatures(&obs0);
-        let basis0 = choice.basis(&temps);
-        let (est, orientation) = with_orientations(rec, Some(&basis0))?;
-        let r = est.as_ref().unwrap_or(rec);
-        let (obs, excluded) = match route {
-            Route::Joint => {
-                let cal = |p: usize| r.positions.has_role(p, Role::Calibration);
-                (observations(r, &cal, 0.25), Excluded::default())
-            }
-            _ => static_calibration(r),
-        };
-        require_known(r, &obs)?;
-        if obs.is_empty() {
-            return Err(no_static(rec, &excluded));
+    let (obs0, _) = static_calibration(rec);
+    let basis0 = choice.basis(&obs_temperatures(&obs0));
+    let oriented = with_orientations(rec, Some(&basis0))?;
+    let r = &*oriented.rec;
+    let (obs, excluded) = match route {
+        Route::Joint => {
+            let cal = |p: usize| r.positions.has_role(p, Role::Calibration);
+            (observations(r, &cal, WINDOW_SPAN_C), Excluded::default())
         }
-        // the default breakpoints are the static dwells' temperatures (the stops), also
-        // on the joint route, whose ramp windows would make every 2 C a breakpoint
-        let basis = if obs0.is_empty() {
-            choice.basis(&obs_temperatures(&obs))
-        } else {
-            basis0
-        };
-        let nz = noise(r);
-        let lower = free_frame(orientation.as_ref());
-        let fit = fit_joint_frame(&obs, &nz, &basis, r.t0_c, &r.path, lower)?;
-        Ok(FitOutcome {
-            fit,
-            stops: identify_stops(r).unwrap_or_default(),
-            noise: nz,
-            selection: None,
-            excluded,
-            orientation,
-        })
+        Route::Static | Route::PerStop => static_calibration(r),
+    };
+    require_known(r, &obs)?;
+    if obs.is_empty() {
+        return Err(no_static(rec, &excluded));
     }
+    // the default breakpoints are the static dwells' temperatures (the stops), also
+    // on the joint route, whose ramp windows would make every 2 C a breakpoint
+    let basis = if obs0.is_empty() {
+        choice.basis(&obs_temperatures(&obs))
+    } else {
+        basis0
+    };
+    let nz = noise(r);
+    let fit = fit_joint(&obs, &basis, &setting(r, &nz, oriented.frame()))?;
+    Ok(FitOutcome {
+        fit,
+        stops: identify_stops(r).unwrap_or_default(),
+        noise: nz,
+        selection: None,
+        excluded,
+        orientation: oriented.orientation,
+    })
 }
 
 fn fit_per_stop(rec: &Recording, choice: &ModelChoice) -> Result<FitOutcome> {
-    let (est, orientation) = with_orientations(rec, None)?;
-    let rec = est.as_ref().unwrap_or(rec);
+    let oriented = with_orientations(rec, None)?;
+    let rec = &*oriented.rec;
     let st = identify_stops(rec)?;
     let basis = match choice.kind {
         ModelKind::Poly => choice.basis(&st.iter().map(|s| s.temp_c).collect::<Vec<_>>()),
@@ -352,14 +381,13 @@ fn fit_per_stop(rec: &Recording, choice: &ModelChoice) -> Result<FitOutcome> {
             stderr: Some(s.stderr),
         })
         .collect();
-    let fit =
-        fit_table(&rows, &basis, rec.t0_c).map_err(|e| HostError::in_file(&rec.path, e.message))?;
+    let fit = fit_table(&rows, &basis, rec.t0_c).map_err(|e| e.within(&rec.path))?;
     Ok(FitOutcome {
         fit,
         stops: st,
         noise: noise(rec),
         selection: None,
         excluded: Excluded::default(),
-        orientation,
+        orientation: oriented.orientation,
     })
 }

@@ -45,8 +45,6 @@ pub struct Prediction {
     /// The most the cache's lag can add to |dg| (|d|a|/dT| x step, worst of the grid and
     /// directions), mg; not part of the 1-sigma: it is the firmware's, not the model's.
     pub cache_lag_max_mg: f64,
-    /// Where the noise level comes from.
-    pub noise_source: &'static str,
     /// Per axis, the factor the residuals put on the covariance (reduced chi-square).
     pub covariance_scale: [f64; 3],
 }
@@ -113,15 +111,35 @@ pub fn sigma_dwell(fit: &ModelFit, noise: &Noise, t: f64, a: [f64; 3], n: usize)
     sigma_model(fit, noise, t, a).hypot(sigma_dwell_noise(fit, noise, t, a, n))
 }
 
-/// The prediction over the valid range `(lo, hi)` at `dirs`, for dwells of
-/// `dwell_samples` samples.
-pub fn predict(
-    fit: &ModelFit,
-    noise: &Noise,
-    dirs: &[(String, [f64; 3])],
-    (lo, hi): (f64, f64),
-    (dwell_samples, update_step_c): (usize, f64),
-) -> Prediction {
+/// One direction a prediction is stated for.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Direction {
+    /// The position's name.
+    pub name: String,
+    /// Its unit vector.
+    pub a: [f64; 3],
+}
+
+/// What a prediction is asked for.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Request {
+    /// The directions.
+    pub directions: Vec<Direction>,
+    /// The length of a verification dwell, samples.
+    pub dwell_samples: usize,
+    /// The valid range, C.
+    pub t_min_c: f64,
+    /// The valid range, C.
+    pub t_max_c: f64,
+    /// The firmware's cache step, C.
+    pub update_step_c: f64,
+}
+
+/// The prediction over the request's valid range at its directions.
+pub fn predict(fit: &ModelFit, noise: &Noise, req: &Request) -> Prediction {
+    let (lo, hi) = (req.t_min_c, req.t_max_c);
+    let (dwell_samples, update_step_c) = (req.dwell_samples, req.update_step_c);
+    let dirs = &req.directions;
     let constant = is_constant(&fit.basis);
     let n_pts = if constant { 0 } else { 11 };
     let mut temps: Vec<f64> = (0..n_pts)
@@ -133,7 +151,7 @@ pub fn predict(
     }
     let worst = |t: f64| {
         dirs.iter()
-            .map(|(_, a)| sigma_model(fit, noise, t, *a))
+            .map(|d| sigma_model(fit, noise, t, d.a))
             .fold(0.0, f64::max)
     };
     let points = temps
@@ -147,15 +165,15 @@ pub fn predict(
     // compensation lags by up to the step, |d|a|/dT| x step
     let cache = temps
         .iter()
-        .flat_map(|t| dirs.iter().map(move |(_, a)| (*t, *a)))
+        .flat_map(|t| dirs.iter().map(move |d| (*t, d.a)))
         .map(|(t, a)| dg_slope(fit, t, a).abs() * update_step_c)
         .fold(0.0, f64::max);
     let dwell = dirs
         .iter()
-        .map(|(_, a)| sigma_dwell_noise(fit, noise, fit.t0_c, *a, dwell_samples))
+        .map(|d| sigma_dwell_noise(fit, noise, fit.t0_c, d.a, dwell_samples))
         .fold(0.0, f64::max);
     Prediction {
-        directions: dirs.iter().map(|(n, _)| n.clone()).collect(),
+        directions: dirs.iter().map(|d| d.name.clone()).collect(),
         t_min_c: lo,
         t_max_c: hi,
         points,
@@ -163,11 +181,6 @@ pub fn predict(
         dwell_samples,
         cache_step_c: update_step_c,
         cache_lag_max_mg: cache * 1e3,
-        noise_source: if noise.dof > 0 {
-            "in-dwell (successive samples)"
-        } else {
-            "the fit's residual scatter (no dwell has two samples: a dwell-averaged recording)"
-        },
         covariance_scale: std::array::from_fn(|i| fit.axis_scale(i, noise.dof > 0)),
     }
 }
@@ -197,15 +210,20 @@ pub fn is_constant(b: &Basis) -> bool {
 }
 
 /// The directions a prediction is stated for: the recording's verification positions
-/// with a known vector, else its calibration positions; with their median dwell length.
-pub fn directions(rec: &crate::data::recording::Recording) -> (Vec<(String, [f64; 3])>, usize) {
+/// with a known vector in `positions` (the recording's, or with the poses of unknown
+/// orientation estimated), else its calibration positions; with their median dwell
+/// length.
+pub fn directions(
+    rec: &crate::data::recording::Recording,
+    positions: &crate::data::positions::Positions,
+) -> (Vec<Direction>, usize) {
     use crate::data::positions::Role;
     for role in [Role::Verification, Role::Calibration] {
         let mut idx: Vec<usize> = rec
             .dwells
             .iter()
             .map(|d| d.position)
-            .filter(|p| rec.positions.has_role(*p, role) && rec.positions.is_known(*p))
+            .filter(|p| positions.has_role(*p, role) && positions.is_known(*p))
             .collect();
         idx.sort_unstable();
         idx.dedup();
@@ -222,7 +240,10 @@ pub fn directions(rec: &crate::data::recording::Recording) -> (Vec<(String, [f64
         let n = lens.get(lens.len() / 2).copied().unwrap_or(1);
         let dirs = idx
             .iter()
-            .map(|p| (rec.positions.name(*p).to_string(), rec.positions.vector(*p)))
+            .map(|p| Direction {
+                name: positions.name(*p).to_string(),
+                a: positions.vector(*p),
+            })
             .collect();
         return (dirs, n);
     }

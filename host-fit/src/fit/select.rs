@@ -7,8 +7,7 @@
 //! Verification positions are never used here, so they stay an independent check.
 use crate::error::{HostError, Result};
 use crate::fit::identify::Obs;
-use crate::fit::noise::Noise;
-use crate::fit::temperature::{fit_joint_frame, temperature_clusters, Basis, ModelFit};
+use crate::fit::temperature::{fit_joint, temperature_clusters, Basis, Setting};
 use firmware_core::model::{apply, dg, invert, Coeffs};
 use firmware_core::temperature::{MAX_BREAKPOINTS, MAX_POLY_ORDER};
 use serde::Serialize;
@@ -81,13 +80,8 @@ pub fn candidates(temps: &[f64]) -> Vec<Basis> {
     out
 }
 
-/// Formula (13) for observation `o` compensated by `fit` (the tables the blob carries;
+/// Formula (13) for observation `o` compensated by `cal` (the tables the blob carries;
 /// an even-order term is not in the blob), in g; None when K is singular there.
-pub fn dg_of(fit: &ModelFit, o: &Obs) -> Option<f64> {
-    let cal = fit.calibration(0.0, false);
-    dg_with(&cal, o)
-}
-
 fn dg_with(cal: &firmware_core::temperature::Calibration<f64>, o: &Obs) -> Option<f64> {
     let c = Coeffs::from_array(&cal.model.eval(cal.t0_c, o.temp_c));
     let n = invert(&c.k)?;
@@ -104,16 +98,23 @@ fn folds(obs: &[Obs], k: usize) -> Vec<usize> {
         .collect()
 }
 
-/// Per held-out dwell, the mean squared dg (g^2) of `basis` under k-fold
+/// A candidate's held-out score: rms |dg| over the held-out dwells and its standard
+/// error, g.
+#[derive(Debug, Clone, Copy)]
+struct Score {
+    rms: f64,
+    se: f64,
+}
+
+/// Per held-out dwell, the mean squared dg (g^2) of `basis` under `k`-fold
 /// cross-validation; None when a training fold does not determine the model.
-fn held_out(
-    obs: &[Obs],
-    noise: &Noise,
-    basis: &Basis,
-    (t0, k, lower): (f64, usize, bool),
-) -> Option<Vec<f64>> {
+fn held_out(obs: &[Obs], basis: &Basis, setting: &Setting, k: usize) -> Option<Vec<f64>> {
     let fold = folds(obs, k);
     let mut per_dwell: std::collections::BTreeMap<usize, (f64, usize)> = Default::default();
+    let quiet = Setting {
+        path: Path::new(""),
+        ..*setting
+    };
     for f in 0..k {
         let train: Vec<Obs> = obs
             .iter()
@@ -121,7 +122,7 @@ fn held_out(
             .filter(|(_, g)| **g != f)
             .map(|(o, _)| o.clone())
             .collect();
-        let fit = fit_joint_frame(&train, noise, basis, t0, Path::new(""), lower).ok()?;
+        let fit = fit_joint(&train, basis, &quiet).ok()?;
         let cal = fit.calibration(0.0, false);
         for (o, _) in obs.iter().zip(&fold).filter(|(_, g)| **g == f) {
             let d = dg_with(&cal, o)?;
@@ -134,7 +135,7 @@ fn held_out(
 }
 
 /// rms and its standard error from per-dwell mean squares.
-fn rms_se(e: &[f64]) -> (f64, f64) {
+fn rms_se(e: &[f64]) -> Score {
     let n = e.len().max(1) as f64;
     let mean = e.iter().sum::<f64>() / n;
     let var = e.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
@@ -144,23 +145,34 @@ fn rms_se(e: &[f64]) -> (f64, f64) {
     } else {
         0.0
     };
-    (rms, se)
+    Score { rms, se }
 }
 
-/// Choose the temperature model of the static observations `obs` (see the module doc).
-pub fn choose(obs: &[Obs], noise: &Noise, t0: f64, path: &Path) -> Result<Selection> {
-    choose_among(obs, noise, (t0, false), path, &|_| true)
+/// The selection when all calibration data are at one temperature: the coefficients
+/// there, no temperature model.
+fn one_temperature(temps: &[f64]) -> Selection {
+    let t = temps.iter().sum::<f64>() / temps.len().max(1) as f64;
+    Selection {
+        chosen: Basis::Poly { order: 0 }.describe(),
+        method: "none: one temperature".into(),
+        reason: format!(
+            "all calibration data are at one temperature ({t:.1} C): the 12 coefficients are identified there, and no temperature model can be fitted (the blob holds them constant)"
+        ),
+        candidates: Vec::new(),
+        basis: Basis::Poly { order: 0 },
+    }
 }
 
-/// [`choose`] among the candidates `keep` accepts (one family, when the user named it);
-/// with `lower`, K(T) lower triangular (the frame's convention of estimated poses).
+/// Choose the temperature model of the static observations `obs` (see the module doc)
+/// among the candidates `keep` accepts (one family, when the user named it), every fit
+/// in `setting` (its frame: lower triangular K(T) for the convention of estimated
+/// poses).
 pub fn choose_among(
     obs: &[Obs],
-    noise: &Noise,
-    (t0, lower): (f64, bool),
-    path: &Path,
+    setting: &Setting,
     keep: &dyn Fn(&Basis) -> bool,
 ) -> Result<Selection> {
+    let path = setting.path;
     let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
     let all = candidates(&temps);
     let n_all = all.len();
@@ -178,34 +190,25 @@ pub fn choose_among(
     dwells.sort_unstable();
     dwells.dedup();
     if n_all <= 1 {
-        let t = temps.iter().sum::<f64>() / temps.len().max(1) as f64;
-        return Ok(Selection {
-            chosen: Basis::Poly { order: 0 }.describe(),
-            method: "none: one temperature".into(),
-            reason: format!(
-                "all calibration data are at one temperature ({t:.1} C): the 12 coefficients are identified there, and no temperature model can be fitted (the blob holds them constant)"
-            ),
-            candidates: Vec::new(),
-            basis: Basis::Poly { order: 0 },
-        });
+        return Ok(one_temperature(&temps));
     }
     // when all the data do not determine even the simplest candidate, say why (which
     // positions at which temperatures), not that cross-validation failed
     if let Some(simplest) = cands.first() {
-        fit_joint_frame(obs, noise, simplest, t0, path, lower)?;
+        fit_joint(obs, simplest, setting)?;
     }
     let k = FOLDS.min(dwells.len());
-    let scored: Vec<(Basis, Option<(f64, f64)>)> = cands
+    let scored: Vec<(Basis, Option<Score>)> = cands
         .into_iter()
         .map(|b| {
-            let s = held_out(obs, noise, &b, (t0, k, lower)).map(|e| rms_se(&e));
+            let s = held_out(obs, &b, setting, k).map(|e| rms_se(&e));
             (b, s)
         })
         .collect();
-    let best = scored
+    let (best, bs) = scored
         .iter()
         .filter_map(|(b, s)| s.map(|s| (b, s)))
-        .min_by(|x, y| x.1 .0.total_cmp(&y.1 .0))
+        .min_by(|x, y| x.1.rms.total_cmp(&y.1.rms))
         .map(|(b, s)| (b.clone(), s))
         .ok_or_else(|| {
             HostError::in_file(
@@ -216,27 +219,27 @@ pub fn choose_among(
                 ),
             )
         })?;
-    let limit = best.1 .0 + best.1 .1;
+    let limit = bs.rms + bs.se;
     let (chosen, cs) = scored
         .iter()
-        .find_map(|(b, s)| s.filter(|s| s.0 <= limit).map(|s| (b.clone(), s)))
-        .unwrap_or((best.0.clone(), best.1));
+        .find_map(|(b, s)| s.filter(|s| s.rms <= limit).map(|s| (b.clone(), s)))
+        .unwrap_or((best.clone(), bs));
     let mg = 1e3;
-    let reason = if chosen == best.0 {
+    let reason = if chosen == best {
         format!(
             "{} predicts held-out dwells best: rms |dg| {:.4} mg (+- {:.4})",
             chosen.describe(),
-            cs.0 * mg,
-            cs.1 * mg
+            cs.rms * mg,
+            cs.se * mg
         )
     } else {
         format!(
             "{} is the simplest model within one standard error of the best ({} {:.4} +- {:.4} mg): rms |dg| {:.4} mg on held-out dwells",
             chosen.describe(),
-            best.0.describe(),
-            best.1 .0 * mg,
-            best.1 .1 * mg,
-            cs.0 * mg
+            best.describe(),
+            bs.rms * mg,
+            bs.se * mg,
+            cs.rms * mg
         )
     };
     Ok(Selection {
@@ -251,8 +254,8 @@ pub fn choose_among(
             .map(|(b, s)| Candidate {
                 model: b.describe(),
                 params_per_coefficient: b.len(),
-                held_out_rms_dg_mg: s.map(|s| s.0 * mg),
-                standard_error_mg: s.map(|s| s.1 * mg),
+                held_out_rms_dg_mg: s.map(|s| s.rms * mg),
+                standard_error_mg: s.map(|s| s.se * mg),
             })
             .collect(),
         basis: chosen,

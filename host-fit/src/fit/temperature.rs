@@ -20,6 +20,12 @@ pub const RANGE_MARGIN_C: f64 = 1.0;
 /// Polynomial fits work in `dT / POLY_SCALE_C` for conditioning.
 pub const POLY_SCALE_C: f64 = 50.0;
 
+/// The firmware recomputes its cached matrices after the temperature moves by this much
+/// (the blob's default, `fit --update-step`): the lag it adds to |dg| stays an order of
+/// magnitude below the acceptance limit near T0 (0.03 mg against 0.3 mg on the paper's
+/// unit), and the MCU inverts K(T) ten times per degree instead of every sample.
+pub const UPDATE_STEP_C: f64 = 0.1;
+
 /// The shape of a temperature model.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Basis {
@@ -145,11 +151,6 @@ pub struct ModelFit {
 }
 
 impl ModelFit {
-    /// Bayesian information criterion of the fit.
-    pub fn bic(&self) -> f64 {
-        self.chi2 + self.n_params as f64 * (self.n_obs.max(1) as f64).ln()
-    }
-
     /// Per axis, the factor on [`ModelFit::axis_cov`]: the reduced chi-square when it
     /// exceeds 1 (scatter beyond the in-dwell noise: the model misfits, or dwells
     /// differ by more than their samples do), else 1. With `noise_known` false the
@@ -271,34 +272,44 @@ fn check_coverage(basis: &Basis, temps: &[f64]) -> Result<()> {
     }
 }
 
+/// The frame of the 12 coefficients.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Frame {
+    /// Fixed by the positions' given orientations: K(T) is full.
+    Given,
+    /// No pose's orientation is given: the convention fixes it, K(T) lower triangular at
+    /// every temperature (kxy, kxz, kyz held at 0), which also removes a rotation of the
+    /// frame that varies with temperature (each pose is seen over a narrow span of
+    /// temperatures, so such a rotation is all but invisible).
+    LowerTriangular,
+}
+
+/// What every joint fit of one recording shares.
+#[derive(Debug, Clone, Copy)]
+pub struct Setting<'a> {
+    /// The noise the windows are weighted with.
+    pub noise: &'a Noise,
+    /// Reference temperature T0, C.
+    pub t0_c: f64,
+    /// The frame.
+    pub frame: Frame,
+    /// The recording, named in errors.
+    pub path: &'a Path,
+}
+
 /// Fit all observations jointly, each at its own temperature: for every axis the four
 /// temperature models of its K row and offset (and a constant even term where the
 /// positions determine it) in one weighted least squares.
-pub fn fit_joint(
-    obs: &[Obs],
-    noise: &Noise,
-    basis: &Basis,
-    t0: f64,
-    path: &Path,
-) -> Result<ModelFit> {
-    fit_joint_frame(obs, noise, basis, t0, path, false)
-}
-
-/// [`fit_joint`]; with `lower`, K(T) lower triangular at every temperature (kxy, kxz,
-/// kyz held at 0): the frame's convention when no pose's orientation is given, which
-/// also removes a rotation of the frame that varies with temperature (each pose is
-/// seen over a narrow span of temperatures, so such a rotation is all but invisible).
-pub fn fit_joint_frame(
-    obs: &[Obs],
-    noise: &Noise,
-    basis: &Basis,
-    t0: f64,
-    path: &Path,
-    lower: bool,
-) -> Result<ModelFit> {
+pub fn fit_joint(obs: &[Obs], basis: &Basis, setting: &Setting) -> Result<ModelFit> {
+    let Setting {
+        noise,
+        t0_c: t0,
+        frame,
+        path,
+    } = *setting;
     basis.check()?;
     let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
-    check_coverage(basis, &temps).map_err(|e| HostError::in_file(path, e.message))?;
+    check_coverage(basis, &temps).map_err(|e| e.within(path))?;
     let nb = basis.len();
     let phis: Vec<Vec<f64>> = obs.iter().map(|o| basis.eval(t0, o.temp_c)).collect();
     let mut params: [Vec<f64>; 12] = Default::default();
@@ -308,7 +319,7 @@ pub fn fit_joint_frame(
     let (mut axis_cov, mut axis_chi2) = (Vec::new(), Vec::new());
     for axis in 0..3 {
         let (s, with_k2) =
-            fit_axis(obs, &phis, noise, axis, lower).ok_or_else(|| rank_error(obs, path, basis))?;
+            fit_axis(obs, &phis, noise, axis, frame).ok_or_else(|| rank_error(obs, path, basis))?;
         let slots = [
             K_INDEX[axis][0],
             K_INDEX[axis][1],
@@ -360,13 +371,14 @@ fn fit_axis(
     phis: &[Vec<f64>],
     noise: &Noise,
     axis: usize,
-    lower: bool,
+    frame: Frame,
 ) -> Option<(Lsq, bool)> {
     let nb = phis.first().map(Vec::len).unwrap_or(0);
     let var = noise.sigma[axis].powi(2);
     let w: Vec<f64> = obs.iter().map(|o| o.n as f64 / var).collect();
     let b = DVector::from_iterator(obs.len(), obs.iter().map(|o| o.u[axis]));
-    // the columns kept: with `lower`, K[axis][j] for j > axis is held at 0
+    // the columns kept: lower triangular, K[axis][j] for j > axis is held at 0
+    let lower = frame == Frame::LowerTriangular;
     let keep: Vec<usize> = (0..4).filter(|j| !lower || *j == 3 || *j <= axis).collect();
     let build = |with_k2: bool| {
         let p = keep.len() * nb + usize::from(with_k2);
@@ -419,34 +431,6 @@ fn expand(s: Lsq, keep: &[usize], nb: usize, with_k2: bool) -> Lsq {
         wrss: s.wrss,
         residuals: s.residuals,
     }
-}
-
-/// The polynomial order (1..=`max_order`) with the lowest BIC in the joint fit, and
-/// its fit; orders the data cannot determine are skipped.
-pub fn choose_poly_order(
-    obs: &[Obs],
-    noise: &Noise,
-    t0: f64,
-    max_order: usize,
-    path: &Path,
-) -> Result<ModelFit> {
-    let mut best: Option<ModelFit> = None;
-    let mut first_err = None;
-    for order in 1..=max_order.min(MAX_POLY_ORDER) {
-        match fit_joint(obs, noise, &Basis::Poly { order }, t0, path) {
-            Ok(f) => {
-                if best.as_ref().is_none_or(|b| f.bic() < b.bic()) {
-                    best = Some(f);
-                }
-            }
-            Err(e) => {
-                first_err.get_or_insert(e);
-            }
-        }
-    }
-    best.ok_or_else(|| {
-        first_err.unwrap_or_else(|| HostError::msg("no polynomial order could be fitted"))
-    })
 }
 
 fn rank_error(obs: &[Obs], path: &Path, basis: &Basis) -> HostError {

@@ -5,7 +5,7 @@
 //! truth (or from the chosen model) with 1-sigma error bars, residuals against time above
 //! the temperature.
 use crate::acceptance::Spec;
-use crate::analysis::{DemoModel, DemoOutcome};
+use crate::analysis::{Compensation, DemoModel, DemoOutcome, T0_CONSTANTS};
 use crate::error::Result;
 use crate::report::axis::prefixed;
 use crate::report::page::{esc, html, Section};
@@ -19,9 +19,9 @@ fn model_color(i: usize) -> Rgb {
 }
 
 /// Method 1 and 2: marker and line.
-const METHODS: [(usize, &str, Marker, Dash); 2] = [
-    (0, "1", Marker::Circle, Dash::Solid),
-    (1, "2", Marker::Triangle, Dash::Dashed),
+const METHODS: [(usize, Compensation, Marker, Dash); 2] = [
+    (0, Compensation::Method1, Marker::Circle, Dash::Solid),
+    (1, Compensation::Method2, Marker::Triangle, Dash::Dashed),
 ];
 
 /// Sideways offset of series `k` of `n` within a category (so equal values stay visible).
@@ -75,7 +75,7 @@ fn accept_band(spec: &Spec, lim: f64, fit: bool) -> Band {
 fn max_dg_plot(oc: &DemoOutcome) -> Plot {
     let t0 = oc.recording.t0_c;
     let spec = &oc.spec;
-    let row_points = |model: &str, method: &str, dx: f64| -> Vec<(f64, f64)> {
+    let row_points = |model: &str, method: Compensation, dx: f64| -> Vec<(f64, f64)> {
         oc.rows
             .iter()
             .filter(|r| r.model == model && r.method == method)
@@ -88,12 +88,12 @@ fn max_dg_plot(oc: &DemoOutcome) -> Plot {
         PALETTE[0],
         Dash::Dotted,
         Marker::Cross,
-        row_points("t0-constants", "none", dodge(0, n) * 3.0),
+        row_points(T0_CONSTANTS, Compensation::None, dodge(0, n) * 3.0),
     )];
     for (i, m) in oc.models.iter().enumerate() {
         for (k, method, marker, dash) in METHODS {
             let mut s = Series::line(
-                format!("{} method {method}", m.name),
+                format!("{} method {}", m.name, method.name()),
                 model_color(i),
                 dash,
                 marker,
@@ -229,7 +229,7 @@ fn dg_plot(oc: &DemoOutcome, names: &[String], ti: usize, t: f64) -> Plot {
                 .collect();
             max_abs = pts.iter().fold(max_abs, |a, p| a.max(p.1.abs()));
             series.push(Series::markers(
-                format!("{} method {method}", m.name),
+                format!("{} method {}", m.name, method.name()),
                 model_color(i),
                 marker,
                 pts,

@@ -3,7 +3,7 @@
 //! after the findings, each pair on one scale so that what the findings explain shows,
 //! with the band the noise alone would fill.
 use crate::data::recording::Recording;
-use crate::diagnose::design::Fit;
+use crate::diagnose::fit::Fit;
 use crate::diagnose::Diagnosis;
 use crate::error::Result;
 use crate::report::axis::prefixed;
@@ -72,7 +72,7 @@ fn floor_band(fr: &Frame) -> Band {
 /// The positions observed, by name, in the positions list's order; and each
 /// observation's category.
 fn position_axis(rec: &Recording, d: &Diagnosis) -> (Vec<String>, Vec<f64>) {
-    let mut used: Vec<usize> = d.obs.iter().map(|o| o.position).collect();
+    let mut used: Vec<usize> = d.data.obs.iter().map(|o| o.position).collect();
     used.sort_unstable();
     used.dedup();
     let names = used
@@ -80,6 +80,7 @@ fn position_axis(rec: &Recording, d: &Diagnosis) -> (Vec<String>, Vec<f64>) {
         .map(|p| rec.positions.name(*p).to_string())
         .collect();
     let cat = d
+        .data
         .obs
         .iter()
         .map(|o| used.binary_search(&o.position).unwrap_or(0) as f64)
@@ -95,7 +96,7 @@ fn plots_of(rec: &Recording, d: &Diagnosis, fr: &Frame, tag: &str, fit: &Fit) ->
     } else {
         (tag.to_string(), format!(", {tag} the findings"))
     };
-    let t = |r: usize| d.obs[r].t_s / 3600.0;
+    let t = |r: usize| d.data.obs[r].t_s / 3600.0;
     let span = time_span(rec);
     let (names, cat) = position_axis(rec, d);
     let many = names.len() > 24;
@@ -123,7 +124,7 @@ fn plots_of(rec: &Recording, d: &Diagnosis, fr: &Frame, tag: &str, fit: &Fit) ->
             id: format!("resid-temp-{id}"),
             title: format!("residual against temperature{when}"),
             x_label: "temperature, C".into(),
-            series: per_axis(fit, fr, &|r| d.obs[r].temp_c, 0.0),
+            series: per_axis(fit, fr, &|r| d.data.obs[r].temp_c, 0.0),
             width: 620,
             height: 260,
             ..base.clone()
@@ -148,7 +149,8 @@ fn plots_of(rec: &Recording, d: &Diagnosis, fr: &Frame, tag: &str, fit: &Fit) ->
 
 /// The diagnosis report: residuals against time, temperature and position, before and
 /// after the findings.
-pub fn diagnosis_report(rec: &Recording, d: &Diagnosis) -> Result<String> {
+pub fn diagnosis_report(d: &Diagnosis) -> Result<String> {
+    let rec = d.recording();
     let fr = frame(rec, d);
     let temp = temperature_plot(rec, "temperature", Some(time_span(rec)));
     // with nothing found the final model is the baseline: its residuals once
@@ -172,14 +174,14 @@ pub fn diagnosis_report(rec: &Recording, d: &Diagnosis) -> Result<String> {
         let [at, atemp, apos] = plots_of(rec, d, &fr, "after", &d.final_fit);
         (vec![bt, at, temp], vec![btemp, atemp], vec![bpos, apos])
     };
-    let contract = d.contract(rec);
+    let contract = d.contract();
     let intro = format!(
         "<p>Recording {}: {} samples, output in {}; {} window means of static positions. Verdict: <b>{}</b>.</p>\n<pre>{}</pre>",
         esc(&rec.path.display().to_string()),
         rec.rows.len(),
         esc(&rec.output_unit),
-        d.obs.len(),
-        esc(contract.verdict),
+        d.data.obs.len(),
+        esc(contract.verdict.as_str()),
         esc(&contract.text())
     );
     let sections = [

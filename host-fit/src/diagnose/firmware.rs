@@ -1,0 +1,323 @@
+//! The diagnosed model in the firmware's form, for `diagnose --out`: the final model in
+//! the forms the firmware applies (one lag pole for all axes, hysteresis of the offsets,
+//! one warm-up since power-on), refitted in those forms where the diagnosis found a
+//! richer one, so the blob carries exactly a model that was fitted; its coefficients as
+//! the polynomial itself or a piecewise-linear table over the data's temperatures, and
+//! its in-flight physics terms.
+use crate::diagnose::data::Data;
+use crate::diagnose::effects::Extra;
+use crate::diagnose::fit::{Depth, Fit};
+use crate::diagnose::params::{Param, Term};
+use crate::diagnose::profile::{time_constant, Grid};
+use crate::diagnose::regressors::{alpha, median_step};
+use crate::error::{HostError, Result};
+use crate::fit::temperature::{Basis, POLY_SCALE_C, UPDATE_STEP_C};
+use firmware_core::model::{K_INDEX, U0_INDEX};
+use firmware_core::temperature::{Calibration, Physics, TempModel};
+
+/// The model the blob carries.
+#[derive(Debug, Clone)]
+pub struct Flashed {
+    /// The final model in the firmware's forms, refitted where it differs.
+    pub fit: Fit,
+    /// Its coefficients on a grid over the data's temperatures: `(temperature, the 12
+    /// coefficients)`.
+    pub table: Vec<(f64, [f64; 12])>,
+    /// Median sample period of the recording, s (the in-flight filters' step).
+    pub sample_period_s: f64,
+}
+
+impl Flashed {
+    /// The final model `f` of `data` in the firmware's forms.
+    pub fn of(data: &Data, f: &Fit) -> Flashed {
+        let fit = flashable(data, f);
+        Flashed {
+            table: table(data, &fit),
+            sample_period_s: median_step(data.rec),
+            fit,
+        }
+    }
+
+    /// The extended model as a firmware calibration: the coefficients as the polynomial
+    /// itself, or as a piecewise-linear table (which also carries a temp_curvature
+    /// finding), and the in-flight physics terms (fixture_error only corrects the
+    /// calibration, which the final fit already does).
+    pub fn calibration(&self, t0: f64) -> Result<Calibration<f64>> {
+        let (lo, hi) = (
+            self.table.first().map(|r| r.0).unwrap_or(t0 - 1.0),
+            self.table.last().map(|r| r.0).unwrap_or(t0 + 1.0),
+        );
+        Ok(Calibration {
+            t0_c: t0,
+            t_min_c: lo,
+            t_max_c: hi.max(lo + 1.0),
+            clamp: false,
+            update_step_c: UPDATE_STEP_C,
+            model: self.poly_table().unwrap_or_else(|| TempModel::Pwl {
+                breakpoints: self.table.iter().map(|r| r.0).collect(),
+                values: self.table.iter().map(|r| r.1).collect(),
+            }),
+            physics: self.physics()?,
+        })
+    }
+
+    /// The model's values of a per-axis term of extra `e` (0 where not fitted).
+    fn term(&self, e: usize, term: Term) -> [f64; 3] {
+        let f = &self.fit;
+        std::array::from_fn(|axis| {
+            f.labels
+                .iter()
+                .position(|l| {
+                    *l == Param::Effect {
+                        term,
+                        axis,
+                        extra: e,
+                    }
+                })
+                .map(|j| f.x[j])
+                .unwrap_or(0.0)
+        })
+    }
+
+    /// The in-flight terms in the firmware's form; `None` when there are none.
+    fn physics(&self) -> Result<Option<Physics<f64>>> {
+        let dt = self.sample_period_s;
+        let mut ph = Physics {
+            sample_period_s: dt,
+            lag_alpha: 1.0,
+            rate: [0.0; 3],
+            rate_alpha: 1.0,
+            hysteresis: [0.0; 3],
+            hysteresis_threshold_c: 0.5,
+            hysteresis_initial: 0.0,
+            k2: [0.0; 3],
+            asymmetry: [0.0; 3],
+            warmup: [0.0; 3],
+            warmup_decay: 1.0,
+        };
+        let refuse = |what: &str| {
+            Err(HostError::msg(format!(
+                "the fitted {what} cannot be flashed by this firmware's physics block; the blob would not compensate what was fitted"
+            )))
+        };
+        let mut any = false;
+        for (e, x) in self.fit.spec.extras.iter().enumerate() {
+            any |= !matches!(
+                x,
+                Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(_)
+            );
+            match x {
+                Extra::Lag { taus } => {
+                    if taus.iter().any(|t| *t != taus[0] || t[1] > 0.0) {
+                        return refuse("thermal lag (per-axis or two-pole)");
+                    }
+                    ph.lag_alpha = alpha(dt, taus[0][0]);
+                }
+                Extra::Rate { tau_s } => {
+                    ph.rate = self.term(e, Term::Rate);
+                    ph.rate_alpha = alpha(dt, *tau_s);
+                }
+                Extra::Hysteresis {
+                    threshold_c,
+                    initial,
+                    scale,
+                } => {
+                    if *scale {
+                        return refuse("hysteresis of the scale factors");
+                    }
+                    ph.hysteresis = self.term(e, Term::Hysteresis);
+                    ph.hysteresis_threshold_c = *threshold_c;
+                    ph.hysteresis_initial = *initial;
+                }
+                Extra::K2 => ph.k2 = self.term(e, Term::K2),
+                Extra::Asymmetry => ph.asymmetry = self.term(e, Term::Asymmetry),
+                Extra::Warmup { tau_s, .. } => {
+                    // in flight the clock restarts at power-on only, as it does here at
+                    // the recording's start (and its gaps); handling does not happen
+                    if ph.warmup != [0.0; 3] {
+                        return refuse("second warm-up time constant");
+                    }
+                    ph.warmup = self.term(e, Term::Warmup);
+                    ph.warmup_decay = (-dt / tau_s).exp();
+                }
+                Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(_) => {}
+            }
+        }
+        Ok(any.then_some(ph))
+    }
+
+    /// The model's polynomial itself, when its temperature dependence is one (no bend,
+    /// no fine offsets): exact, where a table through it would interpolate.
+    fn poly_table(&self) -> Option<TempModel<f64>> {
+        let f = &self.fit;
+        let Basis::Poly { order } = f.spec.basis else {
+            return None;
+        };
+        if f.spec
+            .extras
+            .iter()
+            .any(|e| matches!(e, Extra::Curvature(_) | Extra::Bend { .. }))
+        {
+            return None;
+        }
+        let mut terms = vec![[0.0; 12]; (order + 1).max(2)];
+        for (c, l) in f.labels.iter().enumerate() {
+            let (slot, k) = match *l {
+                Param::K { i, j, k } => (K_INDEX[i][j], k),
+                Param::U0 { i, k } => (U0_INDEX[i], k),
+                Param::Effect { .. } | Param::FixtureAngle { .. } => continue,
+            };
+            // the fit's basis is powers of dT / POLY_SCALE_C
+            terms[k][slot] += f.x[c] / POLY_SCALE_C.powi(k as i32);
+        }
+        Some(TempModel::Poly {
+            terms: terms.into_iter().collect(),
+        })
+    }
+}
+
+/// `f` in the firmware's forms, refitted (a single lag pole profiled again) where it
+/// differs; `f` itself when it is already flashable or a refit is not determined.
+fn flashable(data: &Data, f: &Fit) -> Fit {
+    let mut spec = f.spec.clone();
+    let mut changed = false;
+    let mut warmups = 0;
+    spec.extras.retain(|e| {
+        if let Extra::Warmup { .. } = e {
+            warmups += 1;
+            changed |= warmups > 1;
+            warmups == 1
+        } else {
+            true
+        }
+    });
+    let mut lag_at = None;
+    for (i, e) in spec.extras.iter_mut().enumerate() {
+        match e {
+            Extra::Hysteresis { scale, .. } if *scale => {
+                *scale = false;
+                changed = true;
+            }
+            Extra::Lag { taus } if taus.iter().any(|t| *t != taus[0] || t[1] > 0.0) => {
+                lag_at = Some((i, taus.iter().map(|t| t[0] + t[1]).sum::<f64>() / 3.0));
+                changed = true;
+            }
+            Extra::Hysteresis { .. }
+            | Extra::Lag { .. }
+            | Extra::Curvature(_)
+            | Extra::Bend { .. }
+            | Extra::Rate { .. }
+            | Extra::K2
+            | Extra::Asymmetry
+            | Extra::Fixture(_)
+            | Extra::Warmup { .. } => {}
+        }
+    }
+    if !changed {
+        return f.clone();
+    }
+    if let Some((i, tau)) = lag_at {
+        let make = |t: f64| {
+            let s = spec.replaced(
+                i,
+                Extra::Lag {
+                    taus: [[t, 0.0]; 3],
+                },
+            );
+            data.fit(&s, None, Depth::Profile)
+        };
+        if let Some((t, _)) = time_constant(&make, Grid::around(data, tau, 3, 7)) {
+            spec.extras[i] = Extra::Lag {
+                taus: [[t, 0.0]; 3],
+            };
+        }
+    }
+    data.fit(&spec, None, Depth::Full)
+        .unwrap_or_else(|| f.clone())
+}
+
+/// The grid of the blob's table over `(tmin, tmax)`: up to `max_points`, one per `step_c`;
+/// each bend of `knots` moved onto the nearest interior point no other bend took (so the
+/// table carries every bend sharp).
+pub fn table_grid(
+    (tmin, tmax): (f64, f64),
+    step_c: f64,
+    max_points: usize,
+    knots: &[f64],
+) -> Vec<f64> {
+    let nb = max_points
+        .min(((tmax - tmin) / step_c).floor() as usize + 1)
+        .max(2);
+    let mut grid: Vec<f64> = (0..nb)
+        .map(|k| tmin + (tmax - tmin) * k as f64 / (nb - 1) as f64)
+        .collect();
+    let mut taken = vec![false; nb];
+    for knot_c in knots {
+        let nearest = (1..nb - 1).filter(|&i| !taken[i]).min_by(|&a, &b| {
+            (grid[a] - knot_c)
+                .abs()
+                .total_cmp(&(grid[b] - knot_c).abs())
+        });
+        if let Some(i) = nearest {
+            grid[i] = *knot_c;
+            taken[i] = true;
+        }
+    }
+    grid.sort_by(f64::total_cmp);
+    grid.dedup();
+    grid
+}
+
+/// The model's coefficients on the table grid over the data's temperature range.
+fn table(data: &Data, f: &Fit) -> Vec<(f64, [f64; 12])> {
+    let knots: Vec<f64> = f
+        .spec
+        .extras
+        .iter()
+        .filter_map(|e| {
+            if let Extra::Bend { knot_c } = e {
+                Some(*knot_c)
+            } else {
+                None
+            }
+        })
+        .collect();
+    let r = &data.rules;
+    let grid = table_grid(
+        data.temperature_range(),
+        r.table_step_c,
+        r.max_breakpoints,
+        &knots,
+    );
+    grid.iter()
+        .zip(data.coefficients_at(f, &grid))
+        .map(|(t, (k, u0))| (*t, firmware_core::model::Coeffs { k, u0 }.to_array()))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_table_grid_spans_the_range_one_point_per_step_at_most_the_limit() {
+        let g = table_grid((-20.0, 40.0), 2.0, 16, &[]);
+        assert_eq!(g.len(), 16);
+        assert_eq!((g[0], g[15]), (-20.0, 40.0));
+        assert_eq!(table_grid((20.0, 21.0), 2.0, 16, &[]), vec![20.0, 21.0]);
+    }
+
+    /// Two bends near one grid point each get a point of their own: the table carries
+    /// both sharp (the second must not move the point the first took).
+    #[test]
+    fn two_nearby_bends_do_not_move_the_same_grid_point() {
+        let knots = [9.0, 9.5];
+        let g = table_grid((-20.0, 40.0), 2.0, 16, &knots);
+        for k in knots {
+            assert!(g.contains(&k), "bend at {k} C is not on the grid {g:?}");
+        }
+        assert_eq!(g.len(), 16, "{g:?}");
+        assert!(g.windows(2).all(|w| w[0] < w[1]), "{g:?}");
+        assert_eq!((g[0], g[15]), (-20.0, 40.0), "the ends stay");
+    }
+}

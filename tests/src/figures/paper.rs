@@ -1,0 +1,53 @@
+//! The paper's experiment on the twin (`host-fit demo`) and the paper's own tables
+//! (`temp-fit` against Table 3).
+use crate::{cli, cli_json, repo, s};
+
+/// `host-fit demo --seed 1`: the table it prints.
+pub fn demo_table() -> String {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("demo");
+    let (code, out, err) = cli(&["demo", "--out", s(&dir), "--seed", "1"]);
+    assert_eq!(code, 0, "{err}");
+    out.lines()
+        .take_while(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// `temp-fit` on the paper's Tables 1-2 (pwl, relative) against its Table 3: the
+/// largest relative difference over the 24 coefficients, and the line quoting it.
+pub fn golden_table3() -> (f64, String) {
+    let tables = repo().join("testdata/paper/paper-tables.csv");
+    let j = cli_json(&[
+        "temp-fit",
+        tables.to_str().unwrap(),
+        "--model",
+        "pwl",
+        "--relative",
+        "--json",
+    ]);
+    let iv = j["intervals"].as_array().unwrap();
+    let text = std::fs::read_to_string(repo().join("testdata/paper/paper-table3.csv")).unwrap();
+    let mut worst: f64 = 0.0;
+    let mut n = 0;
+    for l in text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("coefficient"))
+    {
+        let f: Vec<&str> = l.split(',').collect();
+        for (k, col) in [(0, 2), (1, 3)] {
+            let want: f64 = f[col].parse().unwrap();
+            let got = iv[k]["coefficients"][f[0]]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{} missing", f[0]));
+            worst = worst.max(((got - want) / want).abs());
+            n += 1;
+        }
+    }
+    (
+        worst,
+        format!(
+            "Table 3 reproduced: largest relative difference {worst:.1e} over {n} coefficients"
+        ),
+    )
+}

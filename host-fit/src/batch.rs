@@ -3,7 +3,9 @@
 //! specification on its verification dwells, `summary.csv` (one line per unit:
 //! acceptance `pass`, `fail` or `error`, and why) and the lot's statistics (`lot.csv`:
 //! every coefficient's distribution over the units, and the units far from the lot by a
-//! robust z-score). One unit's bad file is reported and does not stop the batch.
+//! robust z-score). One unit's bad file is reported and does not stop the batch. With a
+//! record store every unit's run is recorded (an error too), in chunks of
+//! [`RECORD_CHUNK`] units, one transaction each.
 use crate::acceptance::{judge, Acceptance, Spec, Verdict};
 use crate::blob::build_blob;
 use crate::data::positions::{Positions, Role};
@@ -16,6 +18,8 @@ use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
 use crate::fit::temperature::{span, UPDATE_STEP_C};
 use crate::output::{check_writable, write_atomic, write_json};
+use crate::store::record::{sha256_file, AtT0, Command as Recorded, HashingReader, Record};
+use crate::store::{Store, Target};
 use crate::verify::{verify, TempMax};
 use firmware_core::compensate::Method;
 use firmware_core::model::COEFF_NAMES;
@@ -28,6 +32,9 @@ use std::path::{Path, PathBuf};
 /// A unit is far from the lot when one of its coefficients lies more than this many
 /// robust standard deviations (1.4826 MAD) from the lot's median.
 pub const OUTLIER_Z: f64 = 3.5;
+
+/// Units recorded in one transaction of the record store.
+pub const RECORD_CHUNK: usize = 64;
 
 /// How a unit of the batch ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -93,6 +100,8 @@ pub struct UnitResult {
     pub at_t0_sigma: [f64; 12],
     /// The coefficients far from the lot, with their robust z-scores.
     pub outlier: Vec<(&'static str, f64)>,
+    /// The unit's record (with a record store).
+    pub record: Option<Record>,
 }
 
 /// What a batch does with every unit.
@@ -112,6 +121,8 @@ pub struct BatchOptions {
     /// The positions every recording is read with (built in, or a lab's own file with
     /// its roles).
     pub positions: Positions,
+    /// Record every unit in this store.
+    pub store: Option<Target>,
 }
 
 /// The per-unit JSON.
@@ -140,7 +151,11 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let rec = Recording::read(path, o.positions.clone())?;
+    // read once: for the recording and for its SHA-256
+    let file = std::fs::File::open(path).map_err(|e| HostError::io(path, &e))?;
+    let mut input = HashingReader::new(file);
+    let rec = Recording::from_reader(path, &mut input, o.positions.clone())?;
+    let sha = input.finish().map_err(|e| HostError::io(path, &e))?;
     if !rec.unit.is_empty() {
         r.unit = rec.unit.clone();
     }
@@ -169,6 +184,22 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     };
     r.at_t0 = Some(cal.at_t0());
     let (blob, bytes, dep) = build_blob(&r.unit, &cal)?;
+    if let Some(t) = &o.store {
+        let mut rc = t.record(Recorded::Batch, &r.unit, path)?;
+        rc.input_sha256 = Some(sha);
+        rc.output_unit = Some(rec.output_unit.clone());
+        rc.model = Some(r.model.clone());
+        rc.at_t0 = Some(AtT0 {
+            t0_c: cal.t0_c,
+            values: cal.at_t0(),
+            sigma: Some(r.at_t0_sigma),
+        });
+        rc.blob = Some(bytes.clone());
+        if let Some(d) = &diagnosis {
+            rc.with_diagnosis(d)?;
+        }
+        r.record = Some(rc);
+    }
     write_atomic(&out.join(format!("{stem}.blob")), &bytes, o.force)?;
     let check = |p: usize| rec.positions.has_role(p, Role::Verification);
     let v = verify(&rec, &blob, Method::CorrectConstants, &check)
@@ -183,6 +214,10 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         judge(&v, &o.spec, cal.t0_c, (cal.t_min_c, cal.t_max_c)).map_err(|e| e.within(path))?;
     r.acceptance = acc.acceptance.into();
     r.reason = acc.reason.clone();
+    if let Some(rc) = &mut r.record {
+        rc.worst_dg_mg = r.max_dg_after_mg;
+        rc.with_verdict(&acc.acceptance, &acc.reason)?;
+    }
     let j = UnitJson {
         unit: &r.unit,
         file: path.display().to_string(),
@@ -220,12 +255,35 @@ fn one(path: &Path, out: &Path, o: &BatchOptions) -> UnitResult {
         at_t0: None,
         at_t0_sigma: [0.0; 12],
         outlier: Vec::new(),
+        record: None,
     };
     if let Err(e) = fit_unit(path, out, o, &mut r) {
         r.acceptance = UnitStatus::Error;
         r.reason = e.to_string();
+        if let Some(t) = &o.store {
+            let begun = r.record.take();
+            r.record = error_record(t, path, &r, begun);
+        }
     }
     r
+}
+
+/// The record of a unit that could not be processed: the record begun (its blob, if it
+/// was made), or a new one with the file's SHA-256 where it can be read.
+fn error_record(t: &Target, path: &Path, r: &UnitResult, begun: Option<Record>) -> Option<Record> {
+    let mut rc = match begun {
+        Some(rc) => rc,
+        None => {
+            let mut rc = t.record(Recorded::Batch, &r.unit, path).ok()?;
+            rc.input_sha256 = sha256_file(path).ok();
+            rc
+        }
+    };
+    rc.judged = Some(crate::store::record::Judged {
+        verdict: "error".into(),
+        reason: r.reason.clone(),
+    });
+    Some(rc)
 }
 
 /// The `*.csv` files of `dir`, sorted.
@@ -393,6 +451,8 @@ pub struct BatchOutcome {
     pub units: Vec<UnitResult>,
     /// The lot's coefficients.
     pub lot: Vec<LotCoefficient>,
+    /// Records written to the store.
+    pub recorded: Option<usize>,
 }
 
 impl BatchOutcome {
@@ -423,19 +483,32 @@ pub fn run(dir: &Path, out: &Path, o: &BatchOptions) -> Result<BatchOutcome> {
         ProgressStyle::with_template("{pos}/{len} units [{bar:40}] {elapsed_precise} eta {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
+    // opened before any unit is processed: a bad store stops the batch before it starts
+    let writer = match &o.store {
+        Some(t) => Some(Store::open(&t.db)?.writer(RECORD_CHUNK)),
+        None => None,
+    };
     let mut units: Vec<UnitResult> = pool.install(|| {
         files
             .par_iter()
             .map(|f| {
                 let r = one(f, out, o);
+                if let (Some(w), Some(rc)) = (&writer, &r.record) {
+                    w.send(rc.clone());
+                }
                 bar.inc(1);
                 r
             })
             .collect()
     });
     bar.finish_and_clear();
+    let recorded = writer.map(|w| w.finish()).transpose()?;
     let lot = lot(&mut units);
     write_atomic(&summary, summary_csv(&units)?.as_bytes(), o.force)?;
     write_atomic(&lot_path, lot_csv(&lot)?.as_bytes(), o.force)?;
-    Ok(BatchOutcome { units, lot })
+    Ok(BatchOutcome {
+        units,
+        lot,
+        recorded,
+    })
 }

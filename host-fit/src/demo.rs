@@ -1,5 +1,7 @@
 //! The main job: the paper's experiment on the digital twin, compared by
-//! [`crate::analysis`], written to a folder (recording, truth, blobs, summary, report).
+//! [`crate::analysis`], written to a folder (recording, truth, blobs, summary, report),
+//! every model's blob recorded in the folder's record store (`records.sqlite`, appended
+//! to when the demo runs again with `--force`).
 use crate::acceptance::{Acceptance, Spec};
 use crate::analysis::{analyse, DemoOutcome, SummaryRow};
 use crate::data::positions::Positions;
@@ -8,6 +10,8 @@ use crate::error::{HostError, Result};
 use crate::fit::select::Selection;
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::simulate::{simulate, SimConfig, TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
+use crate::store::record::{AtT0, Command, HashingReader, Record};
+use crate::store::Store;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::io::IsTerminal;
@@ -55,6 +59,9 @@ fn bar(len: u64, msg: &str) -> ProgressBar {
     b
 }
 
+/// The demo's record store, in its folder.
+pub const STORE: &str = "records.sqlite";
+
 /// The demo's output files in `dir`.
 pub fn outputs(dir: &Path) -> Vec<PathBuf> {
     [
@@ -65,10 +72,50 @@ pub fn outputs(dir: &Path) -> Vec<PathBuf> {
         "pwl-all.blob",
         "summary.json",
         "report.html",
+        STORE,
     ]
     .iter()
     .map(|f| dir.join(f))
     .collect()
+}
+
+/// One record per model of the demo: its blob, model, coefficients at T0 and verdict.
+fn records(oc: &DemoOutcome, rec_path: &Path, csv: &str, seed: u64) -> Result<Vec<Record>> {
+    let sha = HashingReader::new(csv.as_bytes())
+        .finish()
+        .map_err(|e| HostError::io(rec_path, &e))?;
+    let mut out = Vec::new();
+    // one run: its records share its time
+    let started = crate::store::clock::now();
+    for m in &oc.models {
+        let mut r = Record::new(Command::Demo, None, &oc.recording.unit, rec_path)?;
+        r.time_utc.clone_from(&started);
+        r.options = serde_json::json!({ "seed": seed, "model": m.name, "blob": m.file });
+        r.input_sha256 = Some(sha.clone());
+        r.output_unit = Some(oc.recording.output_unit.clone());
+        r.model = Some(m.name.clone());
+        let cal = m.fit.calibration(0.1, false);
+        r.at_t0 = Some(AtT0 {
+            t0_c: cal.t0_c,
+            values: cal.at_t0(),
+            sigma: None,
+        });
+        r.blob = Some(m.blob.clone());
+        r.worst_dg_mg = m.verifications[0]
+            .max_by_temperature
+            .iter()
+            .map(|t| t.max_abs_dg_mg)
+            .reduce(f64::max);
+        match &m.acceptance {
+            Ok(a) => r.with_verdict(&a.acceptance, &a.reason)?,
+            Err(why) => r.options["not_judged"] = why.clone().into(),
+        }
+        out.push(r);
+    }
+    // the data-chosen model's blob is the unit's calibration: recorded last, it is the
+    // one `history` marks as the latest
+    out.sort_by_key(|r| r.options["blob"] == "chosen.blob");
+    Ok(out)
 }
 
 /// Run the demo into `dir`.
@@ -77,6 +124,8 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<DemoOutcome> {
     for f in outputs(dir) {
         check_writable(&f, force)?;
     }
+    // opened first: a bad store stops the demo before it writes anything
+    let mut store = Store::open(&dir.join(STORE))?;
     let cfg = SimConfig {
         seed,
         ..SimConfig::default()
@@ -94,6 +143,7 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<DemoOutcome> {
     write_json(&dir.join("truth.json"), &truth, force)?;
     let rec = Recording::from_reader(&rec_path, sim.csv.as_bytes(), Positions::default())?;
     let oc = analyse(rec, Some(TrueUnit::new(&cfg)?))?;
+    store.append(&mut records(&oc, &rec_path, &sim.csv, seed)?)?;
     for m in &oc.models {
         write_atomic(&dir.join(m.file), &m.blob, force)?;
     }

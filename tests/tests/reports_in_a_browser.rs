@@ -449,3 +449,57 @@ fn the_wrist_recordings_diagnosis_report_in_a_browser() {
     assert!(size < 600_000, "the wrist report is {size} bytes");
     check_in_browser("diagnosis report (ggir-wrist)", &report);
 }
+
+/// The trend report of 150 units in 6 lots (written through the store's own API; the x
+/// offset moves by 3 sigma from lot 5 on, so that rules fire and their series are drawn).
+#[test]
+fn the_trend_report_in_a_browser() {
+    use host_fit::store::record::{AtT0, Command, Record};
+    let tmp = tempdir();
+    let dir = tmp.path();
+    let db = dir.join("line.sqlite");
+    let mut store = host_fit::store::Store::open(&db).unwrap();
+    let mut rng = host_fit::rng::Rng::new(4);
+    let mut records = Vec::new();
+    for lot in 1..=6 {
+        for u in 0..25 {
+            let serial = format!("L{lot}-{u:02}");
+            let input = std::path::PathBuf::from(format!("L{lot}/{serial}.csv"));
+            let mut r = Record::new(Command::Batch, None, &serial, &input).unwrap();
+            let mut values = host_fit::simulate::PAPER_UNIT[2];
+            for v in values.iter_mut() {
+                *v += 1e-6 * rng.normal();
+            }
+            if lot >= 5 {
+                values[9] += 3e-6;
+            }
+            r.lot = Some(format!("L{lot}"));
+            r.input_sha256 = Some("0".repeat(64));
+            r.output_unit = Some("V".into());
+            r.model = Some("poly4".into());
+            r.at_t0 = Some(AtT0 {
+                t0_c: 20.0,
+                values,
+                sigma: Some([1e-6; 12]),
+            });
+            r.blob = Some(vec![0; 64]);
+            r.worst_dg_mg = Some(0.015 + 0.003 * rng.normal().abs());
+            records.push(r);
+        }
+    }
+    store.append(&mut records).unwrap();
+    drop(store);
+    let report = dir.join("trend.html");
+    let (code, out, err) = cli(&[
+        "trend",
+        "--db",
+        db.to_str().unwrap(),
+        "--out",
+        report.to_str().unwrap(),
+        "--reference-first",
+        "50",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("150 units"), "{out}");
+    check_in_browser("trend report", &report);
+}

@@ -151,6 +151,21 @@ pub struct Input {
     pub verbose: bool,
 }
 
+/// Where a run is recorded (the record store; `history` and `trend` read it).
+#[derive(Args, Debug, Clone, Default)]
+pub struct RecordArgs {
+    /// Record the run in this record store (SQLite, created when missing; `batch`:
+    /// records.sqlite in its output folder unless given).
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+    /// The unit's lot, recorded with the run (`batch`: default the folder's name).
+    #[arg(long)]
+    pub lot: Option<String>,
+    /// How the tool was run (filled by the command line; not an option).
+    #[arg(skip)]
+    pub invocation: Option<crate::store::Invocation>,
+}
+
 /// `temp-fit`.
 #[derive(Args, Debug)]
 pub struct TempFitArgs {
@@ -218,6 +233,9 @@ pub struct FitArgs {
     /// Machine-readable output.
     #[arg(long)]
     pub json: bool,
+    /// Where the run is recorded.
+    #[command(flatten)]
+    pub record: RecordArgs,
 }
 
 /// `verify`.
@@ -244,6 +262,9 @@ pub struct VerifyArgs {
     /// Machine-readable output.
     #[arg(long)]
     pub json: bool,
+    /// Where the run is recorded.
+    #[command(flatten)]
+    pub record: RecordArgs,
 }
 
 /// `report`.
@@ -285,6 +306,9 @@ pub struct DiagnoseArgs {
     /// Machine-readable output.
     #[arg(long)]
     pub json: bool,
+    /// Where the run is recorded.
+    #[command(flatten)]
+    pub record: RecordArgs,
 }
 
 /// `batch`.
@@ -314,6 +338,12 @@ pub struct BatchArgs {
     /// Overwrite outputs of an earlier run.
     #[arg(long)]
     pub force: bool,
+    /// Where the units are recorded.
+    #[command(flatten)]
+    pub record: RecordArgs,
+    /// Record nothing (no record store).
+    #[arg(long, conflicts_with = "db")]
+    pub no_db: bool,
 }
 
 /// `blind`.
@@ -397,6 +427,59 @@ pub struct InspectArgs {
     pub json: bool,
 }
 
+/// `history`.
+#[derive(Args, Debug)]
+pub struct HistoryArgs {
+    /// The unit's serial (as in its blob).
+    pub serial: String,
+    /// The record store.
+    #[arg(long)]
+    pub db: PathBuf,
+    /// Re-issue the blob of this run, bit for bit (its run id, or its first 6 or more
+    /// hex digits); needs --out.
+    #[arg(long, requires = "out")]
+    pub blob: Option<String>,
+    /// Where to write the re-issued blob.
+    #[arg(long, requires = "blob")]
+    pub out: Option<PathBuf>,
+    /// Overwrite an existing --out.
+    #[arg(long)]
+    pub force: bool,
+    /// Machine-readable output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `trend`.
+#[derive(Args, Debug)]
+pub struct TrendArgs {
+    /// The record store.
+    #[arg(long)]
+    pub db: PathBuf,
+    /// The HTML report to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Centre lines and limits from the first N units in time order (default 50).
+    #[arg(long, conflicts_with_all = ["reference_from", "reference_to"])]
+    pub reference_first: Option<usize>,
+    /// ... or from the units calibrated from this date or UTC time (YYYY-MM-DD or
+    /// YYYY-MM-DDTHH:MM:SSZ) ...
+    #[arg(long, requires = "reference_to")]
+    pub reference_from: Option<String>,
+    /// ... to this one (a date alone: to its end).
+    #[arg(long, requires = "reference_from")]
+    pub reference_to: Option<String>,
+    /// The run rules that flag points: Nelson's numbers, comma-separated, or `all`.
+    #[arg(long, default_value = "all")]
+    pub rules: String,
+    /// Overwrite an existing report.
+    #[arg(long)]
+    pub force: bool,
+    /// Machine-readable output (every flagged point).
+    #[arg(long)]
+    pub json: bool,
+}
+
 /// The commands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
@@ -428,4 +511,11 @@ pub enum Command {
     FwVectors(FwVectorsArgs),
     /// Decode a blob and print it, or say why it is invalid.
     Inspect(InspectArgs),
+    /// Every record of a unit in a record store, its latest calibration marked; a stored
+    /// blob re-issued bit for bit.
+    History(HistoryArgs),
+    /// Control charts across lots from a record store: each coefficient at T0 and the
+    /// worst verification |dg|, with limits from a reference period and the points the
+    /// run rules flag (HTML report).
+    Trend(TrendArgs),
 }

@@ -313,6 +313,13 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     let cal = oc.fit.calibration(a.update_step, a.clamp);
     let serial_name = a.serial.as_deref().unwrap_or(serial(&rec));
     let (blob, bytes, dep) = build_blob(serial_name, &cal)?;
+    let run = super::records::Run {
+        args: &a.record,
+        serial: serial_name,
+        rec: &rec,
+        err,
+    };
+    let bytes = super::records::fit(run, &oc, &cal, bytes)?;
     write_atomic(&a.out, &bytes, a.force)?;
     let written = Written {
         serial: serial_name,

@@ -42,7 +42,7 @@ fn method(m: MethodArg, error_model: Option<ErrModel>) -> Result<Method> {
 pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let m = method(a.method, a.error_model)?;
     let spec = Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?;
-    let (b, _) = read_blob(&a.blob)?;
+    let (b, blob_bytes) = read_blob(&a.blob)?;
     let rec = load(&a.input, err)?;
     let unit = serial(&rec);
     if b.serial.as_str() != unit {
@@ -81,6 +81,13 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
         (f64::from(cal.t_min_c), f64::from(cal.t_max_c)),
     )
     .map_err(|e| e.within(&a.input.recording))?;
+    let run = super::records::Run {
+        args: &a.record,
+        serial: unit,
+        rec: &rec,
+        err,
+    };
+    super::records::verify(run, (&b, &blob_bytes), &v, &acc)?;
     let outcome = match acc.acceptance {
         Verdict::Pass => Outcome::Done,
         Verdict::Fail => Outcome::Rejected,

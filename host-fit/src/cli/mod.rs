@@ -5,11 +5,11 @@ mod calibrate;
 mod check;
 mod common;
 mod production;
+mod records;
 mod study;
 
 use crate::error::Result;
-use args::{Cli, Command};
-use clap::Parser;
+use args::Command;
 pub use common::Outcome;
 use std::io::Write;
 
@@ -19,7 +19,7 @@ where
     I: IntoIterator<Item = T>,
     T: Into<std::ffi::OsString> + Clone,
 {
-    let cli = match Cli::try_parse_from(args) {
+    let cli = match records::parse(args) {
         Ok(c) => c,
         Err(e) => {
             let code = e.exit_code();
@@ -60,5 +60,7 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<Ou
         Command::Batch(a) => production::batch(a, out, err),
         Command::Simulate(a) => done(production::simulate(a, out)),
         Command::Demo(a) => done(production::demo(a, out)),
+        Command::History(a) => done(records::history(a, out)),
+        Command::Trend(a) => done(records::trend(a, out)),
     }
 }

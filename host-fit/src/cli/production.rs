@@ -23,6 +23,7 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
         diagnose: a.diagnose,
         force: a.force,
         positions,
+        store: super::records::batch_store(&a.dir, &a.out, &a.record, a.no_db),
     };
     let res = crate::batch::run(&a.dir, &a.out, &o)?;
     let count = |s: UnitStatus| res.units.iter().filter(|r| r.acceptance == s).count();
@@ -77,6 +78,18 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
             if far.is_empty() { "none".to_string() } else { far.join(", ") }
         ),
     )?;
+    if let (Some(t), Some(n)) = (&o.store, res.recorded) {
+        w(
+            out,
+            format!(
+                "records: {n} units recorded in {} (lot {}; host-fit history SERIAL --db {}, host-fit trend --db {} --out trend.html)",
+                t.db.display(),
+                t.lot.as_deref().unwrap_or("-"),
+                t.db.display(),
+                t.db.display()
+            ),
+        )?;
+    }
     Ok(if res.all_pass() {
         Outcome::Done
     } else {
@@ -141,5 +154,18 @@ pub(super) fn demo(a: DemoArgs, out: &mut dyn Write) -> Result<()> {
     w(
         out,
         format!("report:  {}", a.out.join("report.html").display()),
+    )?;
+    // the line's memory: what the store now holds of this unit
+    let db = a.out.join(crate::demo::STORE);
+    let store = crate::store::Store::open_existing(&db)?;
+    let h = crate::store::history::history(&store, &oc.recording.unit)?;
+    w(
+        out,
+        format!(
+            "records: {}
+{}",
+            db.display(),
+            h.text()
+        ),
     )
 }

@@ -20,9 +20,19 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
     let rec = oriented(load(&a.input, err)?, err)?;
     let d = crate::diagnose::diagnose(&rec)?;
     let mut c = d.contract();
-    if let Some(b) = &a.out {
-        let name = a.serial.as_deref().unwrap_or(serial(&rec));
-        let (blob, bytes, dep) = build_blob(name, &d.calibration(rec.t0_c)?)?;
+    let name = a.serial.as_deref().unwrap_or(serial(&rec));
+    let built = match &a.out {
+        Some(_) => Some(build_blob(name, &d.calibration(rec.t0_c)?)?),
+        None => None,
+    };
+    let run = super::records::Run {
+        args: &a.record,
+        serial: name,
+        rec: &rec,
+        err,
+    };
+    let stamped = super::records::diagnose(run, &d, &c, built.as_ref().map(|b| b.1.clone()))?;
+    if let (Some(b), Some((blob, _, dep)), Some(bytes)) = (&a.out, built, stamped) {
         write_atomic(b, &bytes, a.force)?;
         c.blob = Some(BlobNote {
             path: b.display().to_string(),

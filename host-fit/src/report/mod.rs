@@ -1,5 +1,5 @@
 //! The engineer's reports: self-contained HTML pages with SVG plots, for the demo (or
-//! any recording) and for a diagnosis.
+//! any recording), for a diagnosis and for the trend of a record store.
 pub mod axis;
 pub mod demo;
 pub mod diagnosis;
@@ -7,3 +7,4 @@ pub mod page;
 pub mod plot;
 pub mod svg;
 pub mod trace;
+pub mod trend;

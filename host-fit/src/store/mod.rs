@@ -1,0 +1,60 @@
+//! The line's memory: a record store in SQLite (one file, the SQLite compiled into
+//! host-fit), written by `fit`, `verify` and `diagnose` with `--db PATH`, by `batch` (into
+//! its output folder unless told otherwise) and by `demo` (into its folder), read by
+//! `history` and `trend`.
+//!
+//! One record per run and unit, never changed or deleted (triggers refuse it): a unit
+//! calibrated again keeps every record, and the view `latest_calibrations` (a query, no
+//! flag that an update could lose) names each unit's newest calibration.
+//!
+//! # Schema (version 1, `PRAGMA user_version = 1`, `PRAGMA application_id = 0x41544352`)
+//!
+//! Table `runs`, one row per record:
+//!
+//! | column | type | what |
+//! |---|---|---|
+//! | `id` | INTEGER PRIMARY KEY | order of writing (1, 2, ...) |
+//! | `run_id` | TEXT, unique | 16 random bytes as 32 lowercase hex digits; the blob's `run_id` (format 4) |
+//! | `serial` | TEXT | the unit's serial (as in its blob) |
+//! | `time_utc` | TEXT | when the run started, UTC, RFC 3339 with microseconds (`2026-12-01T18:29:03.123456Z`; text order is time order); a batch's units share it |
+//! | `host_fit_version`, `host_fit_commit` | TEXT | the tool that wrote it, and the git commit it was built from (`unknown` outside a checkout) |
+//! | `command` | TEXT | `fit`, `verify`, `diagnose`, `batch` (one record per unit) or `demo` (one per model) |
+//! | `options` | TEXT (JSON object) | every option of the command with its value, defaults included |
+//! | `lot` | TEXT | the lot: a batch's folder name or `--lot`; `--lot` elsewhere; NULL when none was given |
+//! | `input`, `input_sha256` | TEXT | the recording as given, and the SHA-256 of its bytes (64 hex digits) |
+//! | `output_unit` | TEXT | the recording's output unit: K is in it per g, U0 in it |
+//! | `model` | TEXT | the model in the blob (`poly3`, `pwl`, `diagnosed (temp_rate)`, ...) |
+//! | `t0_c` | REAL | T0, C |
+//! | `kxx` .. `u0z` | REAL | the 12 coefficients at T0 |
+//! | `sigma_kxx` .. `sigma_u0z` | REAL | their 1-sigma (fit, batch; NULL where the run does not estimate them) |
+//! | `blob`, `blob_crc` | BLOB, INTEGER | the blob made (fit, diagnose `--out`, batch, demo) or verified (verify), bit for bit, and its CRC-32 |
+//! | `acceptance`, `reason` | TEXT | `pass`, `fail` or `error` (a batch unit that could not be processed) against the acceptance specification, and why |
+//! | `worst_dg_mg` | REAL | the worst compensated \|dg\| over the verification dwells, mg |
+//! | `diagnosis_verdict`, `findings` | TEXT, TEXT (JSON) | the diagnosis' verdict and findings, as in its JSON contract |
+//!
+//! Indexes `runs_by_serial (serial, id)` and `runs_by_time (time_utc, id)`; view
+//! `latest_calibrations` (the newest record per serial that made a blob and did not end in
+//! an error; `verify` records are checks of a blob, not calibrations).
+//!
+//! # Many writers, no half records
+//! The store runs in WAL mode with `synchronous = FULL`; every write is one transaction
+//! (`BEGIN IMMEDIATE`: a writer waits for another up to [`BUSY_TIMEOUT`]), one per
+//! record or per chunk of a batch, so two batches writing one store at once lose
+//! nothing, and a writer killed mid-way leaves the records it committed, whole.
+//!
+//! # Bad stores
+//! A store of a newer schema is refused with its version named; a file that is not an
+//! SQLite database, an empty one, one cut short of the length its header states, or
+//! another program's database is reported, naming the file, and never re-created or
+//! altered.
+pub mod clock;
+pub mod db;
+pub mod fault;
+pub mod history;
+pub mod record;
+pub mod schema;
+pub mod trend;
+
+pub use db::{record_columns, Store, Target, Writer, FLUSH_AFTER};
+pub use fault::{db_error, BUSY_TIMEOUT};
+pub use record::Invocation;

@@ -71,8 +71,8 @@ pub struct DemoModel {
     pub blob: Vec<u8>,
     /// Verification with method 1 and method 2.
     pub verifications: [Verification; 2],
-    /// The acceptance of its blob (method 1), or why it could not be judged.
-    pub acceptance: std::result::Result<Acceptance, String>,
+    /// The acceptance of its blob (method 1).
+    pub acceptance: Acceptance,
 }
 
 /// Everything the comparison produced (also what the report plots).
@@ -183,8 +183,7 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
         }
         rows.extend(summary_rows(&name, Compensation::Method1, &v[0]));
         rows.extend(summary_rows(&name, Compensation::Method2, &v[1]));
-        let acceptance =
-            judge(&v[0], &spec, cal.t0_c, (cal.t_min_c, cal.t_max_c)).map_err(|e| e.message);
+        let acceptance = judge(&v[0], &spec, cal.t0_c, (cal.t_min_c, cal.t_max_c));
         models.push(DemoModel {
             name,
             file,
@@ -215,10 +214,8 @@ pub fn verdicts(oc: &DemoOutcome) -> String {
         oc.spec.text()
     );
     for m in &oc.models {
-        let line = match &m.acceptance {
-            Ok(a) => format!("{}: {}", a.acceptance.name(), a.reason),
-            Err(e) => format!("not judged: {e}"),
-        };
+        let a = &m.acceptance;
+        let line = format!("{}: {}", a.acceptance.name(), a.reason);
         s.push_str(&format!("  {:<14} {line}\n", m.name));
     }
     s

@@ -1,7 +1,7 @@
 //! Production batches: fit (and optionally diagnose) every recording in a folder in
 //! parallel, one blob and one JSON per unit, each unit judged against the acceptance
 //! specification on its verification dwells, `summary.csv` (one line per unit:
-//! acceptance `pass`, `fail` or `error`, and why) and the lot's statistics (`lot.csv`:
+//! acceptance `pass`, `fail`, `not_judged` or `error`, and why) and the lot's statistics (`lot.csv`:
 //! every coefficient's distribution over the units, and the units far from the lot by a
 //! robust z-score). One unit's bad file is reported and does not stop the batch. With a
 //! record store every unit's run is recorded (an error too), in chunks of
@@ -44,16 +44,19 @@ pub enum UnitStatus {
     Pass,
     /// Fitted, and its blob failed acceptance.
     Fail,
+    /// Fitted, but a band of the specification had no verification dwell to judge.
+    NotJudged,
     /// Could not be processed (the reason says why).
     Error,
 }
 
 impl UnitStatus {
-    /// `pass`, `fail` or `error`, as the summary writes it.
+    /// `pass`, `fail`, `not_judged` or `error`, as the summary writes it.
     pub fn name(self) -> &'static str {
         match self {
             UnitStatus::Pass => "pass",
             UnitStatus::Fail => "fail",
+            UnitStatus::NotJudged => "not_judged",
             UnitStatus::Error => "error",
         }
     }
@@ -64,6 +67,7 @@ impl From<Verdict> for UnitStatus {
         match v {
             Verdict::Pass => UnitStatus::Pass,
             Verdict::Fail => UnitStatus::Fail,
+            Verdict::NotJudged => UnitStatus::NotJudged,
         }
     }
 }
@@ -141,6 +145,10 @@ struct UnitJson<'a> {
     #[serde(flatten)]
     acceptance: &'a Acceptance,
     warnings: usize,
+    /// Positions missing at a stop, each named with the stop (also counted in
+    /// `warnings`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    missing_positions: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     diagnosis: Option<Contract>,
 }
@@ -154,7 +162,12 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     // read once: for the recording and for its SHA-256
     let file = std::fs::File::open(path).map_err(|e| HostError::io(path, &e))?;
     let mut input = HashingReader::new(file);
-    let rec = Recording::from_reader(path, &mut input, o.positions.clone())?;
+    let mut rec = Recording::from_reader(path, &mut input, o.positions.clone())?;
+    let missing: Vec<String> = crate::fit::coverage::missing(&rec)
+        .iter()
+        .map(|m| m.text())
+        .collect();
+    rec.warnings.extend(missing.iter().cloned());
     let sha = input.finish().map_err(|e| HostError::io(path, &e))?;
     if !rec.unit.is_empty() {
         r.unit = rec.unit.clone();
@@ -210,8 +223,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     };
     r.max_dg_before_mg = worst(&|t| t.max_abs_dg_mg_uncompensated);
     r.max_dg_after_mg = worst(&|t| t.max_abs_dg_mg);
-    let acc =
-        judge(&v, &o.spec, cal.t0_c, (cal.t_min_c, cal.t_max_c)).map_err(|e| e.within(path))?;
+    let acc = judge(&v, &o.spec, cal.t0_c, (cal.t_min_c, cal.t_max_c));
     r.acceptance = acc.acceptance.into();
     r.reason = acc.reason.clone();
     if let Some(rc) = &mut r.record {
@@ -234,6 +246,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         max_abs_dg_mg_method1: r.max_dg_after_mg,
         acceptance: &acc,
         warnings: rec.warnings.len(),
+        missing_positions: missing,
         diagnosis,
     };
     write_json(&out.join(format!("{stem}.json")), &j, o.force)
@@ -459,6 +472,19 @@ impl BatchOutcome {
     /// Whether every unit passed.
     pub fn all_pass(&self) -> bool {
         self.units.iter().all(|u| u.acceptance == UnitStatus::Pass)
+    }
+
+    /// The batch's verdict: `Fail` when a unit failed or errored, else `NotJudged` when
+    /// a unit was not judged, else `Pass`.
+    pub fn verdict(&self) -> Verdict {
+        let any = |s: UnitStatus| self.units.iter().any(|u| u.acceptance == s);
+        if any(UnitStatus::Fail) || any(UnitStatus::Error) {
+            Verdict::Fail
+        } else if any(UnitStatus::NotJudged) {
+            Verdict::NotJudged
+        } else {
+            Verdict::Pass
+        }
     }
 }
 

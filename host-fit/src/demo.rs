@@ -40,10 +40,7 @@ struct Summary<'a> {
 #[derive(Serialize)]
 struct ModelAcceptance<'a> {
     model: &'a str,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    judged: Option<&'a Acceptance>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    not_judged: Option<&'a str>,
+    judged: &'a Acceptance,
 }
 
 fn bar(len: u64, msg: &str) -> ProgressBar {
@@ -106,10 +103,7 @@ fn records(oc: &DemoOutcome, rec_path: &Path, csv: &str, seed: u64) -> Result<Ve
             .iter()
             .map(|t| t.max_abs_dg_mg)
             .reduce(f64::max);
-        match &m.acceptance {
-            Ok(a) => r.with_verdict(&a.acceptance, &a.reason)?,
-            Err(why) => r.options["not_judged"] = why.clone().into(),
-        }
+        r.with_verdict(&m.acceptance.acceptance, &m.acceptance.reason)?;
         out.push(r);
     }
     // the data-chosen model's blob is the unit's calibration: recorded last, it is the
@@ -158,8 +152,7 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<DemoOutcome> {
             .iter()
             .map(|m| ModelAcceptance {
                 model: &m.name,
-                judged: m.acceptance.as_ref().ok(),
-                not_judged: m.acceptance.as_ref().err().map(String::as_str),
+                judged: &m.acceptance,
             })
             .collect(),
     };

@@ -118,6 +118,39 @@ pub struct AcceptArgs {
     /// Limit on |dg| over the rest of the valid range, mg.
     #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     pub accept_range_mg: f64,
+    /// Verification dwells outside the blob's valid range: `fail` the unit (it was
+    /// tested where its blob claims nothing), or `report` them apart (a band of the
+    /// specification they leave without a judged dwell is then not judged).
+    #[arg(long, value_enum, default_value_t = OutsideArg::Fail)]
+    pub outside_range: OutsideArg,
+}
+
+impl AcceptArgs {
+    /// The specification these options give, checked.
+    pub fn spec(&self) -> crate::error::Result<crate::acceptance::Spec> {
+        Ok(
+            crate::acceptance::Spec::new(self.accept_t0_mg, self.accept_range_mg)?
+                .with_outside_range(self.outside_range.into()),
+        )
+    }
+}
+
+/// What becomes of verification dwells outside the blob's valid range.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutsideArg {
+    /// They fail the unit.
+    Fail,
+    /// They are reported apart.
+    Report,
+}
+
+impl From<OutsideArg> for crate::acceptance::OutsideRange {
+    fn from(o: OutsideArg) -> Self {
+        match o {
+            OutsideArg::Fail => crate::acceptance::OutsideRange::Fail,
+            OutsideArg::Report => crate::acceptance::OutsideRange::Report,
+        }
+    }
 }
 
 /// The positions options, the same for every command that reads recordings.

@@ -1,13 +1,13 @@
 //! `temp-fit`, `identify` and `fit`: from data to coefficients and blobs.
 use super::args::{FitArgs, IdentifyArgs, TempFitArgs};
-use super::common::{load, oriented, serial, w};
+use super::common::{load_to_fit, oriented, serial, w};
 use crate::blob::{build_blob, F32_BOUND_G};
 use crate::data::table::{read_table, to_csv, TableRow};
 use crate::error::{HostError, Result};
 use crate::fit::describe::ModelDescription;
 use crate::fit::equilibrium::Excluded;
 use crate::fit::identify::StopCoeffs;
-use crate::fit::noise::noise;
+use crate::fit::noise::{noise, Noise};
 use crate::fit::orientation::PoseEstimate;
 use crate::fit::pipeline::{
     fit_chosen, fit_recording, identify_stops, FitOutcome, ModelChoice, ModelKind, ModelRequest,
@@ -95,7 +95,7 @@ pub(super) fn identify(a: IdentifyArgs, out: &mut dyn Write, err: &mut dyn Write
     if let Some(c) = &a.csv {
         check_writable(c, a.force)?;
     }
-    let rec = oriented(load(&a.input, err)?, err)?;
+    let rec = oriented(load_to_fit(&a.input, err)?, err)?;
     let nz = noise(&rec);
     let st = identify_stops(&rec)?;
     let table = to_csv(&table_rows(&st))?;
@@ -185,6 +185,8 @@ struct Fitted<'a> {
     t_max_c: f64,
     noise_sigma: [f64; 3],
     noise_source: &'static str,
+    /// Where every noise figure of this output comes from.
+    noise_figures: NoiseFigures,
     /// The predicted compensation error against temperature (joint fits).
     #[serde(skip_serializing_if = "Option::is_none")]
     predicted_error: Option<Prediction>,
@@ -199,6 +201,36 @@ struct Fitted<'a> {
     blob_bytes: usize,
     temperature_model: ModelDescription,
     warnings: &'a [String],
+}
+
+/// Each noise figure of `fit` and its source.
+#[derive(Serialize)]
+struct NoiseFigures {
+    /// `noise_sigma`.
+    noise_sigma: &'static str,
+    /// `predicted_error.covariance_scale`.
+    covariance_scale: &'static str,
+    /// `predicted_error.dwell_noise_1sigma_mg`.
+    dwell_noise_1sigma_mg: &'static str,
+}
+
+impl NoiseFigures {
+    fn of(noise: &Noise) -> NoiseFigures {
+        let known = noise.dof > 0;
+        NoiseFigures {
+            noise_sigma: noise.source(),
+            covariance_scale: if known {
+                "residual scatter: the reduced chi-square of the calibration windows against their in-dwell noise, at least 1"
+            } else {
+                "residual scatter: the calibration windows' residual variance (no in-dwell noise)"
+            },
+            dwell_noise_1sigma_mg: if known {
+                "in-dwell scatter (successive samples) over the root of the dwell's samples; not widened by the model's residuals"
+            } else {
+                "residual scatter of the fit (no in-dwell noise)"
+            },
+        }
+    }
 }
 
 #[derive(Serialize)]
@@ -261,6 +293,7 @@ fn fitted<'a>(
         t_max_c: cal.t_max_c,
         noise_sigma: oc.noise.sigma,
         noise_source: oc.noise.source(),
+        noise_figures: NoiseFigures::of(&oc.noise),
         predicted_error: prediction,
         excluded_not_in_equilibrium: oc.excluded,
         orientations: oc.orientation.as_ref().map(|o| Orientations {
@@ -291,7 +324,7 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     check_writable(&a.out, a.force)?;
     let req = ModelRequest::from(&a.model);
     req.check()?;
-    let rec = load(&a.input, err)?;
+    let rec = load_to_fit(&a.input, err)?;
     let oc = match (req.kind, Route::from(a.route)) {
         (_, Route::Static) => fit_chosen(&rec, &req)?,
         (None, route) => {
@@ -392,13 +425,19 @@ fn fit_text(j: &Fitted<'_>) -> String {
             .iter()
             .map(|q| format!("{:.1} C {:.4}", q.temp_c, q.dg_1sigma_mg))
             .collect();
+        let widened: Vec<String> = ["x", "y", "z"]
+            .iter()
+            .zip(p.covariance_scale)
+            .map(|(a, c)| format!("{a} {c:.2}"))
+            .collect();
         s.push(format!(
-            "predicted compensation error (1 sigma of |dg| from the fit's covariance, worst of {} directions), mg: {}",
+            "predicted compensation error (1 sigma of |dg| from the fit's covariance, widened by the residual scatter of the calibration windows: reduced chi-square {}; worst of {} directions; inside the valid range only), mg: {}",
+            widened.join(" "),
             p.directions.len(),
             pts.join(", ")
         ));
         s.push(format!(
-            "a verification dwell of {} samples adds {:.4} mg of its own noise (noise: {}); the firmware's {} C cache step up to {:.4} mg; valid range {:.2}..{:.2} C",
+            "a verification dwell of {} samples adds {:.4} mg of its own noise (noise: {}, over the root of its samples; not the model's residuals); the firmware's {} C cache step up to {:.4} mg; valid range {:.2}..{:.2} C",
             p.dwell_samples, p.dwell_noise_1sigma_mg, j.noise_source, p.cache_step_c, p.cache_lag_max_mg, p.t_min_c, p.t_max_c
         ));
     }

@@ -3,7 +3,7 @@
 use super::args::{ErrModel, FwVectorsArgs, InspectArgs, MethodArg, VerifyArgs};
 use super::common::Outcome;
 use super::common::{load, serial, w};
-use crate::acceptance::{judge, Acceptance, Spec, Verdict};
+use crate::acceptance::{judge, Acceptance, Verdict};
 use crate::blob::{read_blob, Inspection, F32_BOUND_G};
 use crate::data::positions::Role;
 use crate::error::{HostError, Result};
@@ -41,7 +41,7 @@ fn method(m: MethodArg, error_model: Option<ErrModel>) -> Result<Method> {
 
 pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let m = method(a.method, a.error_model)?;
-    let spec = Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?;
+    let spec = a.accept.spec()?;
     let (b, blob_bytes) = read_blob(&a.blob)?;
     let rec = load(&a.input, err)?;
     let unit = serial(&rec);
@@ -79,8 +79,7 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
         &spec,
         f64::from(cal.t0_c),
         (f64::from(cal.t_min_c), f64::from(cal.t_max_c)),
-    )
-    .map_err(|e| e.within(&a.input.recording))?;
+    );
     let run = super::records::Run {
         args: &a.record,
         serial: unit,
@@ -91,6 +90,7 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
     let outcome = match acc.acceptance {
         Verdict::Pass => Outcome::Done,
         Verdict::Fail => Outcome::Rejected,
+        Verdict::NotJudged => Outcome::NotJudged,
     };
     if a.json {
         let j = Verified {

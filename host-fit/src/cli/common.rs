@@ -7,14 +7,17 @@ use crate::error::{HostError, Result};
 use std::borrow::Cow;
 use std::io::Write;
 
-/// How a command that ran ended (`cli::run` makes it the exit code: 0, or
-/// `EXIT_REJECTED`).
+/// How a command that ran ended (`cli::run` makes it the exit code: 0,
+/// `EXIT_REJECTED` or `EXIT_NOT_JUDGED`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Outcome {
     /// Done (and accepted, where acceptance is judged).
     Done,
     /// Ran, but the result failed acceptance (or a unit of a batch failed or errored).
     Rejected,
+    /// Ran, but a band of the specification had no judged dwell (in a batch: some unit
+    /// was not judged, and none failed or errored).
+    NotJudged,
 }
 
 /// Write one line of output.
@@ -53,8 +56,22 @@ pub(super) fn positions(p: &PositionArgs) -> Result<(Positions, Vec<String>)> {
 /// Read the recording of `input` with its positions ([`positions`]); warnings go to
 /// `err`, and the notes on expected features of the data too with `--verbose`.
 pub(super) fn load(input: &Input, err: &mut dyn Write) -> Result<Recording> {
+    read(input, err, false)
+}
+
+/// [`load`] for a command that fits: a position missing at a stop is a warning too,
+/// naming the position and the stop (and kept in the recording's warnings).
+pub(super) fn load_to_fit(input: &Input, err: &mut dyn Write) -> Result<Recording> {
+    read(input, err, true)
+}
+
+fn read(input: &Input, err: &mut dyn Write, fitting: bool) -> Result<Recording> {
     let (pos, mut warns) = positions(&input.positions)?;
-    let rec = Recording::read(&input.recording, pos)?;
+    let mut rec = Recording::read(&input.recording, pos)?;
+    if fitting {
+        let missing = crate::fit::coverage::missing(&rec);
+        rec.warnings.extend(missing.iter().map(|m| m.text()));
+    }
     warns.extend(rec.warnings.iter().cloned());
     for wn in &warns {
         let _ = writeln!(err, "warning: {wn}");

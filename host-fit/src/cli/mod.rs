@@ -34,6 +34,7 @@ where
     match dispatch(cli.command, out, err) {
         Ok(Outcome::Done) => 0,
         Ok(Outcome::Rejected) => EXIT_REJECTED,
+        Ok(Outcome::NotJudged) => EXIT_NOT_JUDGED,
         Err(e) => {
             let _ = writeln!(err, "error: {e}");
             1
@@ -44,6 +45,11 @@ where
 /// The exit code of a command that ran but whose result failed acceptance (`verify`),
 /// or in which a unit failed or could not be processed (`batch`). 1 stays "could not run".
 pub const EXIT_REJECTED: i32 = 3;
+
+/// The exit code of a command that ran but could not judge a band of the acceptance
+/// specification (no verification dwell there): neither a pass nor a failure (`verify`;
+/// `batch` when some unit was not judged and none failed or errored).
+pub const EXIT_NOT_JUDGED: i32 = 4;
 
 fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let done = |r: Result<()>| r.map(|()| Outcome::Done);

@@ -2,7 +2,7 @@
 use super::args::{BatchArgs, DemoArgs, SimulateArgs};
 use super::common::w;
 use super::common::Outcome;
-use crate::acceptance::Spec;
+use crate::acceptance::Verdict;
 use crate::batch::{BatchOptions, UnitStatus};
 use crate::error::{HostError, Result};
 use crate::output::{check_writable, write_atomic, write_json};
@@ -19,7 +19,7 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
     let o = BatchOptions {
         jobs: a.jobs,
         model: a.model.map(Into::into),
-        spec: Spec::new(a.accept.accept_t0_mg, a.accept.accept_range_mg)?,
+        spec: a.accept.spec()?,
         diagnose: a.diagnose,
         force: a.force,
         positions,
@@ -37,11 +37,12 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
     w(
         out,
         format!(
-            "{} units in {:.1} s: {} pass, {} fail, {} error ({}); summary {}",
+            "{} units in {:.1} s: {} pass, {} fail, {} not judged, {} error ({}); summary {}",
             res.units.len(),
             t.elapsed().as_secs_f64(),
             count(UnitStatus::Pass),
             count(UnitStatus::Fail),
+            count(UnitStatus::NotJudged),
             count(UnitStatus::Error),
             o.spec.text(),
             a.out.join("summary.csv").display()
@@ -90,10 +91,10 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
             ),
         )?;
     }
-    Ok(if res.all_pass() {
-        Outcome::Done
-    } else {
-        Outcome::Rejected
+    Ok(match res.verdict() {
+        Verdict::Pass => Outcome::Done,
+        Verdict::Fail => Outcome::Rejected,
+        Verdict::NotJudged => Outcome::NotJudged,
     })
 }
 

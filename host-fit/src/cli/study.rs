@@ -1,6 +1,6 @@
 //! `diagnose`, `report` and `blind`: looking into a recording, and testing the looking.
 use super::args::{BlindArgs, DiagnoseArgs, ReportArgs};
-use super::common::{load, oriented, serial, w};
+use super::common::{load_to_fit, oriented, serial, w};
 use crate::analysis::{analyse, table};
 use crate::blob::build_blob;
 use crate::data::recording::Recording;
@@ -17,7 +17,7 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
     for p in a.report.iter().chain(a.out.iter()) {
         check_writable(p, a.force)?;
     }
-    let rec = oriented(load(&a.input, err)?, err)?;
+    let rec = oriented(load_to_fit(&a.input, err)?, err)?;
     let d = crate::diagnose::diagnose(&rec)?;
     let mut c = d.contract();
     let name = a.serial.as_deref().unwrap_or(serial(&rec));
@@ -54,7 +54,7 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
 
 pub(super) fn report(a: ReportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     check_writable(&a.out, a.force)?;
-    let rec = oriented(load(&a.input, err)?, err)?;
+    let rec = oriented(load_to_fit(&a.input, err)?, err)?;
     let truth = match &a.truth {
         Some(p) => Some(twin_truth(p, &rec)?),
         None => None,

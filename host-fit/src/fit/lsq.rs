@@ -105,6 +105,11 @@ impl Normal {
         Some(Solution { x, cov })
     }
 
+    /// Whether these rows determine every parameter ([`RANK_TOL`]), without solving.
+    pub fn is_determined(&self) -> bool {
+        self.factor().is_some()
+    }
+
     /// The parameters only (no covariance: cheaper, for profiling).
     pub fn solve_x(&self) -> Option<DVector<f64>> {
         let (l, d) = self.factor()?;

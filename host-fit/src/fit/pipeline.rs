@@ -265,7 +265,7 @@ pub fn fit_chosen(rec: &Recording, req: &ModelRequest) -> Result<FitOutcome> {
         return Err(no_static(rec, &excluded));
     }
     let nz = noise(r);
-    let selection = choose_among(&obs, &setting(r, &nz, frame), family)?;
+    let selection = choose_among(&obs, &setting(r, &nz, frame), family, &r.positions)?;
     let basis = req.refine(&selection.basis)?;
     let oriented = match &provisional.orientation {
         Some(o) if o.fit.basis != basis => with_orientations(rec, Some(&basis))?,

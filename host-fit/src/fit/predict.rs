@@ -6,11 +6,13 @@
 //! direction `a` at `T` and `C_i` the axis's covariance, widened by its reduced
 //! chi-square when the residuals scatter more than the noise (misfit shows up here
 //! rather than being hidden). A dwell of `n` samples adds its own noise,
-//! `sum_i (a^T N)_i^2 sigma_i^2 / n` (widened by the same reduced chi-square: the scatter
-//! between calibration dwells beyond their in-dwell noise, a temperature reading's error
-//! among it, is a verification dwell's too). Between the calibration temperatures this is the
+//! `sum_i (a^T N)_i^2 sigma_i^2 / n` with `sigma_i` the in-dwell scatter (successive
+//! samples): the dwell's own, never widened by the chosen model's residuals (a model that
+//! misfits the calibration dwells is uncertain, which the covariance's widening says; it
+//! does not make a verification dwell noisier). Between the calibration temperatures this is the
 //! uncertainty of the chosen model, not a bound on how far the truth may stray from the
-//! model's shape there: only data at those temperatures can show that.
+//! model's shape there: only data at those temperatures can show that. Every figure is
+//! stated inside the valid range only (T0 among them when it lies there).
 use crate::fit::noise::Noise;
 use crate::fit::temperature::{Basis, ModelFit};
 use firmware_core::model::{invert, Coeffs};
@@ -92,11 +94,11 @@ pub fn sigma_dwell_noise(fit: &ModelFit, noise: &Noise, t: f64, a: [f64; 3], n: 
     let var: f64 = (0..3)
         .map(|i| {
             // without an in-dwell noise level the residual scatter of the fit's
-            // observations (one per dwell) is the only noise there is
-            // with it, the dwell-to-dwell scatter beyond it (the reduced chi-square of
-            // the calibration dwells) applies to a verification dwell too
+            // observations (one per dwell) is the only noise there is; with it, the
+            // dwell's own scatter, whatever the model's residuals (one dwell missing once
+            // made a misfitting model's reduced chi-square of 36 000 a "dwell noise")
             let s2 = if noise.dof > 0 {
-                noise.sigma[i].powi(2) * fit.axis_scale(i, true)
+                noise.sigma[i].powi(2)
             } else {
                 fit.axis_scale(i, false)
             };
@@ -145,8 +147,12 @@ pub fn predict(fit: &ModelFit, noise: &Noise, req: &Request) -> Prediction {
     let mut temps: Vec<f64> = (0..n_pts)
         .map(|k| lo + (hi - lo) * k as f64 / (n_pts.max(2) - 1) as f64)
         .collect();
-    if constant || (lo..=hi).contains(&fit.t0_c) {
-        temps.push(fit.t0_c);
+    // inside the valid range only: T0 where it lies there, else (one temperature) the
+    // middle of the range; the dwell's own noise at the same place
+    let inside = (lo..=hi).contains(&fit.t0_c);
+    let at = if inside { fit.t0_c } else { 0.5 * (lo + hi) };
+    if inside || constant {
+        temps.push(at);
         temps.sort_by(f64::total_cmp);
     }
     let worst = |t: f64| {
@@ -170,7 +176,7 @@ pub fn predict(fit: &ModelFit, noise: &Noise, req: &Request) -> Prediction {
         .fold(0.0, f64::max);
     let dwell = dirs
         .iter()
-        .map(|d| sigma_dwell_noise(fit, noise, fit.t0_c, d.a, dwell_samples))
+        .map(|d| sigma_dwell_noise(fit, noise, at, d.a, dwell_samples))
         .fold(0.0, f64::max);
     Prediction {
         directions: dirs.iter().map(|d| d.name.clone()).collect(),

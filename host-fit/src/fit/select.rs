@@ -4,10 +4,15 @@
 //! on dwells it was not fitted on (rms of formula (13), |a| - 1, after compensation), and
 //! the simplest candidate within one standard error of the best is chosen (the usual
 //! one-standard-error rule: a richer model must earn its parameters on held-out data).
-//! Verification positions are never used here, so they stay an independent check.
+//! Verification positions are never used here, so they stay an independent check. The
+//! folds keep every training fold's design determined as the full data have it
+//! ([`crate::fit::folds`]): every candidate is scored on the same held-out dwells, and
+//! none is lost to the fold design.
+use crate::data::positions::Positions;
 use crate::error::{HostError, Result};
+use crate::fit::folds::{design, FoldDesign};
 use crate::fit::identify::Obs;
-use crate::fit::temperature::{fit_joint, temperature_clusters, Basis, Setting};
+use crate::fit::temperature::{fit_joint, temperature_clusters, Basis, ModelFit, Setting};
 use firmware_core::model::{apply, dg, invert, Coeffs};
 use firmware_core::temperature::{MAX_BREAKPOINTS, MAX_POLY_ORDER};
 use serde::Serialize;
@@ -27,6 +32,9 @@ pub struct Candidate {
     pub held_out_rms_dg_mg: Option<f64>,
     /// Its standard error, mg.
     pub standard_error_mg: Option<f64>,
+    /// Why it has no score (the full data do not determine it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_scored: Option<String>,
 }
 
 /// What the data chose, and why.
@@ -40,6 +48,12 @@ pub struct Selection {
     pub reason: String,
     /// Every candidate, simplest first.
     pub candidates: Vec<Candidate>,
+    /// Calibration dwells held out in some fold (every candidate scored on these).
+    pub held_out_dwells: usize,
+    /// The dwells never held out, `POSITION at T C`: without any one of them a training
+    /// fold would not determine a candidate, or a temperature's coefficients, that the
+    /// full data determine.
+    pub never_held_out: Vec<String>,
     /// The chosen basis.
     #[serde(skip)]
     pub basis: Basis,
@@ -88,16 +102,6 @@ fn dg_with(cal: &firmware_core::temperature::Calibration<f64>, o: &Obs) -> Optio
     Some(dg(&apply(&n, o.u, c.u0)))
 }
 
-/// The fold of every observation: its dwell's rank among the dwells, modulo `k`.
-fn folds(obs: &[Obs], k: usize) -> Vec<usize> {
-    let mut dwells: Vec<usize> = obs.iter().map(|o| o.dwell).collect();
-    dwells.sort_unstable();
-    dwells.dedup();
-    obs.iter()
-        .map(|o| dwells.binary_search(&o.dwell).unwrap_or(0) % k.max(1))
-        .collect()
-}
-
 /// A candidate's held-out score: rms |dg| over the held-out dwells and its standard
 /// error, g.
 #[derive(Debug, Clone, Copy)]
@@ -106,25 +110,29 @@ struct Score {
     se: f64,
 }
 
-/// Per held-out dwell, the mean squared dg (g^2) of `basis` under `k`-fold
-/// cross-validation; None when a training fold does not determine the model.
-fn held_out(obs: &[Obs], basis: &Basis, setting: &Setting, k: usize) -> Option<Vec<f64>> {
-    let fold = folds(obs, k);
+/// Per held-out dwell, the mean squared dg (g^2) of `basis` under the folds of `folds`;
+/// None when a training fold does not determine the model (the fold design keeps what
+/// the full data determine, so only a model the full data do not determine).
+fn held_out(obs: &[Obs], basis: &Basis, setting: &Setting, folds: &FoldDesign) -> Option<Vec<f64>> {
+    let fold: Vec<Option<usize>> = obs.iter().map(|o| folds.fold_of(o.dwell)).collect();
     let mut per_dwell: std::collections::BTreeMap<usize, (f64, usize)> = Default::default();
     let quiet = Setting {
         path: Path::new(""),
         ..*setting
     };
-    for f in 0..k {
+    for f in 0..folds.k {
         let train: Vec<Obs> = obs
             .iter()
             .zip(&fold)
-            .filter(|(_, g)| **g != f)
+            .filter(|(_, g)| **g != Some(f))
             .map(|(o, _)| o.clone())
             .collect();
+        if train.len() == obs.len() {
+            continue;
+        }
         let fit = fit_joint(&train, basis, &quiet).ok()?;
         let cal = fit.calibration(0.0, false);
-        for (o, _) in obs.iter().zip(&fold).filter(|(_, g)| **g == f) {
+        for (o, _) in obs.iter().zip(&fold).filter(|(_, g)| **g == Some(f)) {
             let d = dg_with(&cal, o)?;
             let e = per_dwell.entry(o.dwell).or_insert((0.0, 0));
             e.0 += d * d;
@@ -159,25 +167,85 @@ fn one_temperature(temps: &[f64]) -> Selection {
             "all calibration data are at one temperature ({t:.1} C): the 12 coefficients are identified there, and no temperature model can be fitted (the blob holds them constant)"
         ),
         candidates: Vec::new(),
+        held_out_dwells: 0,
+        never_held_out: Vec::new(),
         basis: Basis::Poly { order: 0 },
     }
+}
+
+/// One candidate: its basis, its score, or why it has none.
+type Scored = (Basis, std::result::Result<Score, String>);
+
+/// Score the candidates `keep` accepts among `all`, every one on the same held-out dwells
+/// of a fold design that keeps every candidate the full data determine (whatever `keep`
+/// says: the folds are the data's, not the family's) determined in every training fold.
+fn score(
+    obs: &[Obs],
+    all: Vec<Basis>,
+    setting: &Setting,
+    keep: &dyn Fn(&Basis) -> bool,
+    k: usize,
+) -> (Vec<Scored>, FoldDesign) {
+    let quiet = Setting {
+        path: Path::new(""),
+        ..*setting
+    };
+    let fitted: Vec<(Basis, Option<ModelFit>)> = all
+        .into_iter()
+        .map(|b| {
+            let f = fit_joint(obs, &b, &quiet).ok();
+            (b, f)
+        })
+        .collect();
+    let determined: Vec<(Basis, ModelFit)> = fitted
+        .iter()
+        .filter_map(|(b, f)| f.clone().map(|f| (b.clone(), f)))
+        .collect();
+    let folds = design(obs, &determined, setting, k);
+    let scored = fitted
+        .into_iter()
+        .filter(|(b, _)| keep(b))
+        .map(|(b, f)| {
+            let s = match f {
+                None => Err("the data do not determine it".to_string()),
+                Some(_) => held_out(obs, &b, setting, &folds)
+                    .map(|e| rms_se(&e))
+                    .ok_or_else(|| "a training fold does not determine it".to_string()),
+            };
+            (b, s)
+        })
+        .collect();
+    (scored, folds)
+}
+
+/// `POSITION at T C` of every dwell `folds` never holds out.
+fn never_held_out(obs: &[Obs], folds: &FoldDesign, positions: &Positions) -> Vec<String> {
+    folds
+        .never_held_out()
+        .into_iter()
+        .filter_map(|d| {
+            let w: Vec<&Obs> = obs.iter().filter(|o| o.dwell == d).collect();
+            let first = w.first()?;
+            let t = w.iter().map(|o| o.temp_c).sum::<f64>() / w.len() as f64;
+            Some(format!("{} at {t:.1} C", positions.name(first.position)))
+        })
+        .collect()
 }
 
 /// Choose the temperature model of the static observations `obs` (see the module doc)
 /// among the candidates `keep` accepts (one family, when the user named it), every fit
 /// in `setting` (its frame: lower triangular K(T) for the convention of estimated
-/// poses).
+/// poses); `positions` names the dwells.
 pub fn choose_among(
     obs: &[Obs],
     setting: &Setting,
     keep: &dyn Fn(&Basis) -> bool,
+    positions: &Positions,
 ) -> Result<Selection> {
     let path = setting.path;
     let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
     let all = candidates(&temps);
-    let n_all = all.len();
-    let cands: Vec<Basis> = all.into_iter().filter(|b| keep(b)).collect();
-    if cands.is_empty() {
+    if !all.iter().any(|b| keep(b)) {
         return Err(HostError::in_file(
             path,
             format!(
@@ -189,32 +257,26 @@ pub fn choose_among(
     let mut dwells: Vec<usize> = obs.iter().map(|o| o.dwell).collect();
     dwells.sort_unstable();
     dwells.dedup();
-    if n_all <= 1 {
+    if all.len() <= 1 {
         return Ok(one_temperature(&temps));
     }
     // when all the data do not determine even the simplest candidate, say why (which
     // positions at which temperatures), not that cross-validation failed
-    if let Some(simplest) = cands.first() {
+    if let Some(simplest) = all.iter().find(|b| keep(b)) {
         fit_joint(obs, simplest, setting)?;
     }
     let k = FOLDS.min(dwells.len());
-    let scored: Vec<(Basis, Option<Score>)> = cands
-        .into_iter()
-        .map(|b| {
-            let s = held_out(obs, &b, setting, k).map(|e| rms_se(&e));
-            (b, s)
-        })
-        .collect();
+    let (scored, folds) = score(obs, all, setting, keep, k);
     let (best, bs) = scored
         .iter()
-        .filter_map(|(b, s)| s.map(|s| (b, s)))
+        .filter_map(|(b, s)| s.as_ref().ok().map(|s| (b, *s)))
         .min_by(|x, y| x.1.rms.total_cmp(&y.1.rms))
         .map(|(b, s)| (b.clone(), s))
         .ok_or_else(|| {
             HostError::in_file(
                 path,
                 format!(
-                    "no temperature model is determined when a fifth of the {} calibration dwells is held out: too few positions or temperatures for cross-validation (give --model)",
+                    "no dwell of the {} calibration dwells can be held out without leaving the model undetermined: too few positions or temperatures for cross-validation (give --model)",
                     dwells.len()
                 ),
             )
@@ -222,44 +284,73 @@ pub fn choose_among(
     let limit = bs.rms + bs.se;
     let (chosen, cs) = scored
         .iter()
-        .find_map(|(b, s)| s.filter(|s| s.rms <= limit).map(|s| (b.clone(), s)))
+        .find_map(|(b, s)| {
+            s.as_ref()
+                .ok()
+                .filter(|s| s.rms <= limit)
+                .map(|s| (b.clone(), *s))
+        })
         .unwrap_or((best.clone(), bs));
+    let never = never_held_out(obs, &folds, positions);
+    Ok(Selection {
+        chosen: chosen.describe(),
+        method: method_text(k, dwells.len(), &folds, &never),
+        reason: reason_text((&chosen, cs), (&best, bs)),
+        candidates: scored
+            .iter()
+            .map(|(b, s)| Candidate {
+                model: b.describe(),
+                params_per_coefficient: b.len(),
+                held_out_rms_dg_mg: s.as_ref().ok().map(|s| s.rms * 1e3),
+                standard_error_mg: s.as_ref().ok().map(|s| s.se * 1e3),
+                not_scored: s.as_ref().err().cloned(),
+            })
+            .collect(),
+        held_out_dwells: folds.held_out(),
+        never_held_out: never,
+        basis: chosen,
+    })
+}
+
+/// How the model was chosen, in words: the folds and the dwells never held out.
+fn method_text(k: usize, dwells: usize, folds: &FoldDesign, never: &[String]) -> String {
+    let mut s = format!(
+        "{k}-fold cross-validation over {dwells} static calibration dwells (every {k}th dwell held out in turn"
+    );
+    if never.is_empty() {
+        s.push(')');
+    } else {
+        s.push_str(&format!(
+            "; {} never held out, since a training fold without it would not determine a candidate or a temperature's coefficients that the full data determine: {}; every candidate scored on the same {} held-out dwells)",
+            never.len(),
+            never.join(", "),
+            folds.held_out()
+        ));
+    }
+    s
+}
+
+/// Why `chosen` (with its score), against the `best`.
+fn reason_text(chosen: (&Basis, Score), best: (&Basis, Score)) -> String {
+    let ((c, cs), (b, bs)) = (chosen, best);
     let mg = 1e3;
-    let reason = if chosen == best {
+    if c == b {
         format!(
             "{} predicts held-out dwells best: rms |dg| {:.4} mg (+- {:.4})",
-            chosen.describe(),
+            c.describe(),
             cs.rms * mg,
             cs.se * mg
         )
     } else {
         format!(
             "{} is the simplest model within one standard error of the best ({} {:.4} +- {:.4} mg): rms |dg| {:.4} mg on held-out dwells",
-            chosen.describe(),
-            best.describe(),
+            c.describe(),
+            b.describe(),
             bs.rms * mg,
             bs.se * mg,
             cs.rms * mg
         )
-    };
-    Ok(Selection {
-        chosen: chosen.describe(),
-        method: format!(
-            "{k}-fold cross-validation over {} static calibration dwells (every {k}th dwell held out in turn)",
-            dwells.len()
-        ),
-        reason,
-        candidates: scored
-            .iter()
-            .map(|(b, s)| Candidate {
-                model: b.describe(),
-                params_per_coefficient: b.len(),
-                held_out_rms_dg_mg: s.map(|s| s.rms * mg),
-                standard_error_mg: s.map(|s| s.se * mg),
-            })
-            .collect(),
-        basis: chosen,
-    })
+    }
 }
 
 #[cfg(test)]

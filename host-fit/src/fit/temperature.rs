@@ -243,7 +243,9 @@ pub fn temperature_clusters(temps: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-fn check_coverage(basis: &Basis, temps: &[f64]) -> Result<()> {
+/// Whether data at `temps` can determine `basis` at all: a polynomial needs as many
+/// distinct temperatures as parameters, a pwl data on both sides of every breakpoint.
+pub(crate) fn check_coverage(basis: &Basis, temps: &[f64]) -> Result<()> {
     let clusters = temperature_clusters(temps);
     let list = clusters
         .iter()
@@ -377,21 +379,13 @@ fn fit_axis(
     let var = noise.sigma[axis].powi(2);
     let w: Vec<f64> = obs.iter().map(|o| o.n as f64 / var).collect();
     let b = DVector::from_iterator(obs.len(), obs.iter().map(|o| o.u[axis]));
-    // the columns kept: lower triangular, K[axis][j] for j > axis is held at 0
-    let lower = frame == Frame::LowerTriangular;
-    let keep: Vec<usize> = (0..4).filter(|j| !lower || *j == 3 || *j <= axis).collect();
+    let keep = kept_columns(frame, axis);
     let build = |with_k2: bool| {
         let p = keep.len() * nb + usize::from(with_k2);
         let mut a = DMatrix::zeros(obs.len(), p);
         for (r, (o, phi)) in obs.iter().zip(phis).enumerate() {
-            let g = [o.a[0], o.a[1], o.a[2], 1.0];
-            for (jj, j) in keep.iter().enumerate() {
-                for (k, f) in phi.iter().enumerate() {
-                    a[(r, jj * nb + k)] = g[*j] * f;
-                }
-            }
-            if with_k2 {
-                a[(r, p - 1)] = o.a[axis] * o.a[axis];
+            for (c, v) in design_row(o, phi, &keep, axis, with_k2).into_iter().enumerate() {
+                a[(r, c)] = v;
             }
         }
         weighted_lsq(&a, &b, &w).map(|s| expand(s, &keep, nb, with_k2))
@@ -401,6 +395,28 @@ fn fit_axis(
         Some(s) => Some((s, true)),
         None => build(false).map(|s| (s, false)),
     }
+}
+
+/// The groups of columns (`a_x`, `a_y`, `a_z`, 1) of one axis's design kept in `frame`:
+/// lower triangular holds K[axis][j] at 0 for j > axis.
+pub fn kept_columns(frame: Frame, axis: usize) -> Vec<usize> {
+    let lower = frame == Frame::LowerTriangular;
+    (0..4).filter(|j| !lower || *j == 3 || *j <= axis).collect()
+}
+
+/// One observation's row of one axis's design (the fit's and the cross-validation's fold
+/// design's one source): `a_j phi_k(T)` for the kept groups `keep`, then `a_axis^2` with
+/// the even-order term.
+pub fn design_row(o: &Obs, phi: &[f64], keep: &[usize], axis: usize, with_k2: bool) -> Vec<f64> {
+    let g = [o.a[0], o.a[1], o.a[2], 1.0];
+    let mut row: Vec<f64> = keep
+        .iter()
+        .flat_map(|j| phi.iter().map(move |f| g[*j] * f))
+        .collect();
+    if with_k2 {
+        row.push(o.a[axis] * o.a[axis]);
+    }
+    row
 }
 
 /// A reduced solution laid out in the full order `a_x phi, a_y phi, a_z phi, phi[, k2]`,

@@ -4,7 +4,7 @@
 //! own scale), the 12 coefficients against temperature and their departures from the
 //! truth (or from the chosen model) with 1-sigma error bars, residuals against time above
 //! the temperature.
-use crate::acceptance::Spec;
+use crate::acceptance::{Spec, Verdict};
 use crate::analysis::{
     names_text, verification_names, Compensation, DemoModel, DemoOutcome, T0_CONSTANTS,
 };
@@ -133,10 +133,7 @@ fn max_dg_plot(oc: &DemoOutcome) -> Plot {
     let verdicts: Vec<String> = oc
         .models
         .iter()
-        .map(|m| match &m.acceptance {
-            Ok(a) => format!("{} {}", m.name, a.acceptance.name()),
-            Err(_) => format!("{} not judged", m.name),
-        })
+        .map(|m| format!("{} {}", m.name, m.acceptance.acceptance.name()))
         .collect();
     Plot {
         id: "max-dg".into(),
@@ -529,11 +526,13 @@ fn verdict_table(oc: &DemoOutcome) -> String {
         esc(&oc.spec.text())
     );
     for m in &oc.models {
-        let (v, why) = match &m.acceptance {
-            Ok(a) => (a.acceptance.name(), a.reason.clone()),
-            Err(e) => ("not judged", e.clone()),
+        let a = &m.acceptance;
+        let (v, why) = (a.acceptance.name(), a.reason.clone());
+        let color = match a.acceptance {
+            Verdict::Pass => "#1A8036",
+            Verdict::Fail => "#B00020",
+            Verdict::NotJudged => "#7A5A00",
         };
-        let color = if v == "pass" { "#1A8036" } else { "#B00020" };
         s.push_str(&format!(
             "<tr><td>{}</td><td style=\"color:{color};font-weight:bold\">{v}</td><td>{}</td></tr>\n",
             esc(&m.name),

@@ -123,7 +123,12 @@ fn values(r: &Record) -> Vec<rusqlite::types::Value> {
     }
     v.push(r.blob.clone().map_or(V::Null, V::Blob));
     v.push(r.blob_crc().map_or(V::Null, |c| V::Integer(i64::from(c))));
-    v.push(opt_text(r.judged.as_ref().map(|j| j.verdict.as_str())));
+    v.push(opt_text(
+        r.judged
+            .as_ref()
+            .map(|j| j.verdict.as_str())
+            .filter(|v| *v != super::record::NOT_JUDGED),
+    ));
     v.push(opt_text(r.judged.as_ref().map(|j| j.reason.as_str())));
     v.push(real(r.worst_dg_mg));
     v.push(opt_text(r.diagnosis_verdict.as_deref()));

@@ -72,10 +72,18 @@ fn from_row(row: &Row) -> rusqlite::Result<Record> {
             ValueRef::Blob(b) => Some(b.to_vec()),
             _ => None,
         },
-        judged: acceptance.map(|verdict| Judged {
-            verdict,
-            reason: text(after + 3).ok().flatten().unwrap_or_default(),
-        }),
+        judged: match (acceptance, text(after + 3).ok().flatten()) {
+            (Some(verdict), reason) => Some(Judged {
+                verdict,
+                reason: reason.unwrap_or_default(),
+            }),
+            // a reason without a verdict: judged, and a band had nothing to judge
+            (None, Some(reason)) => Some(Judged {
+                verdict: super::record::NOT_JUDGED.to_string(),
+                reason,
+            }),
+            (None, None) => None,
+        },
         worst_dg_mg: real(after + 4)?,
         diagnosis_verdict: text(after + 5)?,
         findings: json(after + 6)?,

@@ -195,12 +195,19 @@ impl Serialize for AtT0 {
 /// The verdict against the acceptance specification (the store's `acceptance` column).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Judged {
-    /// `pass`, `fail` (the acceptance's own verdict, as it serialises) or `error` (a
-    /// batch unit that could not be processed).
+    /// `pass`, `fail`, `not_judged` (the acceptance's own verdict, as it serialises) or
+    /// `error` (a batch unit that could not be processed). The store's `acceptance`
+    /// column holds `pass`, `fail` or `error`, and NULL for [`NOT_JUDGED`] (with its
+    /// reason), as for a run that judged nothing.
     pub verdict: String,
     /// Why, in one sentence (the acceptance's reason, or the error).
     pub reason: String,
 }
+
+/// The verdict of a specification band with no judged dwell: stored as a NULL
+/// `acceptance` with its reason (the schema's column predates it, and NULL is what it
+/// says: not judged).
+pub const NOT_JUDGED: &str = "not_judged";
 
 /// One record, as written and as read back.
 #[derive(Debug, Clone, PartialEq, Serialize)]

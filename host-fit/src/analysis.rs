@@ -147,7 +147,7 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
     let (list, selection) = fits(&rec, &stops)?;
     for (name, file, fit) in list {
         let cal = fit.calibration(0.1, false);
-        let (blob, bytes, _) = build_blob(&serial, &cal)?;
+        let (blob, bytes, _) = build_blob(&serial, &rec.output_unit, &cal)?;
         let run = |m: Method| -> Result<Verification> {
             verify(&rec, &blob, m, &check).ok_or_else(|| HostError::msg("singular K(T0)"))
         };

@@ -120,7 +120,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     };
     r.at_t0 = Some(cal.at_t0());
     r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
-    let (blob, bytes, dep) = build_blob(&r.unit, &cal)?;
+    let (blob, bytes, dep) = build_blob(&r.unit, &rec.output_unit, &cal)?;
     write_atomic(&out.join(format!("{stem}.blob")), &bytes, o.force)?;
     let check = |p: usize| rec.positions.has_role(p, Role::Verification);
     let v = verify(&rec, &blob, Method::CorrectConstants, &check)

@@ -1,7 +1,7 @@
 //! From a fitted model to a flashed blob and back: f32 tables, the f32-vs-f64 check,
 //! encoding, reading a blob file, and what `inspect` shows of it.
 use crate::error::{HostError, Result};
-use firmware_core::blob::{Blob, FORMAT_VERSION, MAX_BLOB_LEN, MAX_SERIAL_LEN};
+use firmware_core::blob::{Blob, OutputUnit, RunId, FORMAT_VERSION, MAX_BLOB_LEN, MAX_SERIAL_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
 use firmware_core::model::{Coeffs, COEFF_NAMES};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
@@ -40,8 +40,11 @@ pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Resu
         Method::CorrectConstants,
         Method::CorrectResult(ErrorModel::Full),
     ] {
-        let mut m64 = Compensator::new(&c64, method).map_err(|e| HostError::msg(e.to_string()))?;
-        let mut m32 = Compensator::new(&c32, method).map_err(|e| HostError::msg(e.to_string()))?;
+        // one sample a second: the physics terms' machines follow the sweep alike in both
+        let mut m64 =
+            Compensator::new(&c64, method, 1.0).map_err(|e| HostError::msg(e.to_string()))?;
+        let mut m32 =
+            Compensator::new(&c32, method, 1.0).map_err(|e| HostError::msg(e.to_string()))?;
         let mut t = cal64.t_min_c - 10.0;
         while t <= cal64.t_max_c + 10.0 {
             let t32 = t as f32;
@@ -66,21 +69,29 @@ pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Resu
     Ok((inside, beyond))
 }
 
-/// Build and encode the blob for `serial` from an f64 calibration; checks the f32 path
-/// against [`F32_BOUND_G`]. Returns the blob, its bytes and the measured departure.
-pub fn build_blob(serial: &str, cal64: &Calibration<f64>) -> Result<(Blob, Vec<u8>, f64)> {
-    let (blob, bytes, (inside, _)) = build_blob_checked(serial, cal64)?;
+/// Build and encode the blob for `serial` from an f64 calibration whose K and U0 are in
+/// `output_unit` (the recording's `output_unit`, recorded in the blob); checks the f32
+/// path against [`F32_BOUND_G`]. Returns the blob, its bytes and the measured departure.
+pub fn build_blob(
+    serial: &str,
+    output_unit: &str,
+    cal64: &Calibration<f64>,
+) -> Result<(Blob, Vec<u8>, f64)> {
+    let (blob, bytes, (inside, _)) = build_blob_checked(serial, output_unit, cal64)?;
     Ok((blob, bytes, inside))
 }
 
 /// [`build_blob`], returning the departure inside the range and beyond it.
 pub fn build_blob_checked(
     serial: &str,
+    output_unit: &str,
     cal64: &Calibration<f64>,
 ) -> Result<(Blob, Vec<u8>, (f64, f64))> {
     let s = blob_serial(serial)?;
     let blob = Blob {
         serial: s,
+        output_unit: OutputUnit::from_label(output_unit),
+        run_id: RunId::NONE,
         calibration: cal64.convert(),
     };
     let mut buf = [0u8; MAX_BLOB_LEN];
@@ -132,6 +143,10 @@ pub struct Inspection {
     pub bytes: usize,
     /// Unit serial.
     pub serial: String,
+    /// The unit K and U0 are in (`V`, `m/s2`, ...; `unstated`, `other`).
+    pub output_unit: &'static str,
+    /// The host-fit run that made the blob (32 hex digits), None when it has none.
+    pub run_id: Option<String>,
     /// Reference temperature, C.
     pub t0_c: f32,
     /// Valid range, C.
@@ -153,26 +168,20 @@ pub struct Inspection {
     pub physics: Option<PhysicsTerms>,
 }
 
-/// Every in-flight term of a blob, as stored, with the time constants they stand for.
+/// Every in-flight term of a blob, as stored (time constants in seconds).
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct PhysicsTerms {
-    /// The sample period the per-sample constants are for, s.
-    pub sample_period_s: f32,
-    /// `thermal_lag`: the filter constant (1 = no lag).
-    pub lag_alpha: f32,
-    /// Its time constant, s (None: no lag).
-    pub lag_tau_s: Option<f64>,
+    /// `thermal_lag`: the time constant, s (0: no lag).
+    pub lag_tau_s: f32,
     /// `temp_rate`: offset per C/s, per axis.
     pub rate: [f32; 3],
-    /// The rate's low-pass constant.
-    pub rate_alpha: f32,
-    /// Its time constant, s.
-    pub rate_tau_s: Option<f64>,
+    /// The rate estimator's low-pass time constant, s.
+    pub rate_tau_s: f32,
     /// `hysteresis`: the offset split, per axis.
     pub hysteresis: [f32; 3],
     /// The change that sets the direction, C.
     pub hysteresis_threshold_c: f32,
-    /// The direction at power-on.
+    /// The direction at power-on (+1 heated, -1 cooled, 0 unknown).
     pub hysteresis_initial: f32,
     /// `nonlinearity_k2`, per axis.
     pub k2: [f32; 3],
@@ -180,61 +189,45 @@ pub struct PhysicsTerms {
     pub asymmetry: [f32; 3],
     /// `warmup_drift` amplitude, per axis.
     pub warmup: [f32; 3],
-    /// Its per-sample decay.
-    pub warmup_decay: f32,
-    /// Its time constant, s (None: no warm-up).
-    pub warmup_tau_s: Option<f64>,
-}
-
-/// The time constant of a one-pole constant `alpha = 1 - exp(-dt/tau)`.
-fn tau_of_alpha(dt: f32, alpha: f32) -> Option<f64> {
-    let a = f64::from(alpha);
-    (a > 0.0 && a < 1.0).then(|| -f64::from(dt) / (1.0 - a).ln())
+    /// Its time constant since power-on, s (0: no warm-up).
+    pub warmup_tau_s: f32,
 }
 
 impl PhysicsTerms {
     fn of(p: &Physics<f32>) -> Self {
-        let decay = f64::from(p.warmup_decay);
         PhysicsTerms {
-            sample_period_s: p.sample_period_s,
-            lag_alpha: p.lag_alpha,
-            lag_tau_s: tau_of_alpha(p.sample_period_s, p.lag_alpha),
+            lag_tau_s: p.lag_tau_s,
             rate: p.rate,
-            rate_alpha: p.rate_alpha,
-            rate_tau_s: tau_of_alpha(p.sample_period_s, p.rate_alpha),
+            rate_tau_s: p.rate_tau_s,
             hysteresis: p.hysteresis,
             hysteresis_threshold_c: p.hysteresis_threshold_c,
             hysteresis_initial: p.hysteresis_initial,
             k2: p.k2,
             asymmetry: p.asymmetry,
             warmup: p.warmup,
-            warmup_decay: p.warmup_decay,
-            warmup_tau_s: (decay > 0.0 && decay < 1.0)
-                .then(|| -f64::from(p.sample_period_s) / decay.ln()),
+            warmup_tau_s: p.warmup_tau_s,
         }
     }
 
     fn text(&self) -> String {
-        let tau = |t: Option<f64>| t.map_or("none".to_string(), |t| format!("{t:.4e} s"));
+        let tau = |t: f32| {
+            if t > 0.0 {
+                format!("{t:.4e} s")
+            } else {
+                "none".to_string()
+            }
+        };
         let v = |a: [f32; 3]| format!("[{:.4e}, {:.4e}, {:.4e}]", a[0], a[1], a[2]);
         [
+            "in-flight terms (time constants in seconds; the firmware steps them on its own sample period):".to_string(),
+            format!("  thermal_lag      tau {}", tau(self.lag_tau_s)),
             format!(
-                "in-flight terms (sample period {} s):",
-                self.sample_period_s
-            ),
-            format!(
-                "  thermal_lag      alpha {:.6e}, tau {}",
-                self.lag_alpha,
-                tau(self.lag_tau_s)
-            ),
-            format!(
-                "  temp_rate        r {} per C/s, alpha {:.6e} (tau {})",
+                "  temp_rate        r {} per C/s, rate low-pass tau {}",
                 v(self.rate),
-                self.rate_alpha,
                 tau(self.rate_tau_s)
             ),
             format!(
-                "  hysteresis       h {}, threshold {} C, initial direction {}",
+                "  hysteresis       h {}, threshold {} C, direction at power-on {}",
                 v(self.hysteresis),
                 self.hysteresis_threshold_c,
                 self.hysteresis_initial
@@ -242,9 +235,8 @@ impl PhysicsTerms {
             format!("  nonlinearity_k2  k2 {}", v(self.k2)),
             format!("  scale_asymmetry  c {}", v(self.asymmetry)),
             format!(
-                "  warmup_drift     d {}, decay {:.9} per sample (tau {})",
+                "  warmup_drift     d {}, tau {} since power-on",
                 v(self.warmup),
-                self.warmup_decay,
                 tau(self.warmup_tau_s)
             ),
         ]
@@ -296,6 +288,8 @@ impl Inspection {
             format_version: FORMAT_VERSION,
             bytes,
             serial: b.serial.to_string(),
+            output_unit: b.output_unit.label(),
+            run_id: (!b.run_id.is_none()).then(|| b.run_id.to_string()),
             t0_c: c.t0_c,
             t_min_c: c.t_min_c,
             t_max_c: c.t_max_c,
@@ -311,11 +305,12 @@ impl Inspection {
     /// As text (the blob's path as given on the command line).
     pub fn text(&self, path: &Path) -> String {
         let mut s = format!(
-            "blob {} ({} bytes, format {}): serial {}\n",
+            "blob {} ({} bytes, format {}): serial {}, run {}\n",
             path.display(),
             self.bytes,
             self.format_version,
-            self.serial
+            self.serial,
+            self.run_id.as_deref().unwrap_or("not recorded")
         );
         // the header's values are f32: two decimals say what they mean, not their rounding
         s.push_str(&format!(
@@ -331,9 +326,14 @@ impl Inspection {
             self.update_step_c,
             self.model
         ));
-        s.push_str(
-            "table (K in the recording's output unit per g, U0 in that unit; a polynomial's row dT^k per C^k):\n",
-        );
+        let unit = match self.output_unit {
+            "unstated" => "the output unit (not stated in the blob)".to_string(),
+            "other" => "the recording's own output unit (not one the format lists)".to_string(),
+            u => u.to_string(),
+        };
+        s.push_str(&format!(
+            "table (K in {unit} per g, U0 in {unit}; a polynomial's row dT^k per C^k):\n"
+        ));
         s.push_str(&format!(
             "{:>10} {}\n",
             "",

@@ -309,7 +309,7 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     };
     let cal = oc.fit.calibration(a.update_step, a.clamp);
     let serial_name = a.serial.as_deref().unwrap_or(serial(&rec));
-    let (blob, bytes, dep) = build_blob(serial_name, &cal)?;
+    let (blob, bytes, dep) = build_blob(serial_name, &rec.output_unit, &cal)?;
     write_atomic(&a.out, &bytes, a.force)?;
     let j = fitted(&a, &rec, &oc, &cal, (bytes.len(), dep), serial_name);
     if a.json {

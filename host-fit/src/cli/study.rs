@@ -18,7 +18,7 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
     let mut c = d.contract(&rec);
     if let Some(b) = &a.out {
         let name = a.serial.as_deref().unwrap_or(serial(&rec));
-        let (blob, bytes, dep) = build_blob(name, &d.calibration(rec.t0_c)?)?;
+        let (blob, bytes, dep) = build_blob(name, &rec.output_unit, &d.calibration(rec.t0_c)?)?;
         write_atomic(b, &bytes, a.force)?;
         c.blob = Some(BlobNote {
             path: b.display().to_string(),

@@ -2,7 +2,6 @@
 //! the polynomial itself or a piecewise-linear table, and its in-flight physics terms.
 use crate::diagnose::effects::Extra;
 use crate::diagnose::params::{Param, Term};
-use crate::diagnose::regressors::alpha;
 use crate::diagnose::Diagnosis;
 use crate::error::{HostError, Result};
 use crate::fit::temperature::{Basis, POLY_SCALE_C};
@@ -28,22 +27,12 @@ impl Diagnosis {
         })
     }
 
-    /// The in-flight terms in the firmware's form; `None` when there are none.
+    /// The in-flight terms in the firmware's form, every time constant in seconds (the
+    /// firmware derives its per-step constants from its own clock); `None` when there
+    /// are none.
     fn physics(&self) -> Result<Option<Physics<f64>>> {
-        let dt = self.sample_period_s;
-        let mut ph = Physics {
-            sample_period_s: dt,
-            lag_alpha: 1.0,
-            rate: [0.0; 3],
-            rate_alpha: 1.0,
-            hysteresis: [0.0; 3],
-            hysteresis_threshold_c: 0.5,
-            hysteresis_initial: 0.0,
-            k2: [0.0; 3],
-            asymmetry: [0.0; 3],
-            warmup: [0.0; 3],
-            warmup_decay: 1.0,
-        };
+        let mut ph = Physics::<f64>::neutral();
+        ph.hysteresis_threshold_c = 0.5;
         let refuse = |what: &str| {
             Err(HostError::msg(format!(
                 "the fitted {what} cannot be flashed by this firmware's physics block; the blob would not compensate what was fitted"
@@ -60,11 +49,11 @@ impl Diagnosis {
                     if taus.iter().any(|t| *t != taus[0] || t[1] > 0.0) {
                         return refuse("thermal lag (per-axis or two-pole)");
                     }
-                    ph.lag_alpha = alpha(dt, taus[0][0]);
+                    ph.lag_tau_s = taus[0][0];
                 }
                 Extra::Rate { tau_s } => {
                     ph.rate = self.term(e, Term::Rate);
-                    ph.rate_alpha = alpha(dt, *tau_s);
+                    ph.rate_tau_s = *tau_s;
                 }
                 Extra::Hysteresis {
                     threshold_c,
@@ -82,12 +71,13 @@ impl Diagnosis {
                 Extra::Asymmetry => ph.asymmetry = self.term(e, Term::Asymmetry),
                 Extra::Warmup { tau_s, .. } => {
                     // in flight the clock restarts at power-on only, as it does here at
-                    // the recording's start (and its gaps); handling does not happen
+                    // the recording's start and its stated power-offs; handling does not
+                    // happen
                     if ph.warmup != [0.0; 3] {
                         return refuse("second warm-up time constant");
                     }
                     ph.warmup = self.term(e, Term::Warmup);
-                    ph.warmup_decay = (-dt / tau_s).exp();
+                    ph.warmup_tau_s = *tau_s;
                 }
                 Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(_) => {}
             }

@@ -146,7 +146,8 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
     let spec = Spec::default();
     let (list, selection) = fits(&rec, &stops)?;
     for (name, file, fit) in list {
-        let cal = fit.calibration(0.1, false);
+        let mut cal = fit.calibration(0.0, false);
+        crate::blob::Cache::for_model(&rec, &fit, &noise(&rec), &mut cal, None);
         let (blob, bytes, _) = build_blob(&serial, &rec.output_unit, &cal)?;
         let run = |m: Method| -> Result<Verification> {
             verify(&rec, &blob, m, &check).ok_or_else(|| HostError::msg("singular K(T0)"))

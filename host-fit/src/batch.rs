@@ -116,7 +116,9 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         r.model = format!("diagnosed ({})", r.findings.join("+"));
         (d.calibration(rec.t0_c)?, Some(d.contract(&rec)))
     } else {
-        (oc.fit.calibration(0.1, false), None)
+        let mut cal = oc.fit.calibration(0.0, false);
+        crate::blob::Cache::for_fit(&rec, &oc, &mut cal, None);
+        (cal, None)
     };
     r.at_t0 = Some(cal.at_t0());
     r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);

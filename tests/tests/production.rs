@@ -284,9 +284,20 @@ fn the_default_fit_states_its_choice_and_its_predicted_error() {
         let v = q["dg_1sigma_mg"].as_f64().unwrap();
         assert!(v > 0.0 && v < 0.05, "{q}");
     }
-    // the cache's lag, stated apart, scales with the step
-    let lag = p["cache_lag_max_mg"].as_f64().unwrap();
-    assert!(lag > 0.001 && lag < 0.1, "{lag}");
+    // the firmware's cache, stated apart: by default its step is chosen from the unit's
+    // slopes so that it never costs more than a verification dwell's own noise anywhere
+    // in the valid range; a given step scales its cost
+    let c = &j["cache"];
+    let (step, lag, floor) = (
+        c["step_c"].as_f64().unwrap(),
+        c["worst_mg"].as_f64().unwrap(),
+        c["floor_mg"].as_f64().unwrap(),
+    );
+    assert_eq!(c["chosen"], true, "{c}");
+    assert!(step > 0.0 && step <= 0.1, "{c}");
+    assert!(lag > 0.0 && lag <= floor, "{c}");
+    assert_eq!(p["cache_lag_max_mg"].as_f64().unwrap(), lag);
+    assert_eq!(p["dwell_noise_1sigma_mg"].as_f64().unwrap(), floor);
     let j2 = cli_json(&[
         "fit",
         s(&rec),
@@ -298,7 +309,8 @@ fn the_default_fit_states_its_choice_and_its_predicted_error() {
         "0.2",
     ]);
     let lag2 = j2["predicted_error"]["cache_lag_max_mg"].as_f64().unwrap();
-    assert!((lag2 / lag - 2.0).abs() < 1e-9, "{lag} {lag2}");
+    assert!((lag2 / lag - 0.2 / step).abs() < 1e-9, "{lag} {lag2}");
+    assert_eq!(j2["cache"]["chosen"], false);
     let ex = &j["excluded_not_in_equilibrium"];
     assert_eq!(ex["dwells"], 5, "the five rests through the ramps: {ex}");
     std::fs::remove_dir_all(&dir).unwrap();

@@ -120,9 +120,12 @@ pub struct FitArgs {
     /// verification, PP1..PP6 unless a positions file says otherwise).
     #[arg(long, value_delimiter = ',')]
     pub positions_for_check: Option<Vec<String>>,
-    /// Recompute the firmware's cached matrices after this temperature change, C.
-    #[arg(long, default_value_t = 0.1)]
-    pub update_step: f64,
+    /// Recompute the firmware's cached matrices after this temperature change, C
+    /// (default: chosen from the unit's own slopes so that the cache never costs more
+    /// than a verification dwell's own noise anywhere in the valid range, at most 0.1;
+    /// 0: the model at every temperature).
+    #[arg(long)]
+    pub update_step: Option<f64>,
     /// Clamp the temperature to the valid range instead of extrapolating.
     #[arg(long)]
     pub clamp: bool,

@@ -1,7 +1,7 @@
 //! `temp-fit`, `identify` and `fit`: from data to coefficients and blobs.
 use super::args::{FitArgs, IdentifyArgs, TempFitArgs};
 use super::common::{load, oriented, serial, w};
-use crate::blob::{build_blob, F32_BOUND_G};
+use crate::blob::{build_blob, Cache, F32_BOUND_G};
 use crate::data::table::{read_table, to_csv, TableRow};
 use crate::error::{HostError, Result};
 use crate::fit::describe::ModelDescription;
@@ -183,6 +183,8 @@ struct Fitted<'a> {
     t0_c: f64,
     t_min_c: f64,
     t_max_c: f64,
+    /// The firmware's cache of N(T): its step and its worst cost.
+    cache: Cache,
     noise_sigma: [f64; 3],
     noise_source: &'static str,
     /// The predicted compensation error against temperature (joint fits).
@@ -221,23 +223,14 @@ fn fitted<'a>(
     rec: &'a crate::data::recording::Recording,
     oc: &'a FitOutcome,
     cal: &firmware_core::temperature::Calibration<f64>,
-    (bytes, dep): (usize, f64),
+    (bytes, dep, cache): (usize, f64, Cache),
     serial: &'a str,
 ) -> Fitted<'a> {
-    let prediction = (!oc.fit.axis_cov.is_empty()).then(|| {
-        let r = oc.orientation.as_ref().map(|o| {
-            let mut r = rec.clone();
-            r.positions = o.positions.clone();
-            r
-        });
-        let (dirs, n) = directions(r.as_ref().unwrap_or(rec));
-        predict(
-            &oc.fit,
-            &oc.noise,
-            &dirs,
-            (cal.t_min_c, cal.t_max_c),
-            (n, cal.update_step_c),
-        )
+    let prediction = self::prediction(rec, oc, cal).map(|mut p| {
+        // the cache's cost over the whole range and every attitude, as chosen
+        p.cache_step_c = cache.step_c;
+        p.cache_lag_max_mg = cache.worst_mg;
+        p
     });
     let one_temp = crate::fit::predict::is_constant(&oc.fit.basis);
     Fitted {
@@ -252,6 +245,7 @@ fn fitted<'a>(
         t0_c: cal.t0_c,
         t_min_c: cal.t_min_c,
         t_max_c: cal.t_max_c,
+        cache,
         noise_sigma: oc.noise.sigma,
         noise_source: if oc.noise.dof > 0 {
             "in-dwell (successive samples)"
@@ -284,6 +278,29 @@ fn fitted<'a>(
     }
 }
 
+/// The predicted error of `oc`'s model over `cal`'s range (None without a covariance).
+fn prediction(
+    rec: &crate::data::recording::Recording,
+    oc: &FitOutcome,
+    cal: &firmware_core::temperature::Calibration<f64>,
+) -> Option<crate::fit::predict::Prediction> {
+    (!oc.fit.axis_cov.is_empty()).then(|| {
+        let r = oc.orientation.as_ref().map(|o| {
+            let mut r = rec.clone();
+            r.positions = o.positions.clone();
+            r
+        });
+        let (dirs, n) = directions(r.as_ref().unwrap_or(rec));
+        predict(
+            &oc.fit,
+            &oc.noise,
+            &dirs,
+            (cal.t_min_c, cal.t_max_c),
+            (n, cal.update_step_c),
+        )
+    })
+}
+
 pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     check_writable(&a.out, a.force)?;
     let req = ModelRequest::from(&a.model);
@@ -307,11 +324,12 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
             route,
         )?,
     };
-    let cal = oc.fit.calibration(a.update_step, a.clamp);
+    let mut cal = oc.fit.calibration(0.0, a.clamp);
+    let cache = Cache::for_fit(&rec, &oc, &mut cal, a.update_step);
     let serial_name = a.serial.as_deref().unwrap_or(serial(&rec));
     let (blob, bytes, dep) = build_blob(serial_name, &rec.output_unit, &cal)?;
     write_atomic(&a.out, &bytes, a.force)?;
-    let j = fitted(&a, &rec, &oc, &cal, (bytes.len(), dep), serial_name);
+    let j = fitted(&a, &rec, &oc, &cal, (bytes.len(), dep, cache), serial_name);
     if a.json {
         return w(out, json(&j)?);
     }
@@ -383,10 +401,11 @@ fn fit_text(j: &Fitted<'_>) -> String {
             pts.join(", ")
         ));
         s.push(format!(
-            "a verification dwell of {} samples adds {:.4} mg of its own noise (noise: {}); the firmware's {} C cache step up to {:.4} mg; valid range {:.2}..{:.2} C",
-            p.dwell_samples, p.dwell_noise_1sigma_mg, p.noise_source, p.cache_step_c, p.cache_lag_max_mg, p.t_min_c, p.t_max_c
+            "a verification dwell of {} samples adds {:.4} mg of its own noise (noise: {}); valid range {:.2}..{:.2} C",
+            p.dwell_samples, p.dwell_noise_1sigma_mg, p.noise_source, p.t_min_c, p.t_max_c
         ));
     }
+    s.push(j.cache.text());
     if !j.stops.is_empty() {
         let stops: Vec<String> = j
             .stops

@@ -1,5 +1,6 @@
 //! The flashed model as a firmware calibration, for `diagnose --out`: its coefficients as
 //! the polynomial itself or a piecewise-linear table, and its in-flight physics terms.
+use crate::blob::Cache;
 use crate::diagnose::effects::Extra;
 use crate::diagnose::params::{Param, Term};
 use crate::diagnose::Diagnosis;
@@ -94,18 +95,25 @@ impl Diagnosis {
             self.table.first().map(|r| r.0).unwrap_or(t0 - 1.0),
             self.table.last().map(|r| r.0).unwrap_or(t0 + 1.0),
         );
-        Ok(Calibration {
+        let mut cal = Calibration {
             t0_c: t0,
             t_min_c: lo,
             t_max_c: hi.max(lo + 1.0),
             clamp: false,
-            update_step_c: 0.1,
+            update_step_c: 0.0,
             model: self.poly_table().unwrap_or_else(|| TempModel::Pwl {
                 breakpoints: self.table.iter().map(|r| r.0).collect(),
                 values: self.table.iter().map(|r| r.1).collect(),
             }),
             physics: self.physics()?,
-        })
+        };
+        // the firmware's cache within the floor of a window mean (in g: over the mean
+        // scale factor at T0), as `fit` keeps it within a dwell's own noise
+        let c0 = cal.at_t0();
+        let k = (c0[0].abs() + c0[1].abs() + c0[2].abs()) / 3.0;
+        let floor_mg = (k > 0.0).then(|| self.noise_rms / k * 1e3);
+        cal.update_step_c = Cache::choose(&cal, floor_mg, None).step_c;
+        Ok(cal)
     }
 
     /// The flashed model's polynomial itself, when its temperature dependence is one (no

@@ -314,15 +314,17 @@ uint32_t fc_compensate_dt(fc_compensator *comp,
                           float *accel_g);
 
 /*
- Power-on again (the sensor was power-cycled while the MCU kept its RAM): the physics
- terms start again at the next sample, the warm-up clock from 0.
+ The sensor was powered on again `since_s` seconds before the next sample, while the
+ MCU kept the compensator (a power cycle of the sensor alone): the warm-up clock starts
+ again from the power-on; the lag, rate and hysteresis run on across the gap. (An MCU
+ that itself powered up calls `fc_compensator_init` instead.)
 
  Returns `FC_OK`, `FC_ERR_NULL` or `FC_ERR_NOT_INITIALISED`.
 
  # Safety
  `comp` is NULL or points to `fc_compensator` storage, not used concurrently.
  */
-int32_t fc_restart(fc_compensator *comp);
+int32_t fc_power_on(fc_compensator *comp, float since_s);
 
 /*
  Copy the id of the host-fit run that made the blob (16 bytes, all zero: none) to

@@ -423,8 +423,10 @@ pub unsafe extern "C" fn fc_compensate_dt(
     u32::from(out.status.bits())
 }
 
-/// Power-on again (the sensor was power-cycled while the MCU kept its RAM): the physics
-/// terms start again at the next sample, the warm-up clock from 0.
+/// The sensor was powered on again `since_s` seconds before the next sample, while the
+/// MCU kept the compensator (a power cycle of the sensor alone): the warm-up clock starts
+/// again from the power-on; the lag, rate and hysteresis run on across the gap. (An MCU
+/// that itself powered up calls `fc_compensator_init` instead.)
 ///
 /// Returns `FC_OK`, `FC_ERR_NULL` or `FC_ERR_NOT_INITIALISED`.
 ///
@@ -432,14 +434,14 @@ pub unsafe extern "C" fn fc_compensate_dt(
 /// `comp` is NULL or points to `fc_compensator` storage, not used concurrently.
 #[allow(unsafe_code)]
 #[no_mangle]
-pub unsafe extern "C" fn fc_restart(comp: *mut fc_compensator) -> i32 {
+pub unsafe extern "C" fn fc_power_on(comp: *mut fc_compensator, since_s: f32) -> i32 {
     if comp.is_null() {
         return FC_ERR_NULL;
     }
     // SAFETY: non-NULL storage, not used concurrently (the contract).
     match unsafe { comp_of(comp) } {
         Some(c) => {
-            c.restart();
+            c.power_on(since_s);
             FC_OK
         }
         None => FC_ERR_NOT_INITIALISED,

@@ -82,12 +82,12 @@ fn c_results_are_the_rust_results_bit_for_bit() {
                 let u = if k == 17 { [f32::NAN, 0.0, 0.0] } else { u };
                 let mut a = [0f32; 3];
                 // every third sample on its own time step (0.3 s; a negative one at 101),
-                // one power-on again at 250
+                // one power cycle of the sensor at 250
                 let dt = if k == 101 { -1.0 } else { 0.3 };
                 if k == 250 {
                     // SAFETY: initialised storage.
-                    assert_eq!(unsafe { fc_restart(&mut *comp) }, FC_OK);
-                    rust.restart();
+                    assert_eq!(unsafe { fc_power_on(&mut *comp, 0.2) }, FC_OK);
+                    rust.power_on(0.2);
                 }
                 let (st, r) = if k % 3 == 2 {
                     // SAFETY: initialised storage, 3 floats in and out.
@@ -212,8 +212,8 @@ fn null_and_uninitialised_storage_are_refused() {
             fc_compensate_dt(&mut comp, u.as_ptr(), 20.0, 0.1, a.as_mut_ptr()),
             FC_STATUS_BAD_ARGUMENT
         );
-        assert_eq!(fc_restart(&mut comp), FC_ERR_NOT_INITIALISED);
-        assert_eq!(fc_restart(std::ptr::null_mut()), FC_ERR_NULL);
+        assert_eq!(fc_power_on(&mut comp, 0.0), FC_ERR_NOT_INITIALISED);
+        assert_eq!(fc_power_on(std::ptr::null_mut(), 0.0), FC_ERR_NULL);
         assert_eq!(
             fc_compensate(&mut comp, u.as_ptr(), 20.0, a.as_mut_ptr()),
             FC_STATUS_BAD_ARGUMENT

@@ -34,13 +34,20 @@
 //! `f32_machines_follow_f64_at_every_rate`.
 //!
 //! # Power-on
-//! [`Machines`] starts at the first sample after power-on (a new compensator, or
-//! [`Machines::restart`]: an MCU reset, a power cycle a recording states): the lag's
-//! element at the sensor's temperature (a unit at rest), the rate 0, the hysteresis in the
-//! blob's initial direction with its reference at that temperature, the warm-up weight
-//! `exp(-t_on / tau_w)` with `t_on` the time since power-on (the first sample's time step).
-//! The host does the same at the first row of a recording and at the end of each stated
-//! power-off.
+//! [`Machines`] starts at the first sample after the MCU's power-on (a new compensator):
+//! the lag's element at the sensor's temperature (a unit at rest), the rate 0, the
+//! hysteresis in the direction that brought the unit to that temperature from its
+//! reference T0 (-1 below `T0 - threshold`: cooled to a cold start; +1 above
+//! `T0 + threshold`; the blob's initial direction within the threshold of T0), the warm-up
+//! weight `exp(-t_on / tau_w)` with `t_on` the time since power-on (the first sample's time
+//! step). A power cycle of the sensor while the MCU keeps its state
+//! ([`Machines::power_on`]; the host at the end of each power-off a recording states)
+//! restarts the warm-up clock only: the element's temperature, its hysteresis state and
+//! the temperature's rate are the unit's physics, not its power's, and the next step
+//! bridges the gap with the real time elapsed. The host does the same at the first row of
+//! a recording and at each stated power-on. (What a power-off during a fast temperature
+//! change does to an MCU that loses its state cannot be known: its lag starts again at
+//! the sensor's temperature.)
 use crate::real::Real;
 use crate::temperature::Physics;
 
@@ -105,6 +112,8 @@ pub enum Tick<R> {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Clock<R> {
     started: bool,
+    /// The next sample steps, however short the time since the last step.
+    force: bool,
     /// Seconds since the last step (or since power-on, before the start).
     pending: R,
 }
@@ -119,8 +128,9 @@ impl<R: Real> Clock<R> {
             self.pending = R::ZERO;
             return Tick::Start(t);
         }
-        if t >= R::from_f32(MIN_STEP_S) {
+        if t >= R::from_f32(MIN_STEP_S) || self.force {
             self.pending = R::ZERO;
+            self.force = false;
             Tick::Step(t)
         } else {
             self.pending = t;
@@ -138,6 +148,11 @@ impl<R: Real> Clock<R> {
     /// Power-on again: the next sample starts the machines.
     pub fn restart(&mut self) {
         *self = Clock::default();
+    }
+
+    /// The next sample steps the machines, however short the time since the last step.
+    pub fn force_step(&mut self) {
+        self.force = true;
     }
 
     /// Whether the machines have started since power-on.
@@ -222,14 +237,18 @@ impl<R: Real> Rate<R> {
         self.lp.start();
     }
 
-    /// Step over a temperature change `dx` in `h` seconds; returns the rate, C/s.
+    /// Step over a temperature change `dx` in `h` seconds; returns the rate, C/s
     /// (`(dx + e1 - e0) / h`, written as `(dx (1 - b) - a e0) / h` so that no two
-    /// nearly equal numbers are subtracted.)
+    /// nearly equal numbers are subtracted); 0 over no time (a forced step).
     #[inline]
     pub fn step(&mut self, k: Step<R>, dx: R, h: R) -> R {
         let e0 = self.lp.e;
         self.lp.step(k, dx);
-        (dx * (R::ONE - k.b) - k.a * e0) / h
+        if h > R::ZERO {
+            (dx * (R::ONE - k.b) - k.a * e0) / h
+        } else {
+            R::ZERO
+        }
     }
 }
 
@@ -307,6 +326,19 @@ impl<R: Real> Warmup<R> {
     }
 }
 
+/// The hysteresis direction at power-on at temperature `x`: the direction that brought
+/// the unit there from its reference `t0` when it is more than the threshold away from
+/// it (a cold start was cooled to), else the blob's initial direction.
+pub fn power_on_direction<R: Real>(p: &Physics<R>, x: R, t0: R) -> R {
+    if x - t0 > p.hysteresis_threshold_c {
+        R::ONE
+    } else if t0 - x > p.hysteresis_threshold_c {
+        -R::ONE
+    } else {
+        p.hysteresis_initial
+    }
+}
+
 /// The machines of the firmware's physics terms together (one lag pole for all axes, the
 /// rate, the hysteresis of the offsets, one warm-up): what the compensator holds, and what
 /// the host runs to check it. Its outputs, from the last step: the model temperature and
@@ -322,6 +354,10 @@ pub struct Machines<R> {
     dir: Direction<R>,
     warm: Warmup<R>,
     offset: [R; 3],
+    /// A power-on of the sensor is pending ([`Machines::power_on`]), this many seconds
+    /// before the next sample.
+    on_pending: bool,
+    on_s: R,
 }
 
 impl<R: Real> Default for Machines<R> {
@@ -335,6 +371,8 @@ impl<R: Real> Default for Machines<R> {
             dir: Direction::default(),
             warm: Warmup::default(),
             offset: [R::ZERO; 3],
+            on_pending: false,
+            on_s: R::ZERO,
         }
     }
 }
@@ -345,16 +383,18 @@ impl<R: Real> Machines<R> {
         &mut self.clock
     }
 
-    /// Start or step at sensor temperature `x` (`Tick::Hold` changes nothing).
+    /// Start or step at sensor temperature `x`, the reference temperature being `t0`
+    /// (`Tick::Hold` changes nothing).
     #[inline]
-    pub fn apply(&mut self, tick: Tick<R>, p: &Physics<R>, x: R) {
+    pub fn apply(&mut self, tick: Tick<R>, p: &Physics<R>, x: R, t0: R) {
         let (rate, dir, w) = match tick {
             Tick::Hold => return,
             Tick::Start(since_on) => {
                 self.x = x;
                 self.lag.start();
                 self.rate.start();
-                self.dir.start(p.hysteresis_initial, x);
+                self.dir.start(power_on_direction(p, x, t0), x);
+                self.on_pending = false;
                 let w = self.warm.start(Step::new(since_on, p.warmup_tau_s));
                 (R::ZERO, self.dir.value(), w)
             }
@@ -364,7 +404,12 @@ impl<R: Real> Machines<R> {
                 self.lag.step(Step::new(h, p.lag_tau_s), dx);
                 let rate = self.rate.step(Step::new(h, p.rate_tau_s), dx, h);
                 let dir = self.dir.step(p.hysteresis_threshold_c, x);
-                let w = self.warm.step(Step::new(h, p.warmup_tau_s));
+                let w = if self.on_pending {
+                    self.on_pending = false;
+                    self.warm.start(Step::new(self.on_s, p.warmup_tau_s))
+                } else {
+                    self.warm.step(Step::new(h, p.warmup_tau_s))
+                };
                 (rate, dir, w)
             }
         };
@@ -376,17 +421,26 @@ impl<R: Real> Machines<R> {
     }
 
     /// One sample at sensor temperature `x`, `dt` seconds after the previous one (or
-    /// after power-on); returns whether the machines started or stepped.
+    /// after power-on), reference temperature `t0`; returns whether the machines started
+    /// or stepped.
     #[inline]
-    pub fn sample(&mut self, p: &Physics<R>, x: R, dt: R) -> bool {
+    pub fn sample(&mut self, p: &Physics<R>, x: R, dt: R, t0: R) -> bool {
         let tick = self.clock.tick(dt);
-        self.apply(tick, p, x);
+        self.apply(tick, p, x, t0);
         tick != Tick::Hold
     }
 
-    /// Power-on again ([`Clock::restart`]): the next sample starts every machine.
-    pub fn restart(&mut self) {
-        self.clock.restart();
+    /// The sensor was powered on again `since_s` seconds before the next sample (its
+    /// power cycled while these machines kept their state): the warm-up clock starts
+    /// again from there; the next sample steps the other machines across the gap (see the
+    /// module's documentation). Before the first sample, nothing to do: the start is a
+    /// power-on.
+    pub fn power_on(&mut self, since_s: R) {
+        if self.clock.started() {
+            self.on_pending = true;
+            self.on_s = since_s;
+            self.clock.force_step();
+        }
     }
 
     /// The temperature the coefficient model is evaluated at: the lagged element's, at
@@ -524,6 +578,57 @@ mod tests {
         assert!(matches!(c.tick(0.01), Tick::Step(h) if (h - 0.31).abs() < 1e-6));
         c.restart();
         assert!(matches!(c.tick(2.0), Tick::Start(t) if t == 2.0));
+        c.force_step();
+        assert!(matches!(c.tick(0.001), Tick::Step(t) if t == 0.001));
+        assert_eq!(c.tick(0.001), Tick::Hold);
+    }
+
+    /// A power cycle of the sensor restarts the warm-up clock at the power-on, and only
+    /// it: the lag, the rate and the hysteresis run on, the next step spanning the gap.
+    #[test]
+    fn a_power_on_restarts_the_warm_up_only() {
+        let p = Physics::<f64> {
+            lag_tau_s: 100.0,
+            rate: [1.0, 0.0, 0.0],
+            rate_tau_s: 10.0,
+            hysteresis: [0.0, 1.0, 0.0],
+            hysteresis_threshold_c: 0.5,
+            warmup: [0.0, 0.0, 1.0],
+            warmup_tau_s: 1000.0,
+            ..Physics::neutral()
+        };
+        let (mut a, mut b) = (Machines::<f64>::default(), Machines::<f64>::default());
+        for m in [&mut a, &mut b] {
+            m.sample(&p, 20.0, 0.0, 20.0);
+            for k in 1..600 {
+                m.sample(&p, 20.0 + 0.01 * k as f64, 1.0, 20.0);
+            }
+        }
+        // a was off for the last 300 s before its next sample; b never was
+        a.power_on(300.0);
+        a.sample(&p, 26.0, 301.0, 20.0);
+        b.sample(&p, 26.0, 301.0, 20.0);
+        assert_eq!(a.model_temperature(), b.model_temperature());
+        assert_eq!(a.offset()[..2], b.offset()[..2]);
+        assert!((a.offset()[2] - (-0.3f64).exp()).abs() < 1e-12);
+        assert!((b.offset()[2] - (-0.9f64).exp()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_power_on_direction_is_the_way_from_t0() {
+        let p = Physics::<f64> {
+            hysteresis_threshold_c: 0.5,
+            hysteresis_initial: 1.0,
+            ..Physics::neutral()
+        };
+        assert_eq!(power_on_direction(&p, -30.0, 20.0), -1.0);
+        assert_eq!(power_on_direction(&p, 45.0, 20.0), 1.0);
+        assert_eq!(power_on_direction(&p, 19.8, 20.0), 1.0);
+        let q = Physics {
+            hysteresis_initial: -1.0,
+            ..p
+        };
+        assert_eq!(power_on_direction(&q, 20.3, 20.0), -1.0);
     }
 
     /// The machines in f32 at 10 Hz, 100 Hz and 1 kHz against f64 at 10 Hz, on a fast
@@ -559,7 +664,7 @@ mod tests {
         let mut at = Vec::new();
         for k in 0..36_000 {
             let t = 0.1 * k as f64;
-            reference.sample(&p64, temp(t), if k == 0 { 0.0 } else { 0.1 });
+            reference.sample(&p64, temp(t), if k == 0 { 0.0 } else { 0.1 }, 20.0);
             at.push((reference.model_temperature(), reference.offset()));
         }
         for hz in [10u32, 100, 1000] {
@@ -569,7 +674,7 @@ mod tests {
             let (mut worst_t, mut worst_r) = (0.0f64, 0.0f64);
             for k in 0..36_000 * per {
                 let t = k as f64 / f64::from(hz);
-                m.sample(&p32, temp(t) as f32, if k == 0 { 0.0 } else { dt });
+                m.sample(&p32, temp(t) as f32, if k == 0 { 0.0 } else { dt }, 20.0);
                 if k % per == 0 {
                     let (tm, off) = at[k / per];
                     worst_t = worst_t.max((f64::from(m.model_temperature()) - tm).abs());

@@ -164,8 +164,8 @@ fn physics_blob() -> Blob {
 
 /// The physics path on an uneven clock, as bits: the blob's compensator, sample by
 /// sample with each sample's own time step (a cold start, a warming at 6 C/min logged at
-/// 0.2-10 s spacings, a 1 ms burst, a power-on again), equal to the committed ones, and
-/// the same from flash and owned.
+/// 0.2-10 s spacings, a 1 ms burst, a power cycle of the sensor), equal to the committed
+/// ones, and the same from flash and owned.
 #[cfg(feature = "physics")]
 #[test]
 fn golden_physics_outputs_on_an_uneven_clock() {
@@ -173,7 +173,7 @@ fn golden_physics_outputs_on_an_uneven_clock() {
     let view = BlobView::new(&bytes).unwrap();
     let owned = Blob::decode(&bytes).unwrap();
     let mut out = String::from(
-        "# method dt_bits temp_bits ux uy uz -> ax ay az status (f32 bits); R = power-on again\n",
+        "# method dt_bits temp_bits ux uy uz -> ax ay az status (f32 bits); P = the sensor powered on 2 s before the next sample\n",
     );
     let u = [0.0045f32, -0.0044, -0.5521];
     for (name, m) in METHODS {
@@ -189,9 +189,9 @@ fn golden_physics_outputs_on_an_uneven_clock() {
         .enumerate()
         {
             if i == 30 {
-                flash.restart();
-                host.restart();
-                out.push_str("R\n");
+                flash.power_on(2.0);
+                host.power_on(2.0);
+                out.push_str("P\n");
             }
             t += dt;
             let temp = -30.0 + 0.1 * t.min(600.0);

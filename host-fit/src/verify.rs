@@ -44,7 +44,8 @@ pub struct Verification {
 }
 
 /// Compensate the whole recording sample by sample in time order, as the MCU would, on
-/// the recording's own clock (each row's time step, the stated power-ons: [`Recording::clock`]),
+/// the recording's own clock (each row's time step, the stated power-ons of the sensor:
+/// [`Recording::clock`]),
 /// and evaluate formula (13) on the mean acceleration of every selected dwell.
 pub fn verify(
     rec: &Recording,
@@ -66,8 +67,8 @@ pub fn verify(
         }
     }
     for (r, (row, clock)) in rec.rows.iter().zip(rec.clock()).enumerate() {
-        if clock.power_on {
-            comp.restart();
+        if let Some(on) = clock.power_on_s {
+            comp.power_on(on as f32);
         }
         let out = comp.compensate_dt(
             row.u.map(|v| v as f32),

@@ -361,8 +361,8 @@ fn crlf_and_bom_are_read() {
 
 /// `power_off_s` (recording-format.md): spans that are not `start-end` numbers, or end
 /// before they start, are errors naming the line and the field; good spans are power-ons
-/// on the recording's clock: the first row after each span's end restarts the in-flight
-/// machines, its time step counted from the power-on.
+/// on the recording's clock: the first row after each span's end says how long before it
+/// the unit was powered on again (the warm-up clock's restart).
 #[test]
 fn power_off_spans_are_read_and_checked() {
     for (i, bad) in ["abc", "10-5", "1-x", "-"].iter().enumerate() {
@@ -390,11 +390,11 @@ fn power_off_spans_are_read_and_checked() {
     assert_eq!(rec.power_off, [[3.5, 5.5], [100.0, 110.0]]);
     let c = rec.clock();
     // rows at t = 0, 1, 2, ...: row 6 (t = 6) is the first after the power-on at 5.5
-    assert_eq!((c[0].dt_s, c[0].power_on), (0.0, false));
-    assert_eq!((c[1].dt_s, c[1].power_on), (1.0, false));
-    assert_eq!((c[6].dt_s, c[6].power_on), (0.5, true));
+    assert_eq!((c[0].dt_s, c[0].power_on_s), (0.0, None));
+    assert_eq!((c[1].dt_s, c[1].power_on_s), (1.0, None));
+    assert_eq!((c[6].dt_s, c[6].power_on_s), (1.0, Some(0.5)));
     assert_eq!(
-        c.iter().filter(|r| r.power_on).count(),
+        c.iter().filter(|r| r.power_on_s.is_some()).count(),
         1,
         "the second span is after the last row"
     );

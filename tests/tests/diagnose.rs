@@ -221,8 +221,8 @@ fn the_flashed_model_reaches_the_fits_own_residual_in_firmware() {
         .iter()
         .zip(rec.clock())
         .map(|(r, c)| {
-            if c.power_on {
-                comp.restart();
+            if let Some(on) = c.power_on_s {
+                comp.power_on(on as f32);
             }
             comp.compensate_dt(r.u.map(|v| v as f32), r.temp_c as f32, c.dt_s as f32)
                 .accel

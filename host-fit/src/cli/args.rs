@@ -257,6 +257,10 @@ pub struct SimulateArgs {
     /// Also write the truth (all parameters) as JSON here.
     #[arg(long)]
     pub truth: Option<PathBuf>,
+    /// Where to write the positions file the recording needs (a `[flight]`
+    /// configuration's attitudes; required with one).
+    #[arg(long)]
+    pub positions_out: Option<PathBuf>,
     /// Overwrite existing outputs.
     #[arg(long)]
     pub force: bool,

@@ -26,10 +26,11 @@ pub struct Row {
 /// One row on the in-flight terms' clock ([`Recording::clock`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RowClock {
-    /// Seconds since the previous row, or since the power-on before this row.
+    /// Seconds since the previous row (the first row: since the power-on before it).
     pub dt_s: f64,
-    /// The unit was powered on again before this row (a stated power-off ended).
-    pub power_on: bool,
+    /// The unit was powered on again this many seconds before this row (a stated
+    /// power-off ended since the previous row).
+    pub power_on_s: Option<f64>,
 }
 
 /// `power_off_s`: comma-separated `start-end` spans (s), each with start <= end.
@@ -265,41 +266,37 @@ impl Recording {
     }
 
     /// The clock the in-flight terms run on, per row: the time step before it (from the
-    /// previous row, or from the power-on before it), and whether the unit was powered on
-    /// again before it (the end of a stated `power_off_s` span). The first row is the
-    /// first sample after power-on (time step 0) unless a span ends before it. The
-    /// firmware's `compensate_dt` and `restart` take exactly these, in `verify` as in the
+    /// previous row; for the first row from the power-on before it, 0 when none is
+    /// stated), and when a stated `power_off_s` span ended between the previous row and
+    /// this one, how long before this row the unit was powered on again. The firmware's
+    /// `compensate_dt` and `power_on` take exactly these, in `verify` as in the
     /// diagnosis's regressors.
     pub fn clock(&self) -> Vec<RowClock> {
         let mut ends: Vec<f64> = self.power_off.iter().map(|s| s[1]).collect();
         ends.sort_by(f64::total_cmp);
-        let mut next = ends.iter().peekable();
+        let mut next = ends.iter().copied().peekable();
         let mut prev: Option<f64> = None;
         self.rows
             .iter()
             .map(|r| {
                 let mut on = None;
                 while let Some(e) = next.peek().copied() {
-                    if *e > r.t_s {
+                    if e > r.t_s {
                         break;
                     }
-                    if prev.is_none_or(|p| *e > p) {
-                        on = Some(*e);
+                    if prev.is_none_or(|p| e > p) {
+                        on = Some(e);
                     }
                     next.next();
                 }
-                let c = match (on, prev) {
-                    (Some(e), _) => RowClock {
-                        dt_s: r.t_s - e,
-                        power_on: prev.is_some(),
-                    },
-                    (None, Some(p)) => RowClock {
+                let c = match prev {
+                    Some(p) => RowClock {
                         dt_s: r.t_s - p,
-                        power_on: false,
+                        power_on_s: on.map(|e| r.t_s - e),
                     },
-                    (None, None) => RowClock {
-                        dt_s: 0.0,
-                        power_on: false,
+                    None => RowClock {
+                        dt_s: on.map_or(0.0, |e| r.t_s - e),
+                        power_on_s: None,
                     },
                 };
                 prev = Some(r.t_s);

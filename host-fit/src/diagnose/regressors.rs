@@ -4,7 +4,10 @@
 //! diagnosis fits exactly what the firmware will apply on any row spacing; plus the
 //! recording's restart events.
 use crate::data::recording::Recording;
-use firmware_core::inflight::{Clock, Direction, Lag, Rate, Step, Tick, Warmup};
+use firmware_core::inflight::{
+    power_on_direction, Clock, Direction, Lag, Rate, Step, Tick, Warmup,
+};
+use firmware_core::temperature::Physics;
 
 /// A `-` run longer than this (s) is handling (the unit re-mounted, turned by hand).
 pub const HANDLING_S: f64 = 120.0;
@@ -66,8 +69,10 @@ pub fn events(rec: &Recording) -> Events {
 
 /// Runs a machine over the recording on the firmware's clock: each row's time step and
 /// the stated power-ons ([`Recording::clock`]) through firmware-core's [`Clock`], so the
-/// machine starts and steps at the rows where the firmware's would. `on(tick, temp)` is
-/// called at a start or a step and returns the machine's output, held between steps.
+/// machine starts and steps at the rows where the firmware's would (a power-on steps at
+/// its row, across the gap, as `Compensator::power_on` makes the firmware do).
+/// `on(tick, temp)` is called at a start or a step and returns the machine's output,
+/// held between steps.
 fn drive(rec: &Recording, mut on: impl FnMut(Tick<f64>, f64) -> f64) -> Vec<f64> {
     let mut clock = Clock::<f64>::default();
     let mut held = 0.0;
@@ -75,8 +80,8 @@ fn drive(rec: &Recording, mut on: impl FnMut(Tick<f64>, f64) -> f64) -> Vec<f64>
         .iter()
         .zip(rec.clock())
         .map(|(r, c)| {
-            if c.power_on {
-                clock.restart();
+            if c.power_on_s.is_some() && clock.started() {
+                clock.force_step();
             }
             let tick = clock.tick(c.dt_s);
             if tick != Tick::Hold {
@@ -123,15 +128,21 @@ pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
     })
 }
 
-/// Per row, the hysteresis direction (threshold in C, initial state +1, -1 or 0 at each
-/// power-on).
+/// Per row, the hysteresis direction (threshold in C; at the first row the state the
+/// firmware takes at power-on: `initial` within the threshold of the recording's T0, else
+/// the way from T0, `firmware_core::inflight::power_on_direction`).
 pub fn directions(rec: &Recording, threshold_c: f64, initial: f64) -> Vec<f64> {
     let mut m = Direction::default();
+    let p = Physics {
+        hysteresis_threshold_c: threshold_c,
+        hysteresis_initial: initial,
+        ..Physics::neutral()
+    };
     drive(rec, |tick, t| match tick {
         Tick::Step(_) => m.step(threshold_c, t),
         _ => {
-            m.start(initial, t);
-            initial
+            m.start(power_on_direction(&p, t, rec.t0_c), t);
+            m.value()
         }
     })
 }
@@ -147,18 +158,21 @@ pub fn warmup(rec: &Recording, tau_s: f64, restarts: &[usize]) -> Vec<f64> {
         .into_iter()
         .enumerate()
         .map(|(k, c)| {
-            if c.power_on {
-                clock.restart();
+            if c.power_on_s.is_some() && clock.started() {
+                clock.force_step();
             }
             let tick = clock.tick(c.dt_s);
-            match tick {
-                Tick::Start(on) => {
+            match (tick, c.power_on_s) {
+                (Tick::Start(on), _) => {
                     m.start(Step::new(on, tau_s));
                 }
-                Tick::Step(h) => {
+                (Tick::Step(_), Some(on)) => {
+                    m.start(Step::new(on, tau_s));
+                }
+                (Tick::Step(h), None) => {
                     m.step(Step::new(h, tau_s));
                 }
-                Tick::Hold => {}
+                (Tick::Hold, _) => {}
             }
             if next.peek() == Some(&k) {
                 next.next();

@@ -445,3 +445,52 @@ fn the_checks_catch_what_they_are_for() {
     let lifetimes = code_only("fn g<'a>(x: &'a str) -> char { let c = '{'; x.len(); c }");
     assert_eq!(function_lengths(&lifetimes), vec![("g".to_string(), 1)]);
 }
+
+/// The `src/` folder of another crate of the workspace (`xtask`, `firmware-core`).
+fn crate_src(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(name)
+        .join("src")
+}
+
+/// The crates beside host-fit held to the same rules of module docs and function length.
+const OTHER_CRATES: [&str; 2] = ["xtask", "firmware-core"];
+
+#[test]
+fn every_module_of_xtask_and_firmware_core_says_what_it_is_for() {
+    let mut missing = Vec::new();
+    for krate in OTHER_CRATES {
+        for (m, p) in files(&crate_src(krate)) {
+            if !std::fs::read_to_string(&p).unwrap().starts_with("//!") {
+                missing.push(format!("{krate}/{m}"));
+            }
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "modules without a `//!` line: {missing:?}"
+    );
+}
+
+#[test]
+fn no_function_of_xtask_or_firmware_core_is_longer_than_the_limit() {
+    let mut long = Vec::new();
+    for krate in OTHER_CRATES {
+        let fs = files(&crate_src(krate));
+        assert!(!fs.is_empty(), "no source found for {krate}");
+        for (m, p) in fs {
+            let code = code_only(&std::fs::read_to_string(&p).unwrap());
+            for (name, n) in function_lengths(&code) {
+                if n > MAX_FN_LINES {
+                    long.push(format!("{krate}/{m}::{name}: {n} lines"));
+                }
+            }
+        }
+    }
+    assert!(
+        long.is_empty(),
+        "functions over {MAX_FN_LINES} lines of code:\n{}",
+        long.join("\n")
+    );
+}

@@ -1,7 +1,9 @@
 //! `cargo xtask bench`: criterion benchmarks of firmware-core and host-fit, and a batch
 //! of 1000 simulated units; writes target/bench/summary.md.
-use std::path::{Path, PathBuf};
+use crate::steps::Outcome;
+use std::path::Path;
 use std::process::Command;
+use std::time::Duration;
 
 /// The mean estimate (ns) of one criterion benchmark, from its `new/estimates.json`.
 fn estimate_ns(dir: &Path) -> Option<f64> {
@@ -102,13 +104,11 @@ fn diagnosis_times(bin: &Path, root: &Path, steps: &mut crate::Steps) -> String 
     ];
     let mut md = String::from("\n### Diagnosis, end to end (release binary, one thread, best of 3)\n\n| recording | time | target |\n|---|---|---|\n");
     for (name, args, target) in cases {
-        eprintln!("\n==> timing the diagnosis of the {name}");
-        match best_of_three(bin, &args) {
-            Some(t) => {
-                md.push_str(&format!("| {name} | {t:.2} s | < {target} s |\n"));
-                steps.passed.push(format!("diagnose the {name}"));
-            }
-            None => steps.failed.push(format!("diagnose the {name}")),
+        let timed = steps.step(&format!("diagnose the {name}"), || {
+            best_of_three(bin, &args).ok_or(format!("host-fit {} failed", args.join(" ")))
+        });
+        if let Ok(t) = timed {
+            md.push_str(&format!("| {name} | {t:.2} s | < {target} s |\n"));
         }
     }
     md
@@ -128,7 +128,55 @@ pub fn bench(steps: &mut crate::Steps) {
     steps.run("build host-fit", c);
     let bin = root.join("target/release/host-fit");
     let units = root.join("target/bench/units");
-    let _ = std::fs::create_dir_all(&units);
+    if let Err(seed) = simulate_units(&bin, &units) {
+        steps.record(
+            &format!("simulate unit {seed}"),
+            Outcome::Fail(format!("host-fit simulate --seed {seed} failed")),
+            Duration::ZERO,
+        );
+        steps.skip("batch of 1000 units", "the units could not be simulated");
+        return;
+    }
+    let out = root.join("target/bench/batch-out");
+    // stdout is read for the verdict counts; stderr (the progress bar) stays the user's
+    let t = std::time::Instant::now();
+    let batch = steps.step("batch of 1000 units", || {
+        let run = Command::new(&bin)
+            .args(["batch"])
+            .arg(&units)
+            .arg("--out")
+            .arg(&out)
+            .args(["--jobs", "2", "--force"])
+            .stderr(std::process::Stdio::inherit())
+            .output()
+            .map_err(|e| format!("host-fit batch: {e}"))?;
+        // exit 0: every unit passed; 3: it ran and some unit failed or errored; else it
+        // did not run
+        match run.status.code() {
+            Some(0 | 3) => Ok(String::from_utf8_lossy(&run.stdout)
+                .lines()
+                .next()
+                .unwrap_or_default()
+                .to_string()),
+            _ => Err(format!("host-fit batch did not run ({})", run.status)),
+        }
+    });
+    let batch_s = t.elapsed().as_secs_f64();
+    let verdicts = batch.unwrap_or_default();
+    let diag = diagnosis_times(&bin, &root, steps);
+    let mut md = criterion_summary(&results(&root.join("target/criterion")));
+    md.push_str(&format!("\n### Batch\n\n`host-fit batch` of 1000 simulated units of the paper's profile (22 k rows each), `--jobs 2`, every unit's model chosen by cross-validation and judged against the acceptance specification: **{batch_s:.1} s** (target < 60 s).\n\n`{verdicts}`\n"));
+    md.push_str(&diag);
+    let dir = root.join("target/bench");
+    let _ = std::fs::create_dir_all(&dir);
+    let _ = std::fs::write(dir.join("summary.md"), &md);
+    println!("{md}");
+}
+
+/// 1000 units of the paper's profile (seeds 1-1000) in `units`, those already there
+/// kept: the seed of the first that could not be simulated.
+fn simulate_units(bin: &Path, units: &Path) -> Result<(), u32> {
+    let _ = std::fs::create_dir_all(units);
     eprintln!(
         "\n==> simulating 1000 units of the paper's profile into {}",
         units.display()
@@ -138,46 +186,22 @@ pub fn bench(steps: &mut crate::Steps) {
         if p.exists() {
             continue;
         }
-        let ok = Command::new(&bin)
+        let ok = Command::new(bin)
             .args(["simulate", "--seed", &seed.to_string(), "--out"])
             .arg(&p)
             .output()
             .map(|o| o.status.success())
             .unwrap_or(false);
         if !ok {
-            steps.failed.push(format!("simulate unit {seed}"));
-            return;
+            return Err(seed);
         }
     }
-    let out = root.join("target/bench/batch-out");
-    let t = std::time::Instant::now();
-    // stdout is read for the verdict counts; stderr (the progress bar) stays the user's
-    let run = Command::new(&bin)
-        .args(["batch"])
-        .arg(&units)
-        .arg("--out")
-        .arg(&out)
-        .args(["--jobs", "2", "--force"])
-        .stderr(std::process::Stdio::inherit())
-        .output();
-    let batch_s = t.elapsed().as_secs_f64();
-    // exit 0: every unit passed; 3: it ran and some unit failed or errored; else it did not run
-    let verdicts = match &run {
-        Ok(o) if matches!(o.status.code(), Some(0 | 3)) => {
-            steps.passed.push("batch of 1000 units".into());
-            String::from_utf8_lossy(&o.stdout)
-                .lines()
-                .next()
-                .unwrap_or_default()
-                .to_string()
-        }
-        _ => {
-            steps.failed.push("batch of 1000 units".into());
-            String::new()
-        }
-    };
-    let diag = diagnosis_times(&bin, &root, steps);
-    let res = results(&root.join("target/criterion"));
+    Ok(())
+}
+
+/// The criterion results as the summary's tables: firmware-core on the host, and
+/// host-fit against recording length.
+fn criterion_summary(res: &[(String, f64)]) -> String {
     let get = |k: &str| res.iter().find(|r| r.0 == k).map(|r| r.1);
     let mut md = String::from("## Benchmarks (`cargo xtask bench`, this machine: 2 cores)\n\n### firmware-core on the host (x86-64, f32)\n\n| benchmark | time |\n|---|---|\n");
     for (k, v) in res.iter().filter(|r| {
@@ -206,11 +230,5 @@ pub fn bench(steps: &mut crate::Steps) {
             d.map(fmt_ns).unwrap_or_default()
         ));
     }
-    md.push_str(&format!("\n### Batch\n\n`host-fit batch` of 1000 simulated units of the paper's profile (22 k rows each), `--jobs 2`, every unit's model chosen by cross-validation and judged against the acceptance specification: **{batch_s:.1} s** (target < 60 s).\n\n`{verdicts}`\n"));
-    md.push_str(&diag);
-    let dir = root.join("target/bench");
-    let _ = std::fs::create_dir_all(&dir);
-    let _ = std::fs::write(dir.join("summary.md"), &md);
-    println!("{md}");
-    let _ = PathBuf::new();
+    md
 }

@@ -1,93 +1,136 @@
 //! `cargo xtask fuzz --seconds N`: every cargo-fuzz target for N seconds (nightly); the
 //! committed seed corpus is read, new inputs go to target/fuzz-corpus/ (the repository
 //! stays clean), and any crash artefact fails the step.
+use std::path::Path;
 use std::process::Command;
 
 /// The targets of fuzz/Cargo.toml.
 pub const TARGETS: [&str; 4] = ["blob_decode", "compensate", "recording", "positions"];
 
-/// Run every target; prints the executions per target.
+/// `cargo xtask fuzz [--seconds N] [TARGET..]`.
+pub struct Options {
+    /// Seconds per target (default 60).
+    pub seconds: u64,
+    /// The targets named, or all of them.
+    pub targets: Vec<&'static str>,
+}
+
+impl Options {
+    /// `--seconds N` (default 60); any other word names a target, none means all.
+    pub fn parse(args: &[String]) -> Result<Options, String> {
+        let mut seconds = 60;
+        let mut targets = Vec::new();
+        let mut words = args.iter();
+        while let Some(w) = words.next() {
+            if w == "--seconds" {
+                seconds = words
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .ok_or("--seconds needs a whole number of seconds")?;
+            } else {
+                let t = TARGETS
+                    .iter()
+                    .find(|t| *t == w)
+                    .ok_or_else(|| format!("no fuzz target `{w}` (targets: {TARGETS:?})"))?;
+                targets.push(*t);
+            }
+        }
+        if targets.is_empty() {
+            targets = TARGETS.to_vec();
+        }
+        Ok(Options { seconds, targets })
+    }
+}
+
+/// Run every target, one step each; prints the executions per target.
 pub fn fuzz(steps: &mut crate::Steps, seconds: u64, targets: &[&str]) {
-    if let Err(e) = crate::setup::cargo_fuzz() {
-        eprintln!("xtask: {e}");
-        steps.failed.push("fuzz: cargo-fuzz".into());
+    if steps
+        .prepare("fuzz: cargo-fuzz", crate::setup::cargo_fuzz)
+        .is_none()
+    {
+        for t in targets {
+            steps.skip(&format!("fuzz {t}"), "no cargo-fuzz");
+        }
         return;
     }
-    let root = crate::root();
     let mut lines = Vec::new();
     for &t in targets {
-        eprintln!("\n==> fuzz {t} for {seconds} s");
-        let work = root.join("target/fuzz-corpus").join(t);
-        let _ = std::fs::create_dir_all(&work);
-        let artifacts = root.join("target/fuzz-artifacts").join(t);
-        let _ = std::fs::remove_dir_all(&artifacts);
-        let _ = std::fs::create_dir_all(&artifacts);
-        let out = Command::new("cargo")
-            .current_dir(&root)
-            .args(["+nightly", "fuzz", "run", t])
-            .arg(&work)
-            .arg(root.join("fuzz/corpus").join(t))
-            .arg("--")
-            .arg(format!("-max_total_time={seconds}"))
-            .arg(format!("-artifact_prefix={}/", artifacts.display()))
-            .env_remove("CARGO")
-            .env_remove("RUSTUP_TOOLCHAIN")
-            .output();
-        let Ok(out) = out else {
-            steps.failed.push(format!("fuzz {t}: could not start"));
-            continue;
-        };
-        let err = String::from_utf8_lossy(&out.stderr);
-        let runs = err
-            .lines()
-            .rev()
-            .filter_map(|l| l.strip_prefix("Done "))
-            .find_map(|l| l.split_whitespace().next())
-            .unwrap_or("?")
-            .to_string();
-        let crashes = std::fs::read_dir(&artifacts)
-            .map(|d| d.count())
-            .unwrap_or(0);
-        lines.push(format!(
-            "{t}: {runs} executions in {seconds} s, {crashes} crash artefacts"
-        ));
-        if out.status.success() && crashes == 0 {
-            steps.passed.push(format!("fuzz {t}"));
-        } else {
-            // CI keeps only the log, so the log must carry what reproduces the crash: the
-            // panic message and the artefact's bytes, not libFuzzer's tail.
-            let mut shown: Vec<&str> = Vec::new();
-            let lines: Vec<&str> = err.lines().collect();
-            for (i, l) in lines.iter().enumerate() {
-                if l.contains("panicked at") || l.contains("ERROR: libFuzzer") {
-                    shown.extend(lines.iter().skip(i).take(3));
-                }
-            }
-            if shown.is_empty() {
-                shown = lines.iter().rev().take(30).rev().copied().collect();
-            }
-            eprintln!("{}", shown.join("\n"));
-            for a in std::fs::read_dir(&artifacts)
-                .into_iter()
-                .flatten()
-                .flatten()
-            {
-                if let Ok(bytes) = std::fs::read(a.path()) {
-                    eprintln!(
-                        "artefact {} ({} bytes): b\"{}\"",
-                        a.path().display(),
-                        bytes.len(),
-                        escape(&bytes[..bytes.len().min(4096)])
-                    );
-                }
-            }
-            steps
-                .failed
-                .push(format!("fuzz {t} (artefacts in {})", artifacts.display()));
+        let name = format!("fuzz {t}");
+        if let Ok(line) = steps.step(&name, || target(t, seconds)) {
+            lines.push(line);
         }
     }
     for l in &lines {
         println!("fuzz {l}");
+    }
+}
+
+/// One target for `seconds`: its executions, or the crash (panic message and input
+/// printed, so a CI log is enough to reproduce it).
+fn target(t: &str, seconds: u64) -> Result<String, String> {
+    let root = crate::root();
+    let work = root.join("target/fuzz-corpus").join(t);
+    let _ = std::fs::create_dir_all(&work);
+    let artifacts = root.join("target/fuzz-artifacts").join(t);
+    let _ = std::fs::remove_dir_all(&artifacts);
+    let _ = std::fs::create_dir_all(&artifacts);
+    let out = Command::new("cargo")
+        .current_dir(&root)
+        .args(["+nightly", "fuzz", "run", t])
+        .arg(&work)
+        .arg(root.join("fuzz/corpus").join(t))
+        .arg("--")
+        .arg(format!("-max_total_time={seconds}"))
+        .arg(format!("-artifact_prefix={}/", artifacts.display()))
+        .env_remove("CARGO")
+        .env_remove("RUSTUP_TOOLCHAIN")
+        .output()
+        .map_err(|e| format!("could not start cargo +nightly fuzz: {e}"))?;
+    let err = String::from_utf8_lossy(&out.stderr);
+    let runs = err
+        .lines()
+        .rev()
+        .filter_map(|l| l.strip_prefix("Done "))
+        .find_map(|l| l.split_whitespace().next())
+        .unwrap_or("?")
+        .to_string();
+    let crashes = std::fs::read_dir(&artifacts)
+        .map(|d| d.count())
+        .unwrap_or(0);
+    let line = format!("{t}: {runs} executions in {seconds} s, {crashes} crash artefacts");
+    if out.status.success() && crashes == 0 {
+        return Ok(line);
+    }
+    show_crash(&err, &artifacts);
+    Err(format!(
+        "{line} (artefacts in {}; the panic and each crashing input are printed above:          add the input to a test, fix, and keep it in fuzz/corpus/{t}/ as a regression seed)",
+        artifacts.display()
+    ))
+}
+
+/// The panic message and each artefact's bytes: CI keeps only the log, so the log must
+/// carry what reproduces the crash, not libFuzzer's tail.
+fn show_crash(err: &str, artifacts: &Path) {
+    let mut shown: Vec<&str> = Vec::new();
+    let lines: Vec<&str> = err.lines().collect();
+    for (i, l) in lines.iter().enumerate() {
+        if l.contains("panicked at") || l.contains("ERROR: libFuzzer") {
+            shown.extend(lines.iter().skip(i).take(3));
+        }
+    }
+    if shown.is_empty() {
+        shown = lines.iter().rev().take(30).rev().copied().collect();
+    }
+    eprintln!("{}", shown.join("\n"));
+    for a in std::fs::read_dir(artifacts).into_iter().flatten().flatten() {
+        if let Ok(bytes) = std::fs::read(a.path()) {
+            eprintln!(
+                "artefact {} ({} bytes): b\"{}\"",
+                a.path().display(),
+                bytes.len(),
+                escape(&bytes[..bytes.len().min(4096)])
+            );
+        }
     }
 }
 
@@ -98,4 +141,21 @@ fn escape(bytes: &[u8]) -> String {
         .flat_map(|b| std::ascii::escape_default(*b))
         .map(char::from)
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Options, TARGETS};
+
+    #[test]
+    fn options_name_targets_and_seconds() {
+        let a = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let o = Options::parse(&a(&["recording", "--seconds", "5"])).unwrap();
+        assert_eq!((o.seconds, o.targets), (5, vec!["recording"]));
+        let all = Options::parse(&[]).unwrap();
+        assert_eq!((all.seconds, all.targets), (60, TARGETS.to_vec()));
+        assert!(Options::parse(&a(&["--seconds", "x"])).is_err());
+        assert!(Options::parse(&a(&["--seconds"])).is_err());
+        assert!(Options::parse(&a(&["nope"])).is_err_and(|e| e.contains("`nope`")));
+    }
 }

@@ -1,0 +1,227 @@
+//! The budgets `cargo xtask embedded` enforces (issue 13) and their verdicts, computed
+//! once: the failures of the task and the report's budget line both read them here.
+use crate::measure::Measured;
+
+/// Method 1's floor: 9 multiplications, 6 additions, 3 subtractions per sample.
+pub const M1_FLOOR: u64 = 18;
+
+/// One budget of a firmware build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Budget {
+    /// Painted stack of blob validation.
+    DecodeStack,
+    /// Painted stack of `compensate` with a temperature update.
+    CompensateStack,
+    /// `size_of::<FlashCompensator>`.
+    State,
+    /// Flash of compensation + blob validation (the library components).
+    Flash,
+    /// Method 1's net instructions per sample: at most 2.5x its floor.
+    Method1,
+    /// No soft-double routine linked.
+    NoSoftDouble,
+}
+
+/// How a build stands against one budget.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// Within the limit.
+    Met,
+    /// Over it.
+    Missed,
+    /// The run gave no figure to judge (a miss too).
+    NotMeasured,
+}
+
+impl Verdict {
+    /// As the report writes it.
+    pub fn word(self) -> &'static str {
+        match self {
+            Verdict::Met => "met",
+            Verdict::Missed | Verdict::NotMeasured => "missed",
+        }
+    }
+}
+
+impl Budget {
+    /// Every budget, in the report's order.
+    pub const ALL: [Budget; 6] = [
+        Budget::DecodeStack,
+        Budget::CompensateStack,
+        Budget::State,
+        Budget::Flash,
+        Budget::Method1,
+        Budget::NoSoftDouble,
+    ];
+
+    /// The limit, in the budget's unit.
+    pub fn limit(self) -> u64 {
+        match self {
+            Budget::DecodeStack => 1024,
+            Budget::CompensateStack => 512,
+            Budget::State => 256,
+            Budget::Flash => 6 * 1024,
+            Budget::Method1 => M1_FLOOR * 5 / 2,
+            Budget::NoSoftDouble => 0,
+        }
+    }
+
+    /// The measured figure (for `NoSoftDouble`, the number of routines linked).
+    pub fn measured(self, m: &Measured) -> Option<u64> {
+        match self {
+            Budget::DecodeStack => m.stack_decode,
+            Budget::CompensateStack => m.stack_compensate,
+            Budget::State => m.state,
+            Budget::Flash => Some(m.library_bytes()),
+            Budget::Method1 => m.net("sample_m1"),
+            Budget::NoSoftDouble => Some(m.soft_double.len() as u64),
+        }
+    }
+
+    /// Whether `m` meets the budget.
+    pub fn verdict(self, m: &Measured) -> Verdict {
+        match self.measured(m) {
+            Some(v) if v <= self.limit() => Verdict::Met,
+            Some(_) => Verdict::Missed,
+            None => Verdict::NotMeasured,
+        }
+    }
+
+    /// What a failure calls it.
+    fn failure_name(self) -> &'static str {
+        match self {
+            Budget::DecodeStack => "decode stack",
+            Budget::CompensateStack => "compensate stack",
+            Budget::State => "compensator state",
+            Budget::Flash => "flash for compensation + blob validation",
+            Budget::Method1 => "method 1 per sample (2.5x the floor of 18)",
+            Budget::NoSoftDouble => "no soft-double routines",
+        }
+    }
+
+    /// The unit of the figure.
+    fn unit(self) -> &'static str {
+        match self {
+            Budget::Method1 => "instructions",
+            Budget::NoSoftDouble => "routines",
+            Budget::DecodeStack | Budget::CompensateStack | Budget::State | Budget::Flash => {
+                "bytes"
+            }
+        }
+    }
+
+    /// The miss of build `build` (`with physics`), if it missed: the budget and build,
+    /// and the figure against the limit.
+    pub fn miss(self, m: &Measured, build: &str) -> Option<(String, String)> {
+        let (unit, limit) = (self.unit(), self.limit());
+        let why = match (self, self.verdict(m), self.measured(m)) {
+            (_, Verdict::Met, _) => return None,
+            (Budget::NoSoftDouble, _, _) => m.soft_double.join(", "),
+            (_, _, Some(v)) => format!("{v} {unit} > {limit} {unit}"),
+            (_, _, None) => "not measured".to_string(),
+        };
+        Some((format!("{} ({build})", self.failure_name()), why))
+    }
+
+    /// The report's clause: `decode stack 472 bytes (<= 1024: met)`.
+    pub fn report(self, m: &Measured) -> String {
+        let (limit, verdict) = (self.limit(), self.verdict(m).word());
+        let v = self.measured(m).unwrap_or(0);
+        match self {
+            Budget::DecodeStack => format!("decode stack {v} bytes (<= {limit}: {verdict})"),
+            Budget::CompensateStack => {
+                format!("compensate stack {v} bytes (<= {limit}: {verdict})")
+            }
+            Budget::State => format!("compensator state {v} bytes (<= {limit}: {verdict})"),
+            Budget::Flash => format!("flash {v} bytes (<= {limit}: {verdict})"),
+            Budget::Method1 => format!(
+                "method 1 {v} instructions per sample (<= {limit}, 2.5x the floor: {verdict})"
+            ),
+            Budget::NoSoftDouble => format!(
+                "soft-double routines: {}",
+                if v == 0 {
+                    "none (met)"
+                } else {
+                    "linked (missed)"
+                }
+            ),
+        }
+    }
+}
+
+/// Each budget this build misses, named with its measured value.
+pub fn missed(m: &Measured, build: &str) -> Vec<(String, String)> {
+    Budget::ALL
+        .iter()
+        .filter_map(|b| b.miss(m, build))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn measured() -> Measured {
+        Measured {
+            samples: 10,
+            physics_refused: false,
+            departures: Vec::new(),
+            sizes: Vec::new(),
+            components: vec![("firmware-core compensate".into(), 6084)],
+            icount: [("call_overhead", 20), ("sample_m1", 63)]
+                .map(|(k, v)| (k.to_string(), v))
+                .to_vec(),
+            soft_double: Vec::new(),
+            stack_decode: Some(472),
+            stack_compensate: Some(464),
+            state: Some(200),
+            blob_view: Some(40),
+        }
+    }
+
+    #[test]
+    fn a_build_within_every_budget_misses_none() {
+        let m = measured();
+        assert_eq!(missed(&m, "with physics"), []);
+        assert_eq!(
+            Budget::ALL.map(|b| b.report(&m)).join(", "),
+            "decode stack 472 bytes (<= 1024: met), compensate stack 464 bytes (<= 512: met), \
+             compensator state 200 bytes (<= 256: met), flash 6084 bytes (<= 6144: met), \
+             method 1 43 instructions per sample (<= 45, 2.5x the floor: met), \
+             soft-double routines: none (met)"
+        );
+    }
+
+    #[test]
+    fn every_miss_is_named_with_its_figure() {
+        let mut m = measured();
+        m.stack_decode = None;
+        m.stack_compensate = Some(513);
+        m.icount[1].1 = 66;
+        m.components[0].1 = 6145;
+        m.soft_double = vec!["__aeabi_dmul".into()];
+        let text: Vec<String> = missed(&m, "without physics")
+            .into_iter()
+            .map(|(name, why)| format!("{name}: {why}"))
+            .collect();
+        assert_eq!(
+            text,
+            [
+                "decode stack (without physics): not measured",
+                "compensate stack (without physics): 513 bytes > 512 bytes",
+                "flash for compensation + blob validation (without physics): 6145 bytes > 6144 bytes",
+                "method 1 per sample (2.5x the floor of 18) (without physics): 46 instructions > 45 instructions",
+                "no soft-double routines (without physics): __aeabi_dmul",
+            ]
+        );
+        assert_eq!(
+            Budget::DecodeStack.report(&m),
+            "decode stack 0 bytes (<= 1024: missed)"
+        );
+        assert_eq!(
+            Budget::NoSoftDouble.report(&m),
+            "soft-double routines: linked (missed)"
+        );
+        assert_eq!(Budget::State.verdict(&m), Verdict::Met);
+    }
+}

@@ -15,8 +15,6 @@ use crate::model::{
     add3, all_finite, apply, diagonal, invert, mat_mul, mat_sub, mat_vec, sub3, Coeffs, Mat3, Vec3,
 };
 use crate::real::Real;
-#[cfg(feature = "physics")]
-use crate::temperature::Physics;
 use crate::temperature::{eval_table, Calibration, Source};
 
 /// Which temperature-error model method 2 subtracts.
@@ -347,8 +345,23 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
     /// rare cases are classified off the fast path. The range flags are those of the
     /// cached temperature, evaluated at each update: within one update step of a range
     /// limit they may lag by up to that step.
+    // One copy of the per-sample paths for both entry points (flash): `compensate_dt`
+    // calls this one for the paths that do not use the time.
+    #[inline(never)]
     pub fn compensate(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
-        self.sample(u, temp_c, self.period)
+        match self.path {
+            Path::Constants => self.core(u, temp_c, false),
+            Path::Result => self.shared_core(u, temp_c, true),
+            #[cfg(feature = "physics")]
+            Path::Physics => self.compensate_physics(u, temp_c, self.period),
+        }
+    }
+
+    /// The core path with the method chosen at run time, one copy for method 2 and the
+    /// physics path (flash); method 1 inlines its own (its per-sample budget).
+    #[inline(never)]
+    fn shared_core(&mut self, u: Vec3<R>, temp_c: R, m2: bool) -> Output<R> {
+        self.core(u, temp_c, m2)
     }
 
     /// Compensate one sample taken `dt_s` seconds after the previous one (or after
@@ -356,23 +369,16 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
     /// replayed on its own clock. A negative or non-finite `dt_s` is taken as 0 and
     /// flagged ([`Status::BAD_TIME_STEP`]). Otherwise as [`Compensator::compensate`].
     pub fn compensate_dt(&mut self, u: Vec3<R>, temp_c: R, dt_s: R) -> Output<R> {
-        if dt_s >= R::ZERO && dt_s.is_finite() {
-            return self.sample(u, temp_c, dt_s);
-        }
-        let mut out = self.sample(u, temp_c, R::ZERO);
-        out.status.insert(Status::BAD_TIME_STEP);
-        out
-    }
-
-    #[inline(always)]
-    fn sample(&mut self, u: Vec3<R>, temp_c: R, dt_s: R) -> Output<R> {
-        let _ = dt_s;
-        match self.path {
-            Path::Constants => self.core(u, temp_c, false),
-            Path::Result => self.core(u, temp_c, true),
+        let good = dt_s >= R::ZERO && dt_s.is_finite();
+        let mut out = match self.path {
             #[cfg(feature = "physics")]
-            Path::Physics => self.compensate_physics(u, temp_c, dt_s),
+            Path::Physics => self.compensate_physics(u, temp_c, if good { dt_s } else { R::ZERO }),
+            _ => self.compensate(u, temp_c),
+        };
+        if !good {
+            out.status.insert(Status::BAD_TIME_STEP);
         }
+        out
     }
 
     /// Start or step the physics terms' machines at sensor temperature `x`: reads every
@@ -380,10 +386,10 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
     #[cfg(feature = "physics")]
     #[inline(never)]
     fn step_machines(&mut self, tick: Tick<R>, x: R) {
-        // Path::Physics is set only for a source with physics terms; the neutral set
-        // stands in for the impossible case (one copy of the code, not two).
-        let p = self.src.physics().unwrap_or_else(Physics::neutral);
-        self.ph.apply(tick, &p, x, self.src.t0_c());
+        // Path::Physics is set only for a source with physics terms
+        if let Some(p) = self.src.physics() {
+            self.ph.apply(tick, &p, x, self.src.t0_c());
+        }
     }
 
     /// The physics terms around the core path: the temperature (when within 40 C of the
@@ -411,13 +417,16 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
             self.ph.clock().wait(dt_s);
             temp_c
         };
-        let mut out = self.core(sub3(u, self.ph.offset()), t_model, m2);
+        let mut out = self.shared_core(sub3(u, self.ph.offset()), t_model, m2);
         if out.status.contains(Status::INPUT_NON_FINITE)
             || out.status.contains(Status::OUTPUT_NON_FINITE)
         {
             return out;
         }
-        let p = self.src.physics().unwrap_or_else(Physics::neutral);
+        // Path::Physics is set only for a source with physics terms
+        let Some(p) = self.src.physics() else {
+            return out;
+        };
         let [a0, a1, a2] = out.accel;
         let [k0, k1, k2] = p.k2;
         let [c0, c1, c2] = p.asymmetry;

@@ -9,18 +9,6 @@ use crate::fit::temperature::{Basis, POLY_SCALE_C};
 use firmware_core::model::{K_INDEX, U0_INDEX};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
 
-/// The rate estimator's time constant the blob carries at most, s: chosen for flight, not
-/// for the chamber. `r` is the unit's physics (an offset per C/s of its temperature's
-/// rate); the estimator only measures that rate, and the one that fits the chamber best
-/// smooths the 10-s rows of a quantised sensor over tens of seconds, which in flight lags
-/// a fast change by as much (on the twin's flight, warming and cooling at 5-8 C/min: 0.44
-/// mg with the chamber's 40 s, 0.045 mg with 2 s). A held attitude's mean is not noisier
-/// for it: the mean of the rate estimate over a hold is the change of its low-pass over
-/// the hold divided by its length, whatever its time constant. Each sample is: the rate
-/// of one 0.1 s step scatters by about sigma/tau (a sensor of 0.027 C, 0.02 C of noise
-/// quantised to 0.0625 C: 0.013 C/s at 2 s, 0.0007 C/s at 40 s), times `r` in the output.
-pub const FLIGHT_RATE_TAU_S: f64 = 2.0;
-
 impl Diagnosis {
     /// The final model's values of a per-axis term of extra `e` (0 where not fitted).
     fn term(&self, e: usize, term: Term) -> [f64; 3] {
@@ -66,7 +54,7 @@ impl Diagnosis {
                 }
                 Extra::Rate { tau_s } => {
                     ph.rate = self.term(e, Term::Rate);
-                    ph.rate_tau_s = tau_s.min(FLIGHT_RATE_TAU_S);
+                    ph.rate_tau_s = *tau_s;
                 }
                 Extra::Hysteresis {
                     threshold_c,

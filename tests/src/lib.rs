@@ -129,6 +129,8 @@ pub const PAPER_T0: [f64; 12] = [
     -0.00347099,
 ];
 
+pub mod time_true;
+
 /// The digital twin's recordings with varied truth and nuisances, for the tests of the
 /// data-chosen model (none of them was used to tune it), and the plain least-squares
 /// fit they are compared with.

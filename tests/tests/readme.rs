@@ -87,6 +87,11 @@ fn physics_blob() {
 }
 
 #[test]
+fn time_true_diagnosed_blobs() {
+    same("time-true", &tests::time_true::table().1);
+}
+
+#[test]
 fn cats_tag_diagnosis() {
     same("cats-tag", &figures::cats_tag());
 }

@@ -351,7 +351,10 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
     pub fn compensate(&mut self, u: Vec3<R>, temp_c: R) -> Output<R> {
         match self.path {
             Path::Constants => self.core(u, temp_c, false),
+            #[cfg(feature = "physics")]
             Path::Result => self.shared_core(u, temp_c, true),
+            #[cfg(not(feature = "physics"))]
+            Path::Result => self.core(u, temp_c, true),
             #[cfg(feature = "physics")]
             Path::Physics => self.compensate_physics(u, temp_c, self.period),
         }
@@ -359,6 +362,7 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
 
     /// The core path with the method chosen at run time, one copy for method 2 and the
     /// physics path (flash); method 1 inlines its own (its per-sample budget).
+    #[cfg(feature = "physics")]
     #[inline(never)]
     fn shared_core(&mut self, u: Vec3<R>, temp_c: R, m2: bool) -> Output<R> {
         self.core(u, temp_c, m2)

@@ -193,3 +193,23 @@ fn a_format_3_blob_is_refused_by_version() {
         );
     }
 }
+
+/// The blob records the recording's output unit (format 4, byte 15): `fit` and
+/// `diagnose --out` write it, `inspect` prints it.
+#[test]
+fn blobs_record_the_output_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let (rec, _) = write(dir.path(), "unit", &production("clean", 3));
+    let text = std::fs::read_to_string(&rec).unwrap();
+    let labelled = dir.path().join("labelled.csv");
+    std::fs::write(&labelled, format!("# output_unit=mV\n{text}")).unwrap();
+    for (cmd, blob) in [("fit", "fit.blob"), ("diagnose", "diag.blob")] {
+        let b = dir.path().join(blob);
+        cli_json(&[cmd, s(&labelled), "--out", s(&b), "--json", "--force"]);
+        let j = cli_json(&["inspect", s(&b), "--json"]);
+        assert_eq!(j["output_unit"], "mV", "{cmd}: {j}");
+        assert_eq!(j["format_version"], 4);
+        let (_, out, _) = cli(&["inspect", s(&b)]);
+        assert!(out.contains("K in mV per g, U0 in mV"), "{out}");
+    }
+}

@@ -16,7 +16,7 @@ use crate::error::{HostError, Result};
 use crate::fit::pipeline::{fit_chosen, ModelKind, ModelRequest};
 use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
-use crate::fit::temperature::{span, UPDATE_STEP_C};
+use crate::fit::temperature::span;
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::store::record::{sha256_file, AtT0, Command as Recorded, HashingReader, Record};
 use crate::store::{Store, Target};
@@ -180,10 +180,12 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         (d.calibration(rec.t0_c)?, Some(d.contract()))
     } else {
         r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
-        (oc.fit.calibration(UPDATE_STEP_C, false), None)
+        let mut cal = oc.fit.calibration(0.0, false);
+        crate::blob::Cache::for_fit(&rec, &oc, &mut cal, None);
+        (cal, None)
     };
     r.at_t0 = Some(cal.at_t0());
-    let (blob, bytes, dep) = build_blob(&r.unit, &cal)?;
+    let (blob, bytes, dep) = build_blob(&r.unit, &rec.output_unit, &cal)?;
     if let Some(t) = &o.store {
         let mut rc = t.record(Recorded::Batch, &r.unit, path)?;
         rc.input_sha256 = Some(sha);

@@ -18,7 +18,7 @@ use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
 use crate::fit::temperature::span;
 use crate::output::{check_writable, write_atomic, write_json};
-use crate::store::record::{sha256_file, AtT0, Command as Recorded, HashingReader, Record};
+use crate::store::record::{sha256_file, stamp, AtT0, Command as Recorded, HashingReader, Record};
 use crate::store::{Store, Target};
 use crate::verify::{verify, TempMax};
 use firmware_core::compensate::Method;
@@ -185,7 +185,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         (cal, None)
     };
     r.at_t0 = Some(cal.at_t0());
-    let (blob, bytes, dep) = build_blob(&r.unit, &rec.output_unit, &cal)?;
+    let (blob, mut bytes, dep) = build_blob(&r.unit, &rec.output_unit, &cal)?;
     if let Some(t) = &o.store {
         let mut rc = t.record(Recorded::Batch, &r.unit, path)?;
         rc.input_sha256 = Some(sha);
@@ -196,10 +196,12 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
             values: cal.at_t0(),
             sigma: Some(r.at_t0_sigma),
         });
-        rc.blob = Some(bytes.clone());
         if let Some(d) = &diagnosis {
             rc.with_diagnosis(d)?;
         }
+        // the blob carries its run's id: a unit in the field leads back to this record
+        bytes = stamp(&bytes, rc.run_id)?;
+        rc.blob = Some(bytes.clone());
         r.record = Some(rc);
     }
     write_atomic(&out.join(format!("{stem}.blob")), &bytes, o.force)?;

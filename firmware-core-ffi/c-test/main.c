@@ -7,7 +7,8 @@
 void semihost_puts(const char *s);
 
 /* Written by `cargo xtask embedded` (c-data.c): the PWL blob from `host-fit fit`, the
- * physics blob from `host-fit diagnose --out`, the input table (ux uy uz temp, f32 LE). */
+ * physics blob from `host-fit diagnose --out`, the input table (ux uy uz temp dt, f32 LE:
+ * each sample on its own time step, s). */
 extern const uint8_t fc_test_blob[], fc_test_blob_phys[], fc_test_inputs[];
 extern const uint32_t fc_test_blob_len, fc_test_blob_phys_len, fc_test_inputs_len;
 
@@ -28,7 +29,7 @@ static void flush(void) { line[pos++] = '\n'; line[pos] = 0; semihost_puts(line)
 static uint32_t bits(float f) { union { float f; uint32_t u; } c = { f }; return c.u; }
 static float input(uint32_t i, uint32_t k) {
     union { uint32_t u; float f; } c;
-    const uint8_t *p = fc_test_inputs + 16 * i + 4 * k;
+    const uint8_t *p = fc_test_inputs + 20 * i + 4 * k;
     c.u = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
     return c.f;
 }
@@ -46,13 +47,14 @@ static int run(const uint8_t *bytes, uint32_t len, const char *prefix) {
         return 1;
     }
     for (int m = 0; m < 3; m++) {
-        if (fc_compensator_init(&comp, &blob, methods[m]) != FC_OK) {
+        /* made for a 100 Hz MCU; every input carries its own time step */
+        if (fc_compensator_init(&comp, &blob, methods[m], 0.01f) != FC_OK) {
             put("error: compensator refused"); flush();
             return 1;
         }
-        for (uint32_t i = 0; i < fc_test_inputs_len / 16; i++) {
+        for (uint32_t i = 0; i < fc_test_inputs_len / 20; i++) {
             float u[3] = {input(i, 0), input(i, 1), input(i, 2)}, a[3];
-            uint32_t st = fc_compensate(&comp, u, input(i, 3), a);
+            uint32_t st = fc_compensate_dt(&comp, u, input(i, 3), input(i, 4), a);
             put("vec "); put(prefix); put(tags[m]); put(" "); put_dec(i);
             for (int k = 0; k < 3; k++) { put(" "); put_hex(bits(a[k])); }
             put(" "); put_dec(st); flush();
@@ -63,7 +65,7 @@ static int run(const uint8_t *bytes, uint32_t len, const char *prefix) {
 
 /* A blob cut short, and one with a flipped version bit, in RAM: each refused with its
  * own code. */
-static uint8_t copy[1024];
+static uint8_t copy[1028];
 static int refusals(void) {
     uint32_t n = fc_test_blob_len < sizeof copy ? fc_test_blob_len : sizeof copy;
     for (uint32_t i = 0; i < n; i++) copy[i] = fc_test_blob[i];

@@ -111,6 +111,11 @@
 #define FC_ERR_PHYSICS_NOT_BUILT_IN 21
 
 /*
+ The sample period is not a positive, finite number of seconds.
+ */
+#define FC_ERR_BAD_SAMPLE_PERIOD 22
+
+/*
  Any other refusal (a newer firmware-core error).
  */
 #define FC_ERR_OTHER 99
@@ -161,9 +166,60 @@
 #define FC_STATUS_OUTPUT_NON_FINITE 32
 
 /*
+ Sample status bit: the time step of `fc_compensate_dt` was negative or not finite; it
+ was taken as 0.
+ */
+#define FC_STATUS_BAD_TIME_STEP 64
+
+/*
  Sample status bit: a NULL or uninitialised argument; nothing was computed.
  */
 #define FC_STATUS_BAD_ARGUMENT 128
+
+/*
+ Output unit code (byte 15 of the blob): not stated.
+ */
+#define FC_UNIT_UNSTATED 0
+
+/*
+ Output unit code: V.
+ */
+#define FC_UNIT_V 1
+
+/*
+ Output unit code: mV.
+ */
+#define FC_UNIT_MV 2
+
+/*
+ Output unit code: m/s2.
+ */
+#define FC_UNIT_M_S2 3
+
+/*
+ Output unit code: g.
+ */
+#define FC_UNIT_G 4
+
+/*
+ Output unit code: mg.
+ */
+#define FC_UNIT_MG 5
+
+/*
+ Output unit code: counts.
+ */
+#define FC_UNIT_COUNTS 6
+
+/*
+ Output unit code: a unit the recording format does not list.
+ */
+#define FC_UNIT_OTHER 7
+
+/*
+ Bytes of a blob's run id.
+ */
+#define FC_RUN_ID_LEN 16
 
 /*
  Storage for a validated blob (a view of the bytes in flash). Opaque: fill it with
@@ -200,16 +256,22 @@ int32_t fc_blob_open(fc_blob *blob, const uint8_t *bytes, size_t len);
 
 /*
  Start a compensator in `comp` over the validated blob `blob`, with `method`
- (`FC_METHOD_*`); its cache starts at T0.
+ (`FC_METHOD_*`), for an MCU sampling every `sample_period_s` seconds (the period of
+ `fc_compensate`; the physics terms' time constants are in seconds in the blob); its
+ cache starts at T0, the physics terms at power-on.
 
  Returns `FC_OK`, `FC_ERR_NULL`, `FC_ERR_NOT_INITIALISED` (blob not opened),
- `FC_ERR_BAD_METHOD`, `FC_ERR_SINGULAR` or `FC_ERR_PHYSICS_NOT_BUILT_IN`.
+ `FC_ERR_BAD_METHOD`, `FC_ERR_BAD_SAMPLE_PERIOD`, `FC_ERR_SINGULAR` or
+ `FC_ERR_PHYSICS_NOT_BUILT_IN`.
 
  # Safety
  `comp` is NULL or points to writable `fc_compensator` storage; `blob` is NULL or
  points to `fc_blob` storage (opened by `fc_blob_open` for `FC_OK`).
  */
-int32_t fc_compensator_init(fc_compensator *comp, const fc_blob *blob, uint32_t method_id);
+int32_t fc_compensator_init(fc_compensator *comp,
+                            const fc_blob *blob,
+                            uint32_t method_id,
+                            float sample_period_s);
 
 /*
  Switch the method of an initialised compensator at run time (recomputes its cache).
@@ -222,8 +284,9 @@ int32_t fc_compensator_init(fc_compensator *comp, const fc_blob *blob, uint32_t 
 int32_t fc_set_method(fc_compensator *comp, uint32_t method_id);
 
 /*
- Compensate one sample: output voltages `volts[3]` at sensor temperature `temp_c`,
- specific force in g written to `accel_g[3]`. Fixed work per sample, as in Rust.
+ Compensate one sample, one sample period after the previous one: output voltages
+ `volts[3]` at sensor temperature `temp_c`, specific force in g written to
+ `accel_g[3]`. Fixed work per sample, as in Rust.
 
  Returns the sample's `FC_STATUS_*` bits (0 = all good); `FC_STATUS_BAD_ARGUMENT`
  when a pointer is NULL or `comp` was not initialised (then nothing is written).
@@ -234,6 +297,57 @@ int32_t fc_set_method(fc_compensator *comp, uint32_t method_id);
  writable floats.
  */
 uint32_t fc_compensate(fc_compensator *comp, const float *volts, float temp_c, float *accel_g);
+
+/*
+ Compensate one sample taken `dt_s` seconds after the previous one (or after
+ power-on): a temperature read at its own rate, a logger with gaps. A negative or
+ non-finite `dt_s` is taken as 0 and flagged `FC_STATUS_BAD_TIME_STEP`. Otherwise as
+ `fc_compensate`.
+
+ # Safety
+ As `fc_compensate`.
+ */
+uint32_t fc_compensate_dt(fc_compensator *comp,
+                          const float *volts,
+                          float temp_c,
+                          float dt_s,
+                          float *accel_g);
+
+/*
+ The sensor was powered on again `since_s` seconds before the next sample, while the
+ MCU kept the compensator (a power cycle of the sensor alone): the warm-up clock starts
+ again from the power-on; the lag, rate and hysteresis run on across the gap. (An MCU
+ that itself powered up calls `fc_compensator_init` instead.)
+
+ Returns `FC_OK`, `FC_ERR_NULL` or `FC_ERR_NOT_INITIALISED`.
+
+ # Safety
+ `comp` is NULL or points to `fc_compensator` storage, not used concurrently.
+ */
+int32_t fc_power_on(fc_compensator *comp, float since_s);
+
+/*
+ Copy the id of the host-fit run that made the blob (16 bytes, all zero: none) to
+ `out[16]`.
+
+ Returns `FC_OK`, `FC_ERR_NULL` or `FC_ERR_NOT_INITIALISED` (blob not opened).
+
+ # Safety
+ `blob` is NULL or points to `fc_blob` storage; `out` is NULL or points to 16
+ writable bytes.
+ */
+int32_t fc_blob_run_id(const fc_blob *blob, uint8_t *out);
+
+/*
+ Write the output unit of the blob's K and U0 (an `FC_UNIT_*` code) to `unit`.
+
+ Returns `FC_OK`, `FC_ERR_NULL` or `FC_ERR_NOT_INITIALISED` (blob not opened).
+
+ # Safety
+ `blob` is NULL or points to `fc_blob` storage; `unit` is NULL or points to a
+ writable byte.
+ */
+int32_t fc_blob_output_unit(const fc_blob *blob, uint8_t *unit);
 
 /*
  The format version a blob's header names (bytes 4..6), whatever its validity: to

@@ -10,14 +10,17 @@
 //! #include "firmware_core.h"
 //! static fc_blob blob; static fc_compensator comp;
 //! if (fc_blob_open(&blob, unit_blob, unit_blob_len) != FC_OK) { /* refuse to run */ }
-//! if (fc_compensator_init(&comp, &blob, FC_METHOD_CONSTANTS) != FC_OK) { /* ... */ }
+//! /* the MCU samples at 100 Hz: the sample period, s */
+//! if (fc_compensator_init(&comp, &blob, FC_METHOD_CONSTANTS, 0.01f) != FC_OK) { /* ... */ }
 //! uint32_t status = fc_compensate(&comp, volts, temp_c, accel_g);
+//! /* a sample 0.25 s after the previous one (a gap) */
+//! status = fc_compensate_dt(&comp, volts, temp_c, 0.25f, accel_g);
 //! ```
 #![no_std]
 #![deny(unsafe_code)]
 
 use core::mem::{align_of, size_of};
-use firmware_core::blob::BlobView;
+use firmware_core::blob::{BlobView, RUN_ID_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, FlashCompensator, Method, Status};
 use firmware_core::Error;
 
@@ -60,6 +63,8 @@ pub const FC_ERR_BAD_RANGE: i32 = 19;
 pub const FC_ERR_SINGULAR: i32 = 20;
 /// The blob has physics terms; the library was built without them.
 pub const FC_ERR_PHYSICS_NOT_BUILT_IN: i32 = 21;
+/// The sample period is not a positive, finite number of seconds.
+pub const FC_ERR_BAD_SAMPLE_PERIOD: i32 = 22;
 /// Any other refusal (a newer firmware-core error).
 pub const FC_ERR_OTHER: i32 = 99;
 
@@ -82,8 +87,30 @@ pub const FC_STATUS_INPUT_NON_FINITE: u32 = 8;
 pub const FC_STATUS_SINGULAR: u32 = 16;
 /// Sample status bit: the result overflowed; the acceleration is NaN.
 pub const FC_STATUS_OUTPUT_NON_FINITE: u32 = 32;
+/// Sample status bit: the time step of `fc_compensate_dt` was negative or not finite; it
+/// was taken as 0.
+pub const FC_STATUS_BAD_TIME_STEP: u32 = 64;
 /// Sample status bit: a NULL or uninitialised argument; nothing was computed.
 pub const FC_STATUS_BAD_ARGUMENT: u32 = 0x80;
+
+/// Output unit code (byte 15 of the blob): not stated.
+pub const FC_UNIT_UNSTATED: u8 = 0;
+/// Output unit code: V.
+pub const FC_UNIT_V: u8 = 1;
+/// Output unit code: mV.
+pub const FC_UNIT_MV: u8 = 2;
+/// Output unit code: m/s2.
+pub const FC_UNIT_M_S2: u8 = 3;
+/// Output unit code: g.
+pub const FC_UNIT_G: u8 = 4;
+/// Output unit code: mg.
+pub const FC_UNIT_MG: u8 = 5;
+/// Output unit code: counts.
+pub const FC_UNIT_COUNTS: u8 = 6;
+/// Output unit code: a unit the recording format does not list.
+pub const FC_UNIT_OTHER: u8 = 7;
+/// Bytes of a blob's run id.
+pub const FC_RUN_ID_LEN: usize = 16;
 
 /// Storage for a validated blob (a view of the bytes in flash). Opaque: fill it with
 /// `fc_blob_open`.
@@ -125,7 +152,22 @@ const _: () = {
     assert!(FC_STATUS_INPUT_NON_FINITE == Status::INPUT_NON_FINITE.bits() as u32);
     assert!(FC_STATUS_SINGULAR == Status::SINGULAR.bits() as u32);
     assert!(FC_STATUS_OUTPUT_NON_FINITE == Status::OUTPUT_NON_FINITE.bits() as u32);
-    assert!(FC_STATUS_BAD_ARGUMENT > 0x3F);
+    assert!(FC_STATUS_BAD_TIME_STEP == Status::BAD_TIME_STEP.bits() as u32);
+    assert!(FC_STATUS_BAD_ARGUMENT > 0x7F);
+    assert!(FC_RUN_ID_LEN == RUN_ID_LEN);
+};
+
+// The unit codes are firmware-core's.
+const _: () = {
+    use firmware_core::blob::OutputUnit;
+    assert!(FC_UNIT_UNSTATED == OutputUnit::Unstated.code());
+    assert!(FC_UNIT_V == OutputUnit::Volt.code());
+    assert!(FC_UNIT_MV == OutputUnit::MilliVolt.code());
+    assert!(FC_UNIT_M_S2 == OutputUnit::MetrePerSecond2.code());
+    assert!(FC_UNIT_G == OutputUnit::G.code());
+    assert!(FC_UNIT_MG == OutputUnit::MilliG.code());
+    assert!(FC_UNIT_COUNTS == OutputUnit::Counts.code());
+    assert!(FC_UNIT_OTHER == OutputUnit::Other.code());
 };
 
 // Size contracts: what lives in the C storage fits it, on the MCU and on the host.
@@ -154,6 +196,7 @@ fn code(e: Error) -> i32 {
         Error::BadRange => FC_ERR_BAD_RANGE,
         Error::Singular => FC_ERR_SINGULAR,
         Error::PhysicsNotBuiltIn => FC_ERR_PHYSICS_NOT_BUILT_IN,
+        Error::BadSamplePeriod => FC_ERR_BAD_SAMPLE_PERIOD,
         _ => FC_ERR_OTHER,
     }
 }
@@ -224,10 +267,13 @@ unsafe fn view_of(blob: *const fc_blob) -> Option<BlobView<'static>> {
 }
 
 /// Start a compensator in `comp` over the validated blob `blob`, with `method`
-/// (`FC_METHOD_*`); its cache starts at T0.
+/// (`FC_METHOD_*`), for an MCU sampling every `sample_period_s` seconds (the period of
+/// `fc_compensate`; the physics terms' time constants are in seconds in the blob); its
+/// cache starts at T0, the physics terms at power-on.
 ///
 /// Returns `FC_OK`, `FC_ERR_NULL`, `FC_ERR_NOT_INITIALISED` (blob not opened),
-/// `FC_ERR_BAD_METHOD`, `FC_ERR_SINGULAR` or `FC_ERR_PHYSICS_NOT_BUILT_IN`.
+/// `FC_ERR_BAD_METHOD`, `FC_ERR_BAD_SAMPLE_PERIOD`, `FC_ERR_SINGULAR` or
+/// `FC_ERR_PHYSICS_NOT_BUILT_IN`.
 ///
 /// # Safety
 /// `comp` is NULL or points to writable `fc_compensator` storage; `blob` is NULL or
@@ -238,6 +284,7 @@ pub unsafe extern "C" fn fc_compensator_init(
     comp: *mut fc_compensator,
     blob: *const fc_blob,
     method_id: u32,
+    sample_period_s: f32,
 ) -> i32 {
     if comp.is_null() || blob.is_null() {
         return FC_ERR_NULL;
@@ -249,7 +296,7 @@ pub unsafe extern "C" fn fc_compensator_init(
     let Some(m) = method(method_id) else {
         return FC_ERR_BAD_METHOD;
     };
-    match Compensator::from_blob(view, m) {
+    match Compensator::from_blob(view, m, sample_period_s) {
         Ok(c) => {
             let slot = CompSlot {
                 tag: TAG_COMP,
@@ -310,8 +357,9 @@ pub unsafe extern "C" fn fc_set_method(comp: *mut fc_compensator, method_id: u32
     }
 }
 
-/// Compensate one sample: output voltages `volts[3]` at sensor temperature `temp_c`,
-/// specific force in g written to `accel_g[3]`. Fixed work per sample, as in Rust.
+/// Compensate one sample, one sample period after the previous one: output voltages
+/// `volts[3]` at sensor temperature `temp_c`, specific force in g written to
+/// `accel_g[3]`. Fixed work per sample, as in Rust.
 ///
 /// Returns the sample's `FC_STATUS_*` bits (0 = all good); `FC_STATUS_BAD_ARGUMENT`
 /// when a pointer is NULL or `comp` was not initialised (then nothing is written).
@@ -342,6 +390,107 @@ pub unsafe extern "C" fn fc_compensate(
     // SAFETY: `accel_g` is non-NULL and points to 3 writable floats.
     unsafe { accel_g.cast::<[f32; 3]>().write(out.accel) };
     u32::from(out.status.bits())
+}
+
+/// Compensate one sample taken `dt_s` seconds after the previous one (or after
+/// power-on): a temperature read at its own rate, a logger with gaps. A negative or
+/// non-finite `dt_s` is taken as 0 and flagged `FC_STATUS_BAD_TIME_STEP`. Otherwise as
+/// `fc_compensate`.
+///
+/// # Safety
+/// As `fc_compensate`.
+#[allow(unsafe_code)]
+#[no_mangle]
+pub unsafe extern "C" fn fc_compensate_dt(
+    comp: *mut fc_compensator,
+    volts: *const f32,
+    temp_c: f32,
+    dt_s: f32,
+    accel_g: *mut f32,
+) -> u32 {
+    if volts.is_null() || accel_g.is_null() {
+        return FC_STATUS_BAD_ARGUMENT;
+    }
+    // SAFETY: storage not used concurrently (the contract); NULL is handled.
+    let Some(c) = (unsafe { comp_of(comp) }) else {
+        return FC_STATUS_BAD_ARGUMENT;
+    };
+    // SAFETY: `volts` is non-NULL and points to 3 readable floats.
+    let u = unsafe { volts.cast::<[f32; 3]>().read() };
+    let out = c.compensate_dt(u, temp_c, dt_s);
+    // SAFETY: `accel_g` is non-NULL and points to 3 writable floats.
+    unsafe { accel_g.cast::<[f32; 3]>().write(out.accel) };
+    u32::from(out.status.bits())
+}
+
+/// The sensor was powered on again `since_s` seconds before the next sample, while the
+/// MCU kept the compensator (a power cycle of the sensor alone): the warm-up clock starts
+/// again from the power-on; the lag, rate and hysteresis run on across the gap. (An MCU
+/// that itself powered up calls `fc_compensator_init` instead.)
+///
+/// Returns `FC_OK`, `FC_ERR_NULL` or `FC_ERR_NOT_INITIALISED`.
+///
+/// # Safety
+/// `comp` is NULL or points to `fc_compensator` storage, not used concurrently.
+#[allow(unsafe_code)]
+#[no_mangle]
+pub unsafe extern "C" fn fc_power_on(comp: *mut fc_compensator, since_s: f32) -> i32 {
+    if comp.is_null() {
+        return FC_ERR_NULL;
+    }
+    // SAFETY: non-NULL storage, not used concurrently (the contract).
+    match unsafe { comp_of(comp) } {
+        Some(c) => {
+            c.power_on(since_s);
+            FC_OK
+        }
+        None => FC_ERR_NOT_INITIALISED,
+    }
+}
+
+/// Copy the id of the host-fit run that made the blob (16 bytes, all zero: none) to
+/// `out[16]`.
+///
+/// Returns `FC_OK`, `FC_ERR_NULL` or `FC_ERR_NOT_INITIALISED` (blob not opened).
+///
+/// # Safety
+/// `blob` is NULL or points to `fc_blob` storage; `out` is NULL or points to 16
+/// writable bytes.
+#[allow(unsafe_code)]
+#[no_mangle]
+pub unsafe extern "C" fn fc_blob_run_id(blob: *const fc_blob, out: *mut u8) -> i32 {
+    if blob.is_null() || out.is_null() {
+        return FC_ERR_NULL;
+    }
+    // SAFETY: `blob` is non-NULL readable `fc_blob` storage (the contract).
+    let Some(view) = (unsafe { view_of(blob) }) else {
+        return FC_ERR_NOT_INITIALISED;
+    };
+    // SAFETY: `out` is non-NULL and points to 16 writable bytes (the contract).
+    unsafe { out.cast::<[u8; RUN_ID_LEN]>().write(view.run_id().0) };
+    FC_OK
+}
+
+/// Write the output unit of the blob's K and U0 (an `FC_UNIT_*` code) to `unit`.
+///
+/// Returns `FC_OK`, `FC_ERR_NULL` or `FC_ERR_NOT_INITIALISED` (blob not opened).
+///
+/// # Safety
+/// `blob` is NULL or points to `fc_blob` storage; `unit` is NULL or points to a
+/// writable byte.
+#[allow(unsafe_code)]
+#[no_mangle]
+pub unsafe extern "C" fn fc_blob_output_unit(blob: *const fc_blob, unit: *mut u8) -> i32 {
+    if blob.is_null() || unit.is_null() {
+        return FC_ERR_NULL;
+    }
+    // SAFETY: `blob` is non-NULL readable `fc_blob` storage (the contract).
+    let Some(view) = (unsafe { view_of(blob) }) else {
+        return FC_ERR_NOT_INITIALISED;
+    };
+    // SAFETY: `unit` is non-NULL and points to a writable byte (the contract).
+    unsafe { unit.write(view.output_unit().code()) };
+    FC_OK
 }
 
 /// The format version a blob's header names (bytes 4..6), whatever its validity: to

@@ -38,9 +38,16 @@ fn open(bytes: &'static [u8]) -> Result<Box<fc_blob>, i32> {
 }
 
 fn init(blob: &fc_blob, m: u32) -> Result<Box<fc_compensator>, i32> {
+    init_at(blob, m, PERIOD)
+}
+
+/// The sample period the tests' compensators are made with, s (100 Hz).
+const PERIOD: f32 = 0.01;
+
+fn init_at(blob: &fc_blob, m: u32, period: f32) -> Result<Box<fc_compensator>, i32> {
     let mut comp = Box::new(MaybeUninit::<fc_compensator>::zeroed());
     // SAFETY: valid storage for both.
-    let rc = unsafe { fc_compensator_init(comp.as_mut_ptr(), blob, m) };
+    let rc = unsafe { fc_compensator_init(comp.as_mut_ptr(), blob, m, period) };
     // SAFETY: zeroed storage is a valid fc_compensator.
     let comp = unsafe { comp.assume_init() };
     if rc == FC_OK {
@@ -67,15 +74,31 @@ fn c_results_are_the_rust_results_bit_for_bit() {
             ),
         ] {
             let mut comp = init(&blob, id).unwrap();
-            let mut rust = Compensator::from_blob(BlobView::new(bytes).unwrap(), m).unwrap();
-            for k in 0..200 {
-                let t = -50.0 + 0.7 * k as f32;
+            let mut rust =
+                Compensator::from_blob(BlobView::new(bytes).unwrap(), m, PERIOD).unwrap();
+            for k in 0..400 {
+                let t = -50.0 + 0.35 * k as f32;
                 let u = [0.0045 + 1e-4 * k as f32, -0.0044, -0.5521];
                 let u = if k == 17 { [f32::NAN, 0.0, 0.0] } else { u };
                 let mut a = [0f32; 3];
-                // SAFETY: initialised storage, 3 floats in and out.
-                let st = unsafe { fc_compensate(&mut *comp, u.as_ptr(), t, a.as_mut_ptr()) };
-                let r = rust.compensate(u, t);
+                // every third sample on its own time step (0.3 s; a negative one at 101),
+                // one power cycle of the sensor at 250
+                let dt = if k == 101 { -1.0 } else { 0.3 };
+                if k == 250 {
+                    // SAFETY: initialised storage.
+                    assert_eq!(unsafe { fc_power_on(&mut *comp, 0.2) }, FC_OK);
+                    rust.power_on(0.2);
+                }
+                let (st, r) = if k % 3 == 2 {
+                    // SAFETY: initialised storage, 3 floats in and out.
+                    let st =
+                        unsafe { fc_compensate_dt(&mut *comp, u.as_ptr(), t, dt, a.as_mut_ptr()) };
+                    (st, rust.compensate_dt(u, t, dt))
+                } else {
+                    // SAFETY: initialised storage, 3 floats in and out.
+                    let st = unsafe { fc_compensate(&mut *comp, u.as_ptr(), t, a.as_mut_ptr()) };
+                    (st, rust.compensate(u, t))
+                };
                 assert_eq!(
                     a.map(f32::to_bits),
                     r.accel.map(f32::to_bits),
@@ -85,6 +108,44 @@ fn c_results_are_the_rust_results_bit_for_bit() {
             }
         }
     }
+}
+
+fn unhex(text: &str) -> &'static [u8] {
+    let digits: Vec<u8> = text.bytes().filter(u8::is_ascii_hexdigit).collect();
+    let bytes: Vec<u8> = digits
+        .chunks(2)
+        .map(|p| u8::from_str_radix(std::str::from_utf8(p).unwrap(), 16).unwrap())
+        .collect();
+    bytes.leak()
+}
+
+/// The blob's run id and output unit, copied out through the C interface.
+#[test]
+fn run_id_and_output_unit_are_read_from_c() {
+    let bytes = unhex(include_str!(
+        "../../firmware-core/tests/data/example_blob_physics.hex"
+    ));
+    let blob = open(bytes).unwrap();
+    let mut id = [0u8; FC_RUN_ID_LEN];
+    let mut unit = 0xFFu8;
+    // SAFETY: opened storage; 16 writable bytes; one writable byte.
+    unsafe {
+        assert_eq!(fc_blob_run_id(&*blob, id.as_mut_ptr()), FC_OK);
+        assert_eq!(fc_blob_output_unit(&*blob, &mut unit), FC_OK);
+        assert_eq!(fc_blob_run_id(&*blob, std::ptr::null_mut()), FC_ERR_NULL);
+        let never = MaybeUninit::<fc_blob>::zeroed().assume_init();
+        assert_eq!(
+            fc_blob_output_unit(&never, &mut unit),
+            FC_ERR_NOT_INITIALISED
+        );
+    }
+    assert_eq!(
+        id,
+        BlobView::new(bytes).unwrap().run_id().0,
+        "the committed blob's run id"
+    );
+    assert_eq!(id[0], 0xa1);
+    assert_eq!(unit, FC_UNIT_M_S2);
 }
 
 #[test]
@@ -107,8 +168,20 @@ fn refusals_are_status_codes() {
     assert_eq!(open(v2).err(), Some(FC_ERR_UNSUPPORTED_VERSION));
     // SAFETY: a readable slice.
     assert_eq!(unsafe { fc_blob_version(v2.as_ptr(), v2.len()) }, 2);
+    let v3 = unhex(include_str!(
+        "../../firmware-core/tests/data/example_blob_v3.hex"
+    ));
+    assert_eq!(open(v3).err(), Some(FC_ERR_UNSUPPORTED_VERSION));
+    // SAFETY: a readable slice.
+    assert_eq!(unsafe { fc_blob_version(v3.as_ptr(), v3.len()) }, 3);
     let blob = open(good).unwrap();
     assert_eq!(init(&blob, 7).err(), Some(FC_ERR_BAD_METHOD));
+    for bad in [0.0, -0.01, f32::NAN, f32::INFINITY] {
+        assert_eq!(
+            init_at(&blob, FC_METHOD_CONSTANTS, bad).err(),
+            Some(FC_ERR_BAD_SAMPLE_PERIOD)
+        );
+    }
     // the library is built with physics (firmware-core's default): a physics blob runs
     assert!(init(&open(blob_bytes(true)).unwrap(), FC_METHOD_CONSTANTS).is_ok());
 }
@@ -128,13 +201,19 @@ fn null_and_uninitialised_storage_are_refused() {
         assert_eq!(fc_blob_open(&mut blob, std::ptr::null(), 0), FC_ERR_NULL);
         let mut comp = MaybeUninit::<fc_compensator>::zeroed().assume_init();
         assert_eq!(
-            fc_compensator_init(&mut comp, &blob, 0),
+            fc_compensator_init(&mut comp, &blob, 0, PERIOD),
             FC_ERR_NOT_INITIALISED
         );
         assert_eq!(
-            fc_compensator_init(&mut comp, std::ptr::null(), 0),
+            fc_compensator_init(&mut comp, std::ptr::null(), 0, PERIOD),
             FC_ERR_NULL
         );
+        assert_eq!(
+            fc_compensate_dt(&mut comp, u.as_ptr(), 20.0, 0.1, a.as_mut_ptr()),
+            FC_STATUS_BAD_ARGUMENT
+        );
+        assert_eq!(fc_power_on(&mut comp, 0.0), FC_ERR_NOT_INITIALISED);
+        assert_eq!(fc_power_on(std::ptr::null_mut(), 0.0), FC_ERR_NULL);
         assert_eq!(
             fc_compensate(&mut comp, u.as_ptr(), 20.0, a.as_mut_ptr()),
             FC_STATUS_BAD_ARGUMENT
@@ -164,6 +243,16 @@ fn null_and_uninitialised_storage_are_refused() {
                 a.as_mut_ptr()
             ),
             0
+        );
+        assert_eq!(
+            fc_compensate_dt(
+                &mut *comp,
+                [0.0045, -0.0044, -0.5521].as_ptr(),
+                20.0,
+                f32::NAN,
+                a.as_mut_ptr()
+            ),
+            FC_STATUS_BAD_TIME_STEP
         );
     }
     assert!((a[2] - 1.0).abs() < 0.01);

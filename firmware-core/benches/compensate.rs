@@ -32,7 +32,7 @@ fn per_sample(c: &mut Criterion) {
             Method::CorrectResult(ErrorModel::Full),
         ),
     ] {
-        let mut comp = Compensator::new(cal, m).unwrap();
+        let mut comp = Compensator::new(cal, m, 0.01).unwrap();
         comp.compensate(u, 21.0);
         g.bench_function(name, |b| {
             b.iter(|| comp.compensate(black_box(u), black_box(21.0)))
@@ -76,7 +76,7 @@ fn update(c: &mut Criterion) {
         )
         .collect();
     for (name, cal) in &cases {
-        let mut comp = Compensator::new(cal, Method::CorrectConstants).unwrap();
+        let mut comp = Compensator::new(cal, Method::CorrectConstants, 0.01).unwrap();
         let mut k = 0u32;
         // the temperature moves on every call: an update (12 models + the inverse) each time
         g.bench_function(name.as_str(), |b| {

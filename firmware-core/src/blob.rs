@@ -1,7 +1,8 @@
 //! The coefficient blob flashed beside the firmware, validated and read in place.
 //!
-//! Format version 3: a fixed little-endian layout of f32 words behind a 16-byte header,
-//! CRC-32 last. [`BlobView::new`] checks a blob where it lies (flash) and the
+//! Format version 4: a fixed little-endian layout of f32 words behind a 16-byte header,
+//! CRC-32 last. Every time constant is in seconds; the blob holds no sample period (the
+//! firmware is told its own when it makes the compensator). [`BlobView::new`] checks a blob where it lies (flash) and the
 //! compensator reads the tables from those bytes: no copy of the tables on the stack or
 //! in RAM. [`Blob`] is the owned form the host builds, encodes and decodes with the same
 //! layout code.
@@ -17,8 +18,9 @@
 //! | 12 | flags: bit 0 clamp (other bits 0) |
 //! | 13 | serial length s (0..=64) |
 //! | 14 | physics section words (0, or [`PHYSICS_WORDS`]) |
-//! | 15 | 0 (reserved) |
+//! | 15 | output unit ([`OutputUnit`] code 0..=7) |
 //! | 16.. | serial (printable ASCII), zero-padded to a multiple of 4 bytes |
+//! | | run id: 16 bytes, the host-fit run that made the blob (all zero: none) |
 //! | | T0, t_min, t_max, update step (4 f32, C) |
 //! | | breakpoints (f32 each; piecewise-linear only) |
 //! | | rows x 12 coefficients (f32, [`crate::model::COEFF_NAMES`] order) |
@@ -34,12 +36,14 @@
 //! ([`Error::TableSize`], [`Error::Malformed`]); (5) the content: finite values, range,
 //! increasing breakpoints, physics ranges, K(T0) invertible.
 //!
-//! Older blobs: versions 1 and 2 also end with the CRC-32 of everything before it, but
-//! have no length field (bytes 6..10 are content, which matches its own complement with
-//! probability 2^-16). So when the length pair disagrees, the CRC is taken over the
-//! whole slice: a version-2 blob passes it and is refused as
-//! `UnsupportedVersion(2)`, while a version-3 blob with a flipped length bit fails it
-//! (`CrcMismatch`).
+//! Older blobs: version 3 has the same header (its time constants are per-sample
+//! constants for one sample period, byte 15 is 0 and there is no run id): it passes the
+//! CRC and is refused as `UnsupportedVersion(3)`. Versions 1 and 2 also end with the
+//! CRC-32 of everything before it, but have no length field (bytes 6..10 are content,
+//! which matches its own complement with probability 2^-16). So when the length pair
+//! disagrees, the CRC is taken over the whole slice: a version-2 blob passes it and is
+//! refused as `UnsupportedVersion(2)`, while a current blob with a flipped length bit
+//! fails it (`CrcMismatch`).
 #![deny(clippy::arithmetic_side_effects)]
 use crate::crc::crc32;
 use crate::error::Error;
@@ -49,16 +53,18 @@ use crate::temperature::{
     TempModel, MAX_BREAKPOINTS, MAX_POLY_ORDER, PHYSICS_WORDS,
 };
 
+pub use crate::format::FORMAT_VERSION;
+
 /// The four magic bytes a blob starts with.
 pub const MAGIC: [u8; 4] = *b"ATCB";
-/// The format version this firmware reads and writes (3: fixed f32 layout, read in place).
-pub const FORMAT_VERSION: u16 = 3;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 16;
 /// Bytes of the trailing checksum.
 pub const CRC_LEN: usize = 4;
 /// The largest blob this version can produce (16 breakpoints, 64-byte serial, physics).
-pub const MAX_BLOB_LEN: usize = 1024;
+pub const MAX_BLOB_LEN: usize = 1028;
+/// Bytes of the run id.
+pub const RUN_ID_LEN: usize = 16;
 /// Longest unit serial, bytes of printable ASCII (a recording's own unit names, such as
 /// "CATS-tag (real recording, see README.md)", fit).
 pub const MAX_SERIAL_LEN: usize = 64;
@@ -70,10 +76,114 @@ const ROW_BYTES: usize = 4 * N_COEFFS;
 const SCALAR_BYTES: usize = 16;
 const PHYSICS_BYTES: usize = 4 * PHYSICS_WORDS;
 
+/// The unit of the outputs the blob's K and U0 are in (the recording's `output_unit`):
+/// byte 15 of the header.
+#[repr(u8)]
+#[non_exhaustive]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum OutputUnit {
+    /// Not stated.
+    #[default]
+    Unstated = 0,
+    /// Volts.
+    Volt = 1,
+    /// Millivolts.
+    MilliVolt = 2,
+    /// Metres per second squared.
+    MetrePerSecond2 = 3,
+    /// Standard gravity, g.
+    G = 4,
+    /// Thousandths of g.
+    MilliG = 5,
+    /// Counts of a digital sensor.
+    Counts = 6,
+    /// A unit the recording format does not list (the recording names it).
+    Other = 7,
+}
+
+impl OutputUnit {
+    /// The unit of a code (byte 15); `None` for a code above 7.
+    pub const fn from_code(code: u8) -> Option<Self> {
+        Some(match code {
+            0 => OutputUnit::Unstated,
+            1 => OutputUnit::Volt,
+            2 => OutputUnit::MilliVolt,
+            3 => OutputUnit::MetrePerSecond2,
+            4 => OutputUnit::G,
+            5 => OutputUnit::MilliG,
+            6 => OutputUnit::Counts,
+            7 => OutputUnit::Other,
+            _ => return None,
+        })
+    }
+
+    /// The code written in byte 15.
+    pub const fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// As a recording's `output_unit` writes it (`unstated`, `other` for the two that
+    /// are none of its values).
+    pub const fn label(self) -> &'static str {
+        match self {
+            OutputUnit::Unstated => "unstated",
+            OutputUnit::Volt => "V",
+            OutputUnit::MilliVolt => "mV",
+            OutputUnit::MetrePerSecond2 => "m/s2",
+            OutputUnit::G => "g",
+            OutputUnit::MilliG => "mg",
+            OutputUnit::Counts => "counts",
+            OutputUnit::Other => "other",
+        }
+    }
+
+    /// The unit of a recording's `output_unit` value (recording-format.md: `V`, `mV`,
+    /// `m/s2` or `m/s^2`, `g`, `mg`, `counts`); any other label is [`OutputUnit::Other`].
+    pub fn from_label(label: &str) -> Self {
+        match label {
+            "V" => OutputUnit::Volt,
+            "mV" => OutputUnit::MilliVolt,
+            "m/s2" | "m/s^2" => OutputUnit::MetrePerSecond2,
+            "g" => OutputUnit::G,
+            "mg" => OutputUnit::MilliG,
+            "counts" => OutputUnit::Counts,
+            _ => OutputUnit::Other,
+        }
+    }
+}
+
+/// The id of the host-fit run that made a blob (16 bytes; all zero: none), so a blob
+/// found on a unit leads back to the run's record.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RunId(pub [u8; RUN_ID_LEN]);
+
+impl RunId {
+    /// No run id.
+    pub const NONE: RunId = RunId([0; RUN_ID_LEN]);
+
+    /// Whether this is no run id (all zero).
+    pub fn is_none(&self) -> bool {
+        self.0.iter().all(|b| *b == 0)
+    }
+}
+
+impl core::fmt::Display for RunId {
+    /// 32 lowercase hex digits.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        for b in self.0 {
+            write!(f, "{b:02x}")?;
+        }
+        Ok(())
+    }
+}
+
 /// Where everything lies in a blob of a given shape: the one definition of the layout,
 /// used by the encoder and by [`BlobView`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Layout {
+    run_id: usize,
     scalars: usize,
     breakpoints: usize,
     table: usize,
@@ -86,7 +196,8 @@ impl Layout {
     /// there. The sizes are bounded by the header's u8 fields, so nothing overflows.
     const fn new(kind: ModelKind, rows: usize, serial: usize, physics: bool) -> Layout {
         let padded = serial.saturating_add(3) & !3;
-        let scalars = HEADER_LEN.saturating_add(padded);
+        let run_id = HEADER_LEN.saturating_add(padded);
+        let scalars = run_id.saturating_add(RUN_ID_LEN);
         let breakpoints = scalars.saturating_add(SCALAR_BYTES);
         let bp_bytes = match kind {
             ModelKind::Poly => 0,
@@ -96,6 +207,7 @@ impl Layout {
         let physics_at = table.saturating_add(rows.saturating_mul(ROW_BYTES));
         let crc = physics_at.saturating_add(if physics { PHYSICS_BYTES } else { 0 });
         Layout {
+            run_id,
             scalars,
             breakpoints,
             table,
@@ -215,7 +327,7 @@ impl<'a> BlobView<'a> {
     /// The header's fields against the layout (CRC, magic and version already checked).
     fn parse_header(bytes: &'a [u8]) -> Result<Self, Error> {
         let h = bytes.first_chunk::<HEADER_LEN>().ok_or(Error::Truncated)?;
-        let [_, _, _, _, _, _, _, _, _, _, model, rows, flags, serial, physics, reserved] = *h;
+        let [_, _, _, _, _, _, _, _, _, _, model, rows, flags, serial, physics, unit] = *h;
         let kind = match model {
             MODEL_POLY => ModelKind::Poly,
             MODEL_PWL => ModelKind::Pwl,
@@ -233,7 +345,10 @@ impl<'a> BlobView<'a> {
             PHYSICS_WORDS => true,
             _ => return Err(Error::Malformed),
         };
-        if flags & !FLAG_CLAMP != 0 || reserved != 0 || usize::from(serial) > MAX_SERIAL_LEN {
+        if flags & !FLAG_CLAMP != 0
+            || OutputUnit::from_code(unit).is_none()
+            || usize::from(serial) > MAX_SERIAL_LEN
+        {
             return Err(Error::Malformed);
         }
         let l = Layout::new(kind, usize::from(rows), usize::from(serial), has_physics);
@@ -242,7 +357,7 @@ impl<'a> BlobView<'a> {
         }
         let serial_end = HEADER_LEN.saturating_add(usize::from(serial));
         let text = bytes.get(HEADER_LEN..serial_end).ok_or(Error::Malformed)?;
-        let padding = bytes.get(serial_end..l.scalars).ok_or(Error::Malformed)?;
+        let padding = bytes.get(serial_end..l.run_id).ok_or(Error::Malformed)?;
         if !text.iter().all(|&b| serial_byte(b)) || padding.iter().any(|&b| b != 0) {
             return Err(Error::Malformed);
         }
@@ -273,6 +388,23 @@ impl<'a> BlobView<'a> {
     /// The blob's bytes.
     pub fn bytes(&self) -> &'a [u8] {
         self.bytes
+    }
+
+    /// The unit of the outputs K and U0 are in (validated: a known code).
+    pub fn output_unit(&self) -> OutputUnit {
+        self.bytes
+            .get(15)
+            .and_then(|c| OutputUnit::from_code(*c))
+            .unwrap_or_default()
+    }
+
+    /// The id of the host-fit run that made the blob (all zero: none).
+    pub fn run_id(&self) -> RunId {
+        let at = usize::from(self.scalars).saturating_sub(RUN_ID_LEN);
+        self.bytes
+            .get(at..)
+            .and_then(|s| s.first_chunk::<RUN_ID_LEN>())
+            .map_or(RunId::NONE, |b| RunId(*b))
     }
 
     /// The unit's serial number: printable ASCII, so no UTF-8 decoder is linked.
@@ -307,6 +439,8 @@ impl<'a> BlobView<'a> {
         };
         Blob {
             serial,
+            output_unit: self.output_unit(),
+            run_id: self.run_id(),
             calibration: Calibration {
                 t0_c: self.t0_c(),
                 t_min_c: self.t_min_c(),
@@ -320,7 +454,7 @@ impl<'a> BlobView<'a> {
     }
 }
 
-/// A serial is printable ASCII (a unit name), in format 3.
+/// A serial is printable ASCII (a unit name).
 fn serial_byte(b: u8) -> bool {
     (0x20..0x7F).contains(&b)
 }
@@ -432,6 +566,10 @@ impl Source for BlobView<'_> {
 pub struct Blob {
     /// The unit's serial number.
     pub serial: heapless::String<MAX_SERIAL_LEN>,
+    /// The unit of the outputs K and U0 are in.
+    pub output_unit: OutputUnit,
+    /// The host-fit run that made the blob ([`RunId::NONE`]: none).
+    pub run_id: RunId,
     /// Temperature model and its use.
     pub calibration: Calibration<f32>,
 }
@@ -467,7 +605,7 @@ impl Blob {
             ModelKind::Poly => MODEL_POLY,
             ModelKind::Pwl => MODEL_PWL,
         };
-        // validated: rows <= 16, serial <= 32 bytes, physics words = PHYSICS_WORDS
+        // validated: rows <= 16, serial <= MAX_SERIAL_LEN bytes, physics words = PHYSICS_WORDS
         let small = |v: usize| u8::try_from(v).map_err(|_| Error::TableSize);
         let physics_words = if cal.physics.is_some() {
             PHYSICS_WORDS
@@ -490,12 +628,13 @@ impl Blob {
             if cal.clamp { FLAG_CLAMP } else { 0 },
             small(serial.len())?,
             small(physics_words)?,
-            0,
+            self.output_unit.code(),
         ];
         let mut w = Writer { out, at: 0 };
         w.bytes(&header)?;
         w.bytes(serial)?;
-        w.at = l.scalars;
+        w.at = l.run_id;
+        w.bytes(&self.run_id.0)?;
         for v in [cal.t0_c, cal.t_min_c, cal.t_max_c, cal.update_step_c] {
             w.f32(v)?;
         }
@@ -563,10 +702,12 @@ pub fn example_blob() -> Blob {
          -0.00068396, -0.01478830, -0.00027167, 0.00359778, -0.00643609, -0.00223732],
     ];
     let mut serial = heapless::String::new();
-    // "PAPER-UNIT" is 10 bytes: always fits the 32-byte serial.
+    // "PAPER-UNIT" is 10 bytes: always fits the serial.
     let _ = serial.push_str("PAPER-UNIT");
     Blob {
         serial,
+        output_unit: OutputUnit::Volt,
+        run_id: RunId::NONE,
         calibration: Calibration {
             t0_c: 20.0,
             t_min_c: -40.0,
@@ -586,17 +727,16 @@ pub fn example_blob() -> Blob {
 /// examples, benchmarks and tests (set it as `calibration.physics` of [`example_blob`]).
 pub fn example_physics() -> Physics<f32> {
     Physics {
-        sample_period_s: 1.0,
-        lag_alpha: 0.01,
+        lag_tau_s: 100.0,
         rate: [0.02, 0.0, -0.01],
-        rate_alpha: 0.03,
+        rate_tau_s: 10.0,
         hysteresis: [1e-4, 0.0, 0.0],
         hysteresis_threshold_c: 0.5,
         hysteresis_initial: 1.0,
         k2: [1e-4, 0.0, 0.0],
         asymmetry: [0.0, 1e-4, 0.0],
         warmup: [2e-4, 0.0, 0.0],
-        warmup_decay: 0.999,
+        warmup_tau_s: 1000.0,
     }
 }
 
@@ -616,11 +756,40 @@ mod tests {
         let b = example_blob();
         let mut buf = [0u8; MAX_BLOB_LEN];
         let n = b.encode(&mut buf).unwrap();
-        assert_eq!(n, 204);
+        assert_eq!(n, 220);
         assert_eq!(Blob::decode(&buf[..n]).unwrap(), b);
         let v = BlobView::new(&buf[..n]).unwrap();
         assert_eq!(v.serial(), b"PAPER-UNIT");
+        assert_eq!(v.output_unit(), OutputUnit::Volt);
+        assert!(v.run_id().is_none());
         assert_eq!(BlobView::from_region(&buf).unwrap().bytes().len(), n);
+    }
+
+    #[test]
+    fn output_units_and_run_ids() {
+        for code in 0..=7u8 {
+            let u = OutputUnit::from_code(code).unwrap();
+            assert_eq!(u.code(), code);
+            if !matches!(u, OutputUnit::Unstated | OutputUnit::Other) {
+                assert_eq!(OutputUnit::from_label(u.label()), u);
+            }
+        }
+        assert_eq!(OutputUnit::from_code(8), None);
+        assert_eq!(OutputUnit::from_label("m/s^2"), OutputUnit::MetrePerSecond2);
+        assert_eq!(OutputUnit::from_label("furlongs"), OutputUnit::Other);
+        let id = RunId(core::array::from_fn(|i| (i * 17) as u8));
+        assert_eq!(id.to_string(), "00112233445566778899aabbccddeeff");
+        assert!(!id.is_none() && RunId::NONE.is_none());
+        let mut b = example_blob();
+        b.run_id = id;
+        b.output_unit = OutputUnit::MetrePerSecond2;
+        let mut buf = [0u8; MAX_BLOB_LEN];
+        let n = b.encode(&mut buf).unwrap();
+        let v = BlobView::new(&buf[..n]).unwrap();
+        assert_eq!(
+            (v.run_id(), v.output_unit()),
+            (id, OutputUnit::MetrePerSecond2)
+        );
     }
 
     #[test]

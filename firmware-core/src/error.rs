@@ -17,8 +17,8 @@ pub enum Error {
     /// The blob has a valid checksum but a format version this firmware does not read
     /// (an older blob: re-export it with the current host-fit).
     UnsupportedVersion(u16),
-    /// The header and the layout disagree, reserved bytes are not zero, or the serial
-    /// is not printable ASCII (a valid checksum over content no encoder of this version
+    /// The header and the layout disagree, reserved bytes are not zero, the output-unit
+    /// code is unknown, or the serial is not printable ASCII (a valid checksum over content no encoder of this version
     /// writes; on encoding: a serial that is not printable ASCII).
     Malformed,
     /// Bytes follow the length the header declares.
@@ -29,7 +29,9 @@ pub enum Error {
     BreakpointsNotIncreasing,
     /// A value that must be finite is NaN or infinite.
     NonFinite,
-    /// The valid temperature range is empty or the update step is negative.
+    /// The valid temperature range is empty, the update step is negative, or a physics
+    /// term is out of its range (a negative time constant or threshold, an initial
+    /// direction other than -1, 0, +1).
     BadRange,
     /// The matrix K is singular (not invertible) at the reference temperature.
     Singular,
@@ -38,6 +40,9 @@ pub enum Error {
     /// The calibration has in-flight physics terms but the firmware was built without
     /// the `physics` feature (compensating without them would be silently wrong).
     PhysicsNotBuiltIn,
+    /// The sample period given to the compensator is not a positive, finite number of
+    /// seconds.
+    BadSamplePeriod,
 }
 
 impl fmt::Display for Error {
@@ -49,7 +54,7 @@ impl fmt::Display for Error {
             Error::UnsupportedVersion(v) => write!(
                 f,
                 "unsupported blob format version {v} (this firmware reads version {})",
-                crate::blob::FORMAT_VERSION
+                crate::format::FORMAT_VERSION
             ),
             Error::Malformed => f.write_str("blob header and layout disagree"),
             Error::TrailingBytes => f.write_str("unexpected bytes after the blob's declared end"),
@@ -58,11 +63,16 @@ impl fmt::Display for Error {
                 f.write_str("breakpoints are not strictly increasing")
             }
             Error::NonFinite => f.write_str("a table value is NaN or infinite"),
-            Error::BadRange => f.write_str("invalid temperature range or update step"),
+            Error::BadRange => {
+                f.write_str("invalid temperature range, update step or physics term")
+            }
             Error::Singular => f.write_str("matrix K is singular at the reference temperature"),
             Error::BufferTooSmall => f.write_str("output buffer too small"),
             Error::PhysicsNotBuiltIn => {
                 f.write_str("the blob has physics terms; firmware built without `physics`")
+            }
+            Error::BadSamplePeriod => {
+                f.write_str("the sample period is not a positive, finite number of seconds")
             }
         }
     }

@@ -12,7 +12,8 @@
 //! // `bytes` is the coefficient blob flashed beside the firmware: validated where it
 //! // lies, and read there by the compensator (no copy of the tables).
 //! let blob = BlobView::new(&bytes).expect("a valid blob");
-//! let mut comp = Compensator::from_blob(blob, Method::CorrectConstants)
+//! // the MCU samples at 100 Hz: the compensator is told so when it is made
+//! let mut comp = Compensator::from_blob(blob, Method::CorrectConstants, 0.01)
 //!     .expect("K(T0) invertible");
 //! let out = comp.compensate([0.0045, -0.0044, -0.5521], 21.3);
 //! assert!(out.status.is_ok());
@@ -21,8 +22,9 @@
 //!
 //! # Features
 //! - `physics` (default): the in-flight terms found by `host-fit diagnose` (thermal lag,
-//!   temperature rate, hysteresis, warm-up, K2, scale asymmetry). Without it the
-//!   compensation path is about 1.3 KiB smaller, and a blob that carries such terms is
+//!   temperature rate, hysteresis, warm-up, K2, scale asymmetry), on the sample period the
+//!   compensator is given (or each sample's own time step, [`compensate::Compensator::compensate_dt`]).
+//!   Without it the compensation path is smaller, and a blob that carries such terms is
 //!   refused by [`compensate::Compensator::new`] with [`Error::PhysicsNotBuiltIn`].
 //! - `defmt`: `defmt::Format` on the public types.
 // no_std always (the error type uses core::error::Error); unit tests use std.
@@ -42,6 +44,8 @@ pub mod blob;
 pub mod compensate;
 pub mod crc;
 pub mod error;
+pub mod exp;
+pub mod format;
 pub mod inflight;
 pub mod model;
 pub mod real;

@@ -38,6 +38,10 @@ pub trait Real:
     fn sqrt(self) -> Self;
     /// Neither NaN nor infinite.
     fn is_finite(self) -> bool;
+    /// `exp(-u) - 1` for `u >= 0` (a negative `u` is treated as 0, NaN stays NaN): f32
+    /// by [`crate::exp::expm1_neg_f32`] (no soft-double; relative error within
+    /// [`crate::exp::EXPM1_NEG_F32_BOUND`]), f64 by libm's `expm1` (the host).
+    fn expm1_neg(self) -> Self;
 }
 
 impl Real for f32 {
@@ -69,6 +73,10 @@ impl Real for f32 {
     fn is_finite(self) -> bool {
         f32::is_finite(self)
     }
+    #[inline]
+    fn expm1_neg(self) -> Self {
+        crate::exp::expm1_neg_f32(self)
+    }
 }
 
 impl Real for f64 {
@@ -99,5 +107,15 @@ impl Real for f64 {
     #[inline]
     fn is_finite(self) -> bool {
         f64::is_finite(self)
+    }
+    #[inline]
+    fn expm1_neg(self) -> Self {
+        if self > 0.0 {
+            libm::expm1(-self)
+        } else if self.is_nan() {
+            self
+        } else {
+            0.0
+        }
     }
 }

@@ -58,115 +58,107 @@ pub struct Calibration<R> {
     pub physics: Option<Physics<R>>,
 }
 
-/// Terms beyond the paper's model (physics-catalogue.md), applied in flight. Per-sample
-/// constants are computed on the host for the sample period, so the firmware needs no
-/// `exp` (libm's `expf` works in f64 and would pull soft-double code in).
-#[derive(Clone, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Physics<R> {
-    /// The sample period the constants below are for, s.
-    pub sample_period_s: R,
-    /// `thermal_lag`: one-pole filter on the temperature input,
-    /// `T_eff += lag_alpha (T - T_eff)` (`1 - exp(-dt/tau)`; 1 = no lag).
-    pub lag_alpha: R,
-    /// `temp_rate`: offset per C/s of the temperature rate, per axis (output units).
-    pub rate: [R; 3],
-    /// Low-pass of the temperature whose difference is the rate (`1 - exp(-dt/tau_r)`).
-    pub rate_alpha: R,
-    /// `hysteresis`: offsets split `+-h/2` by the direction of the last change, per axis.
-    pub hysteresis: [R; 3],
-    /// A change of more than this (C) sets the direction.
-    pub hysteresis_threshold_c: R,
-    /// Direction at power-on (+1 heating, -1 cooling, 0 unknown).
-    pub hysteresis_initial: R,
-    /// `nonlinearity_k2`: `U_i += k2_i a_i^2`, per axis (output units per g^2).
-    pub k2: [R; 3],
-    /// `scale_asymmetry`: `U_i += c_i |a_i|` (`c_i = K_ii delta_i`), per axis.
-    pub asymmetry: [R; 3],
-    /// `warmup_drift`: `U0_i += d_i w`, `w` = 1 at power-on, times `warmup_decay` per sample.
-    pub warmup: [R; 3],
-    /// `exp(-dt / tau_w)`.
-    pub warmup_decay: R,
+/// Defines [`Physics`] from one list of its terms (name, `one` word or `axes` x y z, type,
+/// neutral value), in the order a blob stores them: the
+/// struct, [`PHYSICS_WORDS`], [`PHYSICS_TERM_NAMES`], the words in and out, the neutral
+/// set and the conversion between float types all follow from the list, so a new term is
+/// one line (at the end, with the blob's format version bumped).
+macro_rules! physics_terms {
+    ($( $(#[doc = $doc:literal])* $name:ident : $kind:ident $ty:ty = $neutral:expr ; )*) => {
+        /// Terms beyond the paper's model (physics-catalogue.md), applied in flight by
+        /// [`crate::inflight::Machines`]. Every time constant is in seconds: the firmware
+        /// is told its sample period (or each sample's time step) and derives the per-step
+        /// constants itself.
+        #[derive(Clone, Debug, PartialEq)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+        pub struct Physics<R> {
+            $( $(#[doc = $doc])* pub $name: $ty, )*
+        }
+
+        /// Words (f32 in a blob) of the physics terms: the length of [`Physics::to_words`].
+        pub const PHYSICS_WORDS: usize = 0 $( + physics_terms!(@n $kind) )*;
+
+        /// The terms' names, in blob order (a per-axis term is one name for its 3 words).
+        pub const PHYSICS_TERM_NAMES: &[&str] = &[$( stringify!($name) ),*];
+
+        impl<R: Real> Physics<R> {
+            /// The terms in the order a blob stores them (per-axis terms x, y, z).
+            pub fn to_words(&self) -> [R; PHYSICS_WORDS] {
+                let mut out = [R::ZERO; PHYSICS_WORDS];
+                let mut slots = out.iter_mut();
+                $(
+                    for v in physics_terms!(@words $kind, self.$name) {
+                        if let Some(s) = slots.next() {
+                            *s = v;
+                        }
+                    }
+                )*
+                out
+            }
+
+            /// [`Physics::from_words`] with word `i` given by `w(i)`: a blob's section is
+            /// read field by field where it lies, without a copy of the section.
+            #[inline(always)]
+            pub fn from_word_fn(w: impl Fn(usize) -> R) -> Self {
+                let at = 0usize;
+                $( let (at, $name) = physics_terms!(@read $kind, w, at); )*
+                let _ = at;
+                Physics { $( $name ),* }
+            }
+
+            /// No physics: no lag, no offsets, no K2 or asymmetry.
+            pub fn neutral() -> Self {
+                Physics { $( $name: physics_terms!(@neutral $kind, $neutral) ),* }
+            }
+
+            /// Convert to another float type.
+            pub fn convert<S: Real>(&self) -> Physics<S> {
+                let c = |v: R| S::from_f64(v.to_f64());
+                Physics { $( $name: physics_terms!(@convert $kind, c, self.$name) ),* }
+            }
+        }
+    };
+    (@n one) => { 1 };
+    (@n axes) => { 3 };
+    (@words one, $v:expr) => { [$v] };
+    (@words axes, $v:expr) => { $v };
+    (@read one, $w:ident, $at:ident) => { ($at + 1, $w($at)) };
+    (@read axes, $w:ident, $at:ident) => { ($at + 3, [$w($at), $w($at + 1), $w($at + 2)]) };
+    (@neutral one, $v:expr) => { R::from_f32($v) };
+    (@neutral axes, $v:expr) => { [R::from_f32($v); 3] };
+    (@convert one, $c:ident, $v:expr) => { $c($v) };
+    (@convert axes, $c:ident, $v:expr) => { $v.map($c) };
 }
 
-/// Words (f32 in a blob) of the physics terms: the length of [`Physics::to_words`].
-pub const PHYSICS_WORDS: usize = 21;
+physics_terms! {
+    /// `thermal_lag`: time constant of the one-pole filter from the sensor's temperature
+    /// to the element's, s (0 = no lag).
+    lag_tau_s: one R = 0.0;
+    /// `temp_rate`: offset per C/s of the temperature rate, per axis (output units).
+    rate: axes [R; 3] = 0.0;
+    /// Time constant of the low-pass whose change is the rate, s (0 = the plain
+    /// difference of successive steps).
+    rate_tau_s: one R = 0.0;
+    /// `hysteresis`: offsets split `+-h/2` by the direction of the last change, per axis.
+    hysteresis: axes [R; 3] = 0.0;
+    /// A change of more than this (C) sets the direction.
+    hysteresis_threshold_c: one R = 0.0;
+    /// Direction at power-on (+1 heated, -1 cooled, 0 unknown), until the first change.
+    hysteresis_initial: one R = 0.0;
+    /// `nonlinearity_k2`: `U_i += k2_i a_i^2`, per axis (output units per g^2).
+    k2: axes [R; 3] = 0.0;
+    /// `scale_asymmetry`: `U_i += c_i |a_i|` (`c_i = K_ii delta_i`), per axis.
+    asymmetry: axes [R; 3] = 0.0;
+    /// `warmup_drift`: `U0_i += d_i exp(-t_on / tau_w)`, `t_on` the time since power-on.
+    warmup: axes [R; 3] = 0.0;
+    /// The warm-up's time constant tau_w, s (0 = no warm-up term).
+    warmup_tau_s: one R = 0.0;
+}
 
 impl<R: Real> Physics<R> {
-    /// The terms in the order a blob stores them. This and [`Physics::from_words`] are
-    /// the one definition of the blob's physics section: a new term goes at the end,
-    /// with [`PHYSICS_WORDS`] and the blob's format version bumped.
-    pub fn to_words(&self) -> [R; PHYSICS_WORDS] {
-        let [r0, r1, r2] = self.rate;
-        let [h0, h1, h2] = self.hysteresis;
-        let [k0, k1, k2] = self.k2;
-        let [a0, a1, a2] = self.asymmetry;
-        let [w0, w1, w2] = self.warmup;
-        [
-            self.sample_period_s,
-            self.lag_alpha,
-            r0,
-            r1,
-            r2,
-            self.rate_alpha,
-            h0,
-            h1,
-            h2,
-            self.hysteresis_threshold_c,
-            self.hysteresis_initial,
-            k0,
-            k1,
-            k2,
-            a0,
-            a1,
-            a2,
-            w0,
-            w1,
-            w2,
-            self.warmup_decay,
-        ]
-    }
-
-    /// No physics: no lag (alpha 1), no offsets, no K2 or asymmetry.
-    pub fn neutral() -> Self {
-        let z = [R::ZERO; 3];
-        Physics {
-            sample_period_s: R::ONE,
-            lag_alpha: R::ONE,
-            rate: z,
-            rate_alpha: R::ONE,
-            hysteresis: z,
-            hysteresis_threshold_c: R::ZERO,
-            hysteresis_initial: R::ZERO,
-            k2: z,
-            asymmetry: z,
-            warmup: z,
-            warmup_decay: R::ZERO,
-        }
-    }
-
     /// The inverse of [`Physics::to_words`].
     pub fn from_words(w: &[R; PHYSICS_WORDS]) -> Self {
         Self::from_word_fn(|i| w.get(i).copied().unwrap_or(R::NAN))
-    }
-
-    /// [`Physics::from_words`] with word `i` given by `w(i)`: a blob's section is read
-    /// field by field where it lies, without a copy of the section.
-    #[inline(always)]
-    pub fn from_word_fn(w: impl Fn(usize) -> R) -> Self {
-        Physics {
-            sample_period_s: w(0),
-            lag_alpha: w(1),
-            rate: [w(2), w(3), w(4)],
-            rate_alpha: w(5),
-            hysteresis: [w(6), w(7), w(8)],
-            hysteresis_threshold_c: w(9),
-            hysteresis_initial: w(10),
-            k2: [w(11), w(12), w(13)],
-            asymmetry: [w(14), w(15), w(16)],
-            warmup: [w(17), w(18), w(19)],
-            warmup_decay: w(20),
-        }
     }
 
     /// Check finiteness and ranges.
@@ -177,38 +169,20 @@ impl<R: Real> Physics<R> {
         self.validate_ranges()
     }
 
-    /// The range checks of [`Physics::validate`] (values known to be finite).
+    /// The range checks of [`Physics::validate`] (values known to be finite): time
+    /// constants and the threshold not negative, the initial direction -1, 0 or +1.
     pub fn validate_ranges(&self) -> Result<(), Error> {
-        let unit = |v: R| v > R::ZERO && v <= R::ONE;
-        if self.sample_period_s <= R::ZERO
-            || !unit(self.lag_alpha)
-            || !unit(self.rate_alpha)
-            || self.warmup_decay < R::ZERO
-            || self.warmup_decay > R::ONE
-            || self.hysteresis_threshold_c < R::ZERO
+        let z = R::ZERO;
+        let initial = self.hysteresis_initial;
+        if self.lag_tau_s < z
+            || self.rate_tau_s < z
+            || self.warmup_tau_s < z
+            || self.hysteresis_threshold_c < z
+            || !(initial == z || initial == R::ONE || initial == -R::ONE)
         {
             return Err(Error::BadRange);
         }
         Ok(())
-    }
-
-    /// Convert to another float type.
-    pub fn convert<S: Real>(&self) -> Physics<S> {
-        let c = |v: R| S::from_f64(v.to_f64());
-        let a = |v: [R; 3]| v.map(c);
-        Physics {
-            sample_period_s: c(self.sample_period_s),
-            lag_alpha: c(self.lag_alpha),
-            rate: a(self.rate),
-            rate_alpha: c(self.rate_alpha),
-            hysteresis: a(self.hysteresis),
-            hysteresis_threshold_c: c(self.hysteresis_threshold_c),
-            hysteresis_initial: c(self.hysteresis_initial),
-            k2: a(self.k2),
-            asymmetry: a(self.asymmetry),
-            warmup: a(self.warmup),
-            warmup_decay: c(self.warmup_decay),
-        }
     }
 }
 
@@ -587,21 +561,45 @@ mod tests {
     #[test]
     fn physics_words_round_trip_in_the_documented_order() {
         let p = Physics {
-            sample_period_s: 1.0,
-            lag_alpha: 2.0,
-            rate: [3.0, 4.0, 5.0],
-            rate_alpha: 6.0,
-            hysteresis: [7.0, 8.0, 9.0],
-            hysteresis_threshold_c: 10.0,
-            hysteresis_initial: 11.0,
-            k2: [12.0, 13.0, 14.0],
-            asymmetry: [15.0, 16.0, 17.0],
-            warmup: [18.0, 19.0, 20.0],
-            warmup_decay: 21.0,
+            lag_tau_s: 1.0,
+            rate: [2.0, 3.0, 4.0],
+            rate_tau_s: 5.0,
+            hysteresis: [6.0, 7.0, 8.0],
+            hysteresis_threshold_c: 9.0,
+            hysteresis_initial: 10.0,
+            k2: [11.0, 12.0, 13.0],
+            asymmetry: [14.0, 15.0, 16.0],
+            warmup: [17.0, 18.0, 19.0],
+            warmup_tau_s: 20.0,
         };
+        assert_eq!(PHYSICS_WORDS, 20);
+        assert_eq!(PHYSICS_TERM_NAMES.len(), 10);
+        assert_eq!(PHYSICS_TERM_NAMES[0], "lag_tau_s");
         let w = p.to_words();
         assert_eq!(w, core::array::from_fn(|i| (i + 1) as f64));
         assert_eq!(Physics::from_words(&w), p);
+        assert_eq!(p.convert::<f32>().convert::<f64>(), p);
+        assert_eq!(Physics::<f64>::neutral().to_words(), [0.0; PHYSICS_WORDS]);
+    }
+
+    #[test]
+    fn physics_ranges() {
+        let ok = Physics::<f64>::neutral();
+        assert_eq!(ok.validate(), Ok(()));
+        let bad = |f: &dyn Fn(&mut Physics<f64>)| {
+            let mut p = ok.clone();
+            f(&mut p);
+            p.validate()
+        };
+        assert_eq!(bad(&|p| p.lag_tau_s = -1.0), Err(Error::BadRange));
+        assert_eq!(bad(&|p| p.rate_tau_s = -1.0), Err(Error::BadRange));
+        assert_eq!(bad(&|p| p.warmup_tau_s = -1.0), Err(Error::BadRange));
+        assert_eq!(
+            bad(&|p| p.hysteresis_threshold_c = -0.1),
+            Err(Error::BadRange)
+        );
+        assert_eq!(bad(&|p| p.hysteresis_initial = 0.5), Err(Error::BadRange));
+        assert_eq!(bad(&|p| p.k2 = [0.0, f64::NAN, 0.0]), Err(Error::NonFinite));
     }
 
     #[test]

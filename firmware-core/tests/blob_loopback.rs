@@ -1,12 +1,17 @@
-//! Golden vectors of the blob (format 3) and the compensator reading it in place, and
-//! corruption of every kind, each refused with the right error.
+//! Golden vectors of the blob (format 4) and the compensator reading it in place (the
+//! tables alone, and with physics terms on an uneven clock), and corruption of every
+//! kind, each refused with the right error.
 //!
 //! The expected bytes and f32 output bits are committed under tests/data/ and checked
 //! against an independent reading of the documented layout. If the format changes on
 //! purpose, regenerate them with `UPDATE_GOLDEN=1 cargo test -p firmware-core --test
-//! blob_loopback` and bump `FORMAT_VERSION`. The output bits did not change from format
-//! 2 to 3: the tables read from flash give the same bits as the owned ones.
-use firmware_core::blob::{example_blob, Blob, BlobView, FORMAT_VERSION, MAX_BLOB_LEN};
+//! blob_loopback` and bump `FORMAT_VERSION`. The tables' output bits did not change from
+//! format 2 to 3 to 4 (example_outputs.txt): the tables read from flash give the same
+//! bits as the owned ones. The physics outputs are new in format 4 (time constants in
+//! seconds, the machines on the sample's own time step).
+use firmware_core::blob::{
+    example_blob, Blob, BlobView, OutputUnit, RunId, FORMAT_VERSION, MAX_BLOB_LEN,
+};
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
 use firmware_core::temperature::{Physics, TempModel};
 use firmware_core::Error;
@@ -90,23 +95,125 @@ fn golden_bytes_follow_the_documented_layout() {
     let b = encoded();
     golden("example_blob.hex", &hex(&b));
     // read back by hand, as the table in blob.rs documents it
-    assert_eq!(b.len(), 204);
+    assert_eq!(b.len(), 220);
     assert_eq!(&b[0..4], b"ATCB");
-    assert_eq!(u16::from_le_bytes([b[4], b[5]]), 3);
-    assert_eq!(u16::from_le_bytes([b[6], b[7]]), 204);
-    assert_eq!(u16::from_le_bytes([b[8], b[9]]), !204u16);
-    assert_eq!(&b[10..16], &[2, 3, 0, 10, 0, 0]); // pwl, 3 rows, no clamp, serial 10, no physics
+    assert_eq!(u16::from_le_bytes([b[4], b[5]]), 4);
+    assert_eq!(u16::from_le_bytes([b[6], b[7]]), 220);
+    assert_eq!(u16::from_le_bytes([b[8], b[9]]), !220u16);
+    // pwl, 3 rows, no clamp, serial 10, no physics, output unit V (code 1)
+    assert_eq!(&b[10..16], &[2, 3, 0, 10, 0, 1]);
     assert_eq!(&b[16..28], b"PAPER-UNIT\0\0");
-    let scalars: Vec<f32> = (0..4).map(|k| f32_le(&b, 28 + 4 * k)).collect();
+    assert_eq!(&b[28..44], &[0; 16]); // no run id
+    let scalars: Vec<f32> = (0..4).map(|k| f32_le(&b, 44 + 4 * k)).collect();
     assert_eq!(scalars, [20.0, -40.0, 70.0, 0.1]);
-    let bps: Vec<f32> = (0..3).map(|k| f32_le(&b, 44 + 4 * k)).collect();
+    let bps: Vec<f32> = (0..3).map(|k| f32_le(&b, 60 + 4 * k)).collect();
     assert_eq!(bps, [-40.0, 20.0, 70.0]);
-    assert_eq!(f32_le(&b, 56), -0.550_742_6); // kxx at -40 C, the paper's Table 1
-    assert_eq!(f32_le(&b, 56 + 48 + 44), -0.003_470_99); // u0z at +20 C
+    assert_eq!(f32_le(&b, 72), -0.550_742_6); // kxx at -40 C, the paper's Table 1
+    assert_eq!(f32_le(&b, 72 + 48 + 44), -0.003_470_99); // u0z at +20 C
     assert_eq!(
-        u32::from_le_bytes(b[200..204].try_into().unwrap()),
-        crc32(&b[..200])
+        u32::from_le_bytes(b[216..220].try_into().unwrap()),
+        crc32(&b[..216])
     );
+}
+
+/// The physics section in format 4: every time constant in seconds, in the documented
+/// word order, behind the tables; the run id and the output unit where the layout says.
+#[test]
+fn golden_physics_blob_follows_the_documented_layout() {
+    let b = encode(&physics_blob());
+    golden("example_blob_physics.hex", &hex(&b));
+    assert_eq!(b.len(), 220 + 80);
+    assert_eq!(b[14], 20); // physics words
+    assert_eq!(b[15], 3); // m/s2
+    assert_eq!(&b[28..44], &RUN_ID.0);
+    let words: Vec<f32> = (0..20).map(|k| f32_le(&b, 216 + 4 * k)).collect();
+    let p = physics();
+    assert_eq!(words[0], p.lag_tau_s);
+    assert_eq!(words[1..4], p.rate);
+    assert_eq!(words[4], p.rate_tau_s);
+    assert_eq!(words[19], p.warmup_tau_s);
+    let v = BlobView::new(&b).unwrap();
+    assert_eq!(v.run_id().to_string(), "a1a2a3a4a5a6a7a8b1b2b3b4b5b6b7b8");
+    assert_eq!(v.output_unit(), OutputUnit::MetrePerSecond2);
+}
+
+/// Built without `physics`, the physics blob is refused, never compensated without its
+/// terms.
+#[cfg(not(feature = "physics"))]
+#[test]
+fn without_the_feature_the_physics_blob_is_refused() {
+    let bytes = unhex(&std::fs::read_to_string(data("example_blob_physics.hex")).unwrap());
+    let view = BlobView::new(&bytes).unwrap();
+    assert_eq!(
+        Compensator::from_blob(view, Method::CorrectConstants, 0.01).err(),
+        Some(Error::PhysicsNotBuiltIn)
+    );
+}
+
+const RUN_ID: RunId = RunId([
+    0xa1, 0xa2, 0xa3, 0xa4, 0xa5, 0xa6, 0xa7, 0xa8, 0xb1, 0xb2, 0xb3, 0xb4, 0xb5, 0xb6, 0xb7, 0xb8,
+]);
+
+fn physics_blob() -> Blob {
+    let mut p = example_blob();
+    p.calibration.physics = Some(physics());
+    p.output_unit = OutputUnit::MetrePerSecond2;
+    p.run_id = RUN_ID;
+    p
+}
+
+/// The physics path on an uneven clock, as bits: the blob's compensator, sample by
+/// sample with each sample's own time step (a cold start, a warming at 6 C/min logged at
+/// 0.2-10 s spacings, a 1 ms burst, a power cycle of the sensor), equal to the committed
+/// ones, and the same from flash and owned.
+#[cfg(feature = "physics")]
+#[test]
+fn golden_physics_outputs_on_an_uneven_clock() {
+    let bytes = unhex(&std::fs::read_to_string(data("example_blob_physics.hex")).unwrap());
+    let view = BlobView::new(&bytes).unwrap();
+    let owned = Blob::decode(&bytes).unwrap();
+    let mut out = String::from(
+        "# method dt_bits temp_bits ux uy uz -> ax ay az status (f32 bits); P = the sensor powered on 2 s before the next sample\n",
+    );
+    let u = [0.0045f32, -0.0044, -0.5521];
+    for (name, m) in METHODS {
+        let mut flash = Compensator::from_blob(view, m, 0.01).unwrap();
+        let mut host = Compensator::new(&owned.calibration, m, 0.01).unwrap();
+        let mut t = 0.0f32;
+        for (i, dt) in [
+            0.0f32, 0.2, 1.0, 1.0, 10.0, 10.0, 0.001, 0.001, 0.05, 0.05, 3.0,
+        ]
+        .into_iter()
+        .cycle()
+        .take(40)
+        .enumerate()
+        {
+            if i == 30 {
+                flash.power_on(2.0);
+                host.power_on(2.0);
+                out.push_str("P\n");
+            }
+            t += dt;
+            let temp = -30.0 + 0.1 * t.min(600.0);
+            let o = flash.compensate_dt(u, temp, dt);
+            let h = host.compensate_dt(u, temp, dt);
+            assert_eq!(o.accel.map(f32::to_bits), h.accel.map(f32::to_bits));
+            assert_eq!(o.status, h.status);
+            out.push_str(&format!(
+                "{name} {:08x} {:08x} {:08x} {:08x} {:08x} -> {:08x} {:08x} {:08x} {}\n",
+                dt.to_bits(),
+                temp.to_bits(),
+                u[0].to_bits(),
+                u[1].to_bits(),
+                u[2].to_bits(),
+                o.accel[0].to_bits(),
+                o.accel[1].to_bits(),
+                o.accel[2].to_bits(),
+                o.status.bits()
+            ));
+        }
+    }
+    golden("example_outputs_physics.txt", &out);
 }
 
 /// Inputs for the golden compensation table: (u, temp).
@@ -141,8 +248,8 @@ fn golden_outputs_as_bits_from_flash_and_owned() {
     assert_eq!(owned, example_blob());
     let mut out = String::from("# method temp_bits ux uy uz -> ax ay az status (f32 bits)\n");
     for (name, m) in METHODS {
-        let mut flash = Compensator::from_blob(view, m).unwrap();
-        let mut host = Compensator::new(&owned.calibration, m).unwrap();
+        let mut flash = Compensator::from_blob(view, m, 1.0).unwrap();
+        let mut host = Compensator::new(&owned.calibration, m, 1.0).unwrap();
         for (u, t) in golden_inputs() {
             let o = flash.compensate(u, t);
             let h = host.compensate(u, t);
@@ -204,27 +311,33 @@ fn every_truncation_reads_as_truncation() {
     );
 }
 
-/// A blob of format 2 (postcard content, CRC last, no length field) with its own valid
-/// CRC is recognised as an old blob, not as corruption; any flipped bit in it is
-/// corruption.
+/// A blob of format 3 (the committed bytes of the paper unit as format 3 wrote them:
+/// the same header, per-sample constants, no run id) and one of format 2 (postcard
+/// content, CRC last, no length field), each with its own valid CRC, are recognised as
+/// old blobs, not as corruption; any flipped bit in them is corruption.
 #[test]
 fn an_old_blob_names_its_version() {
+    let v3 = unhex(&std::fs::read_to_string(data("example_blob_v3.hex")).unwrap());
+    assert_eq!(&v3[..6], b"ATCB\x03\x00");
+    assert_eq!(BlobView::new(&v3).err(), Some(Error::UnsupportedVersion(3)));
+    assert_eq!(
+        Error::UnsupportedVersion(3).to_string(),
+        "unsupported blob format version 3 (this firmware reads version 4)"
+    );
     let v2 = unhex(&std::fs::read_to_string(data("example_blob_v2.hex")).unwrap());
     assert_eq!(&v2[..6], b"ATCB\x02\x00");
     assert_eq!(BlobView::new(&v2).err(), Some(Error::UnsupportedVersion(2)));
-    assert_eq!(
-        Error::UnsupportedVersion(2).to_string(),
-        "unsupported blob format version 2 (this firmware reads version 3)"
-    );
-    let mut flipped = v2.clone();
-    flipped[4] ^= 1;
-    assert_eq!(BlobView::new(&flipped).err(), Some(Error::CrcMismatch));
+    for old in [v2, v3] {
+        let mut flipped = old.clone();
+        flipped[4] ^= 1;
+        assert_eq!(BlobView::new(&flipped).err(), Some(Error::CrcMismatch));
+    }
     // a newer version with a valid CRC and length
-    let mut v4 = encoded();
-    v4[4] = 4;
+    let mut v5 = encoded();
+    v5[4] = 5;
     assert_eq!(
-        BlobView::new(&reseal(v4)).err(),
-        Some(Error::UnsupportedVersion(4))
+        BlobView::new(&reseal(v5)).err(),
+        Some(Error::UnsupportedVersion(5))
     );
     let mut magic = encoded();
     magic[0] = b'X';
@@ -243,27 +356,29 @@ fn content_checks_behind_a_valid_crc() {
         |b: &mut Vec<u8>, off: usize, v: f32| b[off..off + 4].copy_from_slice(&v.to_le_bytes());
     assert_eq!(edit(&|_| {}), None, "the independent CRC agrees");
     assert_eq!(
-        edit(&|b| put(b, 44, 30.0)),
+        edit(&|b| put(b, 60, 30.0)),
         Some(Error::BreakpointsNotIncreasing)
     );
-    assert_eq!(edit(&|b| put(b, 48, f32::NAN)), Some(Error::NonFinite));
-    assert_eq!(edit(&|b| put(b, 28, f32::NAN)), Some(Error::NonFinite)); // T0
-    assert_eq!(edit(&|b| put(b, 60, f32::INFINITY)), Some(Error::NonFinite)); // a table value
-    assert_eq!(edit(&|b| put(b, 32, 80.0)), Some(Error::BadRange)); // t_min > t_max
-    assert_eq!(edit(&|b| put(b, 40, -1.0)), Some(Error::BadRange)); // negative step
+    assert_eq!(edit(&|b| put(b, 64, f32::NAN)), Some(Error::NonFinite));
+    assert_eq!(edit(&|b| put(b, 44, f32::NAN)), Some(Error::NonFinite)); // T0
+    assert_eq!(edit(&|b| put(b, 76, f32::INFINITY)), Some(Error::NonFinite)); // a table value
+    assert_eq!(edit(&|b| put(b, 48, 80.0)), Some(Error::BadRange)); // t_min > t_max
+    assert_eq!(edit(&|b| put(b, 56, -1.0)), Some(Error::BadRange)); // negative step
     assert_eq!(edit(&|b| b[10] = 3), Some(Error::Malformed)); // unknown model
     assert_eq!(edit(&|b| b[11] = 1), Some(Error::TableSize));
     assert_eq!(edit(&|b| b[11] = 17), Some(Error::TableSize));
     assert_eq!(edit(&|b| b[11] = 4), Some(Error::Malformed)); // rows disagree with the length
     assert_eq!(edit(&|b| b[12] = 2), Some(Error::Malformed)); // unknown flag
-    assert_eq!(edit(&|b| b[15] = 1), Some(Error::Malformed)); // reserved
+    assert_eq!(edit(&|b| b[15] = 8), Some(Error::Malformed)); // unknown output unit
+    assert_eq!(edit(&|b| b[15] = 7), None); // "other": a valid unit
+    assert_eq!(edit(&|b| b[30] = 0xFF), None); // any run id
     assert_eq!(edit(&|b| b[14] = 5), Some(Error::Malformed)); // physics words
-    assert_eq!(edit(&|b| b[13] = 33), Some(Error::Malformed)); // serial too long
+    assert_eq!(edit(&|b| b[13] = 65), Some(Error::Malformed)); // serial too long
     assert_eq!(edit(&|b| b[27] = 1), Some(Error::Malformed)); // padding
     assert_eq!(edit(&|b| b[16] = 0xFF), Some(Error::Malformed)); // serial not printable ASCII
                                                                  // K(T0) singular: the +20 C row's K made all zero
     assert_eq!(
-        edit(&|b| (0..9).for_each(|i| put(b, 56 + 48 + 4 * i, 0.0))),
+        edit(&|b| (0..9).for_each(|i| put(b, 72 + 48 + 4 * i, 0.0))),
         Some(Error::Singular)
     );
     // a physics term out of range, behind a valid CRC
@@ -271,25 +386,32 @@ fn content_checks_behind_a_valid_crc() {
     p.calibration.physics = Some(physics());
     let bytes = encode(&p);
     assert!(BlobView::new(&bytes).is_ok());
-    let mut b = bytes.clone();
-    let lag = bytes.len() - 4 - 84 + 4; // lag_alpha, the second word
-    put(&mut b, lag, 2.0);
-    assert_eq!(BlobView::new(&reseal(b)).err(), Some(Error::BadRange));
+    let section = bytes.len() - 4 - 80;
+    for (word, value) in [(0, -1.0), (4, -5.0), (19, -1.0), (8, -0.5), (9, 0.5)] {
+        // lag, rate and warm-up time constants negative; threshold negative; an initial
+        // direction that is none of -1, 0, +1
+        let mut b = bytes.clone();
+        put(&mut b, section + 4 * word, value);
+        assert_eq!(
+            BlobView::new(&reseal(b)).err(),
+            Some(Error::BadRange),
+            "word {word}"
+        );
+    }
 }
 
 fn physics() -> Physics<f32> {
     Physics {
-        sample_period_s: 1.0,
-        lag_alpha: 0.01,
+        lag_tau_s: 120.0,
         rate: [0.02, 0.01, -0.01],
-        rate_alpha: 0.03,
+        rate_tau_s: 8.0,
         hysteresis: [1e-4, 2e-4, 3e-4],
         hysteresis_threshold_c: 0.5,
-        hysteresis_initial: 1.0,
+        hysteresis_initial: -1.0,
         k2: [1e-4, 2e-4, 3e-4],
         asymmetry: [1e-4, 2e-4, 3e-4],
         warmup: [2e-4, 1e-4, 3e-4],
-        warmup_decay: 0.999,
+        warmup_tau_s: 900.0,
     }
 }
 
@@ -348,13 +470,15 @@ proptest! {
     }
 }
 
-/// The largest blob the format allows (32-character serial, 16 breakpoints, physics terms)
-/// encodes within `MAX_BLOB_LEN` (also a compile-time assertion in blob.rs).
+/// The largest blob the format allows (64-character serial, 16 breakpoints, physics terms)
+/// encodes to exactly `MAX_BLOB_LEN` (also a compile-time assertion in blob.rs).
 #[test]
 fn the_largest_blob_fits_the_fixed_buffer() {
     let mut b = example_blob();
     b.serial.clear();
-    b.serial.push_str(&"W".repeat(32)).unwrap();
+    b.serial
+        .push_str(&"W".repeat(firmware_core::blob::MAX_SERIAL_LEN))
+        .unwrap();
     let t0 = b.calibration.at_t0();
     let bp: Vec<f32> = (0..16).map(|i| -40.0 + 7.0 * i as f32).collect();
     b.calibration.t_min_c = -40.0;
@@ -369,7 +493,7 @@ fn the_largest_blob_fits_the_fixed_buffer() {
     b.calibration.physics = Some(physics());
     let mut big = vec![0u8; 4 * MAX_BLOB_LEN];
     let n = b.encode(&mut big).unwrap();
-    assert_eq!(n, 984);
-    assert!(n <= MAX_BLOB_LEN, "{n} bytes > MAX_BLOB_LEN {MAX_BLOB_LEN}");
+    assert_eq!(n, 1028);
+    assert_eq!(n, MAX_BLOB_LEN);
     assert_eq!(Blob::decode(&big[..n]), Ok(b));
 }

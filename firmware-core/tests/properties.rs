@@ -30,12 +30,12 @@ proptest! {
         let cal64: Calibration<f64> = cal.convert();
         let u = forward_f64(&cal64, f64::from(t as f32), a);
         // f64 path: exact up to f64 rounding.
-        let mut c64 = Compensator::new(&cal64, Method::CorrectConstants).unwrap();
+        let mut c64 = Compensator::new(&cal64, Method::CorrectConstants, 1.0).unwrap();
         let o64 = c64.compensate(u, f64::from(t as f32));
         prop_assert!(o64.status.is_ok());
         prop_assert!(max_abs_diff(o64.accel, a) < 1e-12);
         // f32 path: the firmware as it runs, within the documented bound of both.
-        let mut c32 = Compensator::new(&cal, Method::CorrectConstants).unwrap();
+        let mut c32 = Compensator::new(&cal, Method::CorrectConstants, 1.0).unwrap();
         let o32 = c32.compensate(u.map(|v| v as f32), t as f32);
         prop_assert!(o32.status.is_ok());
         let a32 = o32.accel.map(f64::from);
@@ -50,8 +50,8 @@ proptest! {
             a in common::direction(), t in -40.0f64..70.0) {
         let cal: Calibration<f64> = cal.convert();
         let u = forward_f64(&cal, t, a);
-        let mut m1 = Compensator::new(&cal, Method::CorrectConstants).unwrap();
-        let mut m2 = Compensator::new(&cal, Method::CorrectResult(ErrorModel::Full)).unwrap();
+        let mut m1 = Compensator::new(&cal, Method::CorrectConstants, 1.0).unwrap();
+        let mut m2 = Compensator::new(&cal, Method::CorrectResult(ErrorModel::Full), 1.0).unwrap();
         let a1 = m1.compensate(u, t).accel;
         let a2 = m2.compensate(u, t).accel;
         let c0 = Coeffs::from_array(&cal.at_t0());
@@ -75,9 +75,9 @@ proptest! {
                                     t in -40.0f64..70.0) {
         let cal: Calibration<f64> = cal.convert();
         let u = forward_f64(&cal, t, a);
-        let mut full = Compensator::new(&cal, Method::CorrectResult(ErrorModel::Full)).unwrap();
+        let mut full = Compensator::new(&cal, Method::CorrectResult(ErrorModel::Full), 1.0).unwrap();
         let mut simp =
-            Compensator::new(&cal, Method::CorrectResult(ErrorModel::Simplified)).unwrap();
+            Compensator::new(&cal, Method::CorrectResult(ErrorModel::Simplified), 1.0).unwrap();
         let af = full.compensate(u, t).accel;
         let asimp = simp.compensate(u, t).accel;
         let c0 = Coeffs::from_array(&cal.at_t0());

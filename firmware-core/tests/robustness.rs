@@ -1,9 +1,9 @@
-//! The compensator at its edges: any f32 bit pattern for the voltages and the
-//! temperature, with and without the physics terms, never panics and never yields a
+//! The compensator at its edges: any f32 bit pattern for the voltages, the
+//! temperature and the time step, with and without the physics terms, never panics and never yields a
 //! non-finite acceleration without a flag; blobs round-trip and every bit flip is caught.
 mod common;
 
-use firmware_core::blob::{example_physics, Blob, BlobView, MAX_BLOB_LEN};
+use firmware_core::blob::{example_physics, Blob, BlobView, OutputUnit, RunId, MAX_BLOB_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, Method, Status};
 use firmware_core::temperature::{Calibration, TempModel};
 use proptest::prelude::*;
@@ -33,22 +33,25 @@ proptest! {
     #[test]
     fn no_input_sequence_gives_an_unflagged_non_finite_output(
         cal in common::unit(), phys in any::<bool>(), m in 0usize..3,
-        seq in prop::collection::vec((prop::array::uniform3(any_f32()), any_f32()), 1..40)) {
+        seq in prop::collection::vec((prop::array::uniform3(any_f32()), any_f32(), any_f32()), 1..40)) {
         let mut cal: Calibration<f32> = cal;
         if phys {
             cal.physics = Some(example_physics());
             if !cfg!(feature = "physics") {
                 // never compensated without its terms
                 prop_assert_eq!(
-                    Compensator::new(&cal, METHODS[m]).err(),
+                    Compensator::new(&cal, METHODS[m], 0.01).err(),
                     Some(firmware_core::Error::PhysicsNotBuiltIn)
                 );
                 return Ok(());
             }
         }
-        let mut c = Compensator::new(&cal, METHODS[m]).unwrap();
-        for (u, t) in seq {
-            let o = c.compensate(u, t);
+        let mut c = Compensator::new(&cal, METHODS[m], 0.01).unwrap();
+        for (u, t, dt) in seq {
+            // half the samples on their own time step, any bits
+            let o = if dt.to_bits() & 1 == 0 { c.compensate(u, t) } else { c.compensate_dt(u, t, dt) };
+            let bad_dt = dt.to_bits() & 1 == 1 && !(dt >= 0.0 && dt.is_finite());
+            prop_assert_eq!(o.status.contains(Status::BAD_TIME_STEP), bad_dt);
             let finite = o.accel.iter().all(|v| v.is_finite());
             if !finite {
                 prop_assert!(o.status.contains(Status::INPUT_NON_FINITE) || o.status.contains(Status::OUTPUT_NON_FINITE));
@@ -79,7 +82,7 @@ proptest! {
         }
         let mut serial = heapless::String::new();
         serial.push_str("UNIT-7").unwrap();
-        let blob = Blob { serial, calibration: cal };
+        let blob = Blob { serial, output_unit: OutputUnit::Counts, run_id: RunId([7; 16]), calibration: cal };
         let mut buf = [0u8; MAX_BLOB_LEN];
         let n = blob.encode(&mut buf).unwrap();
         prop_assert_eq!(Blob::decode(&buf[..n]).unwrap(), blob);
@@ -95,7 +98,7 @@ proptest! {
     #[test]
     fn flash_and_owned_calibrations_agree_bit_for_bit(cal in common::unit(), poly in any::<bool>(),
             with_phys in any::<bool>(), m in 0usize..3,
-            seq in prop::collection::vec((prop::array::uniform3(any_f32()), any_f32()), 1..40)) {
+            seq in prop::collection::vec((prop::array::uniform3(any_f32()), any_f32(), any_f32()), 1..40)) {
         let mut cal: Calibration<f32> = cal;
         if poly {
             let t0 = cal.at_t0();
@@ -105,14 +108,14 @@ proptest! {
         if with_phys && cfg!(feature = "physics") {
             cal.physics = Some(example_physics());
         }
-        let blob = Blob { serial: heapless::String::new(), calibration: cal };
+        let blob = Blob { serial: heapless::String::new(), output_unit: OutputUnit::Unstated, run_id: RunId::NONE, calibration: cal };
         let mut buf = [0u8; MAX_BLOB_LEN];
         let n = blob.encode(&mut buf).unwrap();
         let view = BlobView::new(&buf[..n]).unwrap();
-        let mut flash = Compensator::from_blob(view, METHODS[m]).unwrap();
-        let mut owned = Compensator::new(&blob.calibration, METHODS[m]).unwrap();
-        for (u, t) in seq {
-            let (a, b) = (flash.compensate(u, t), owned.compensate(u, t));
+        let mut flash = Compensator::from_blob(view, METHODS[m], 0.01).unwrap();
+        let mut owned = Compensator::new(&blob.calibration, METHODS[m], 0.01).unwrap();
+        for (u, t, dt) in seq {
+            let (a, b) = (flash.compensate_dt(u, t, dt), owned.compensate_dt(u, t, dt));
             prop_assert_eq!(a.accel.map(f32::to_bits), b.accel.map(f32::to_bits));
             prop_assert_eq!(a.status, b.status);
         }

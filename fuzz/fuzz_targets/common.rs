@@ -3,7 +3,7 @@ use firmware_core::blob::{FORMAT_VERSION, MAGIC};
 use firmware_core::crc::crc32;
 
 /// `content` (header bytes 10.. onward: model, rows, flags, serial length, physics
-/// words, reserved, then the body) behind a valid magic, version and length, and
+/// words, output unit, then the body) behind a valid magic, version and length, and
 /// followed by its CRC: a blob whose header fields and content, not its checksum,
 /// decide whether it validates.
 pub fn wrap(content: &[u8]) -> Vec<u8> {

@@ -1,5 +1,6 @@
 //! A blob (the input's head, wrapped with a valid header and CRC so the content checks
-//! are reached, or the example blob) and a sequence of samples: no panic, every
+//! are reached, or the example blob) and a sequence of samples, each with its own time
+//! step: no panic, every
 //! non-finite output flagged, and the compensator reading the blob in place gives the
 //! same bits as the one over the owned f32 calibration (the host's evaluation).
 #![no_main]
@@ -25,12 +26,13 @@ fuzz_target!(|data: &[u8]| {
         2 => Method::CorrectResult(ErrorModel::Full),
         _ => Method::CorrectResult(ErrorModel::Simplified),
     };
-    let Ok(mut c) = Compensator::from_blob(view, method) else { return };
-    let mut h = Compensator::new(&owned.calibration, method).expect("the owned form is accepted too");
-    for s in samples.chunks_exact(16) {
+    let Ok(mut c) = Compensator::from_blob(view, method, 0.01) else { return };
+    let mut h = Compensator::new(&owned.calibration, method, 0.01).expect("the owned form is accepted too");
+    // ux uy uz temp dt: every sample on its own time step (any bits)
+    for s in samples.chunks_exact(20) {
         let f = |k: usize| f32::from_le_bytes([s[4 * k], s[4 * k + 1], s[4 * k + 2], s[4 * k + 3]]);
-        let o = c.compensate([f(0), f(1), f(2)], f(3));
-        let r = h.compensate([f(0), f(1), f(2)], f(3));
+        let o = c.compensate_dt([f(0), f(1), f(2)], f(3), f(4));
+        let r = h.compensate_dt([f(0), f(1), f(2)], f(3), f(4));
         assert_eq!(o.accel.map(f32::to_bits), r.accel.map(f32::to_bits), "flash and owned differ");
         assert_eq!(o.status, r.status);
         if !o.accel.iter().all(|v| v.is_finite()) {

@@ -16,9 +16,9 @@ use crate::error::{HostError, Result};
 use crate::fit::pipeline::{fit_chosen, ModelKind, ModelRequest};
 use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
-use crate::fit::temperature::{span, UPDATE_STEP_C};
+use crate::fit::temperature::span;
 use crate::output::{check_writable, write_atomic, write_json};
-use crate::store::record::{sha256_file, AtT0, Command as Recorded, HashingReader, Record};
+use crate::store::record::{sha256_file, stamp, AtT0, Command as Recorded, HashingReader, Record};
 use crate::store::{Store, Target};
 use crate::verify::{verify, TempMax};
 use firmware_core::compensate::Method;
@@ -193,10 +193,12 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         (d.calibration(rec.t0_c)?, Some(d.contract()))
     } else {
         r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
-        (oc.fit.calibration(UPDATE_STEP_C, false), None)
+        let mut cal = oc.fit.calibration(0.0, false);
+        crate::blob::Cache::for_fit(&rec, &oc, &mut cal, None);
+        (cal, None)
     };
     r.at_t0 = Some(cal.at_t0());
-    let (blob, bytes, dep) = build_blob(&r.unit, &cal)?;
+    let (blob, mut bytes, dep) = build_blob(&r.unit, &rec.output_unit, &cal)?;
     if let Some(t) = &o.store {
         let mut rc = t.record(Recorded::Batch, &r.unit, path)?;
         rc.input_sha256 = Some(sha);
@@ -207,10 +209,12 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
             values: cal.at_t0(),
             sigma: Some(r.at_t0_sigma),
         });
-        rc.blob = Some(bytes.clone());
         if let Some(d) = &diagnosis {
             rc.with_diagnosis(d)?;
         }
+        // the blob carries its run's id: a unit in the field leads back to this record
+        bytes = stamp(&bytes, rc.run_id)?;
+        rc.blob = Some(bytes.clone());
         r.record = Some(rc);
     }
     write_atomic(&out.join(format!("{stem}.blob")), &bytes, o.force)?;

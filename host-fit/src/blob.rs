@@ -1,7 +1,14 @@
 //! From a fitted model to a flashed blob and back: f32 tables, the f32-vs-f64 check,
 //! encoding, reading a blob file, and what `inspect` shows of it.
+use crate::data::recording::Recording;
 use crate::error::{HostError, Result};
-use firmware_core::blob::{Blob, FORMAT_VERSION, MAGIC, MAX_BLOB_LEN, MAX_SERIAL_LEN};
+use crate::fit::noise::Noise;
+use crate::fit::pipeline::FitOutcome;
+use crate::fit::predict::{directions, sigma_dwell_noise};
+use crate::fit::temperature::ModelFit;
+use firmware_core::blob::{
+    Blob, OutputUnit, RunId, FORMAT_VERSION, MAGIC, MAX_BLOB_LEN, MAX_SERIAL_LEN,
+};
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
 use firmware_core::model::{Coeffs, COEFF_NAMES};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
@@ -15,14 +22,8 @@ use std::path::Path;
 /// digits) is measured and reported.
 pub const F32_BOUND_G: f64 = 2e-6;
 
-/// Largest |a_f32 - a_f64| (g) over a grid of temperatures (0.5 C steps) and 26
-/// directions, for method 1 and method 2 (full): inside the valid range, and in the
-/// 10 C beyond it.
-pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Result<(f64, f64)> {
-    let mut c64 = cal64.clone();
-    c64.update_step_c = 0.0;
-    let mut c32 = cal32.clone();
-    c32.update_step_c = 0.0;
+/// 26 unit directions: the axes, the face diagonals and the cube's corners, both signs.
+fn directions26() -> Vec<[f64; 3]> {
     let mut dirs = Vec::new();
     for x in -1i32..=1 {
         for y in -1i32..=1 {
@@ -35,13 +36,178 @@ pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Resu
             }
         }
     }
+    dirs
+}
+
+/// The largest cache step `fit`, `diagnose --out`, `batch` and the demo give the
+/// firmware by default, C.
+pub const MAX_CACHE_STEP_C: f64 = 0.1;
+/// Grid of [`cache_slope`], C.
+const CACHE_GRID_C: f64 = 0.05;
+
+/// How fast |a| drifts while the firmware holds its cached coefficients and the unit's
+/// temperature moves, g/C: `|d|a|/dT| = |a^T N (dK/dT a + dU0/dT)|` of the calibration's
+/// own model, by differences over every 0.05 C cell of the valid range (exact within a
+/// piecewise-linear segment), worst of 26 directions (any attitude: in flight too).
+pub fn cache_slope(cal: &Calibration<f64>) -> f64 {
+    let dirs = directions26();
+    let eval = |t: f64| Coeffs::from_array(&cal.model.eval(cal.t0_c, t));
+    let mut worst: f64 = 0.0;
+    let mut t = cal.t_min_c;
+    while t < cal.t_max_c {
+        let h = CACHE_GRID_C.min(cal.t_max_c - t).max(1e-6);
+        let (c0, c1) = (eval(t), eval(t + h));
+        let Some(n) = firmware_core::model::invert(&c0.k) else {
+            t += CACHE_GRID_C;
+            continue;
+        };
+        for a in &dirs {
+            // d|a'|/dT for the reading U(T + h) compensated with the coefficients of T
+            let du: [f64; 3] = std::array::from_fn(|i| {
+                (0..3)
+                    .map(|j| (c1.k[i][j] - c0.k[i][j]) * a[j])
+                    .sum::<f64>()
+                    + c1.u0[i]
+                    - c0.u0[i]
+            });
+            let da: [f64; 3] = std::array::from_fn(|i| (0..3).map(|j| n[i][j] * du[j]).sum());
+            let d = (a[0] * da[0] + a[1] * da[1] + a[2] * da[2]).abs() / h;
+            worst = worst.max(d);
+        }
+        t += CACHE_GRID_C;
+    }
+    worst
+}
+
+/// A fitted model of a recording, as the cache's floor needs it.
+#[derive(Debug, Clone, Copy)]
+pub struct Model<'a> {
+    /// The recording.
+    pub rec: &'a Recording,
+    /// Its positions, every pose with a vector (the estimated ones where unknown).
+    pub positions: &'a crate::data::positions::Positions,
+    /// The model.
+    pub fit: &'a ModelFit,
+    /// Its noise.
+    pub noise: &'a Noise,
+}
+
+/// The firmware's cache of N(T): its step and the most it can cost.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct Cache {
+    /// The update step written into the blob, C.
+    pub step_c: f64,
+    /// The most the cache can add to |dg| anywhere in the valid range, at any attitude
+    /// (`cache_slope` x step), mg.
+    pub worst_mg: f64,
+    /// The noise floor the default step keeps it within (a verification dwell's own
+    /// noise, 1 sigma), mg; None when none is known.
+    pub floor_mg: Option<f64>,
+    /// Whether the step was chosen from the unit's slopes (true) or given.
+    pub chosen: bool,
+}
+
+impl Cache {
+    /// `given` (`--update-step`), or by default the largest step up to
+    /// [`MAX_CACHE_STEP_C`] whose worst cost stays within `floor_mg` (rounded down to
+    /// 1e-4 C); with no floor known, 0 (the model at every temperature).
+    pub fn choose(cal: &Calibration<f64>, floor_mg: Option<f64>, given: Option<f64>) -> Cache {
+        let slope_mg = cache_slope(cal) * 1e3;
+        let step_c = match (given, floor_mg) {
+            (Some(s), _) => s,
+            (None, Some(f)) if f > 0.0 && slope_mg > 0.0 => {
+                (((f / slope_mg).min(MAX_CACHE_STEP_C) * 1e4).floor() / 1e4).max(0.0)
+            }
+            (None, Some(f)) if f > 0.0 => MAX_CACHE_STEP_C,
+            (None, _) => 0.0,
+        };
+        Cache {
+            step_c,
+            worst_mg: slope_mg * step_c,
+            floor_mg,
+            chosen: given.is_none(),
+        }
+    }
+
+    /// The cache of a fitted model's calibration (`fit`, `batch`): `given`
+    /// (`--update-step`), or chosen within a verification dwell's own noise as the fit
+    /// predicts it ([`Cache::for_model`], with the poses it estimated); `cal` takes the
+    /// step.
+    pub fn for_fit(
+        rec: &Recording,
+        oc: &FitOutcome,
+        cal: &mut Calibration<f64>,
+        given: Option<f64>,
+    ) -> Cache {
+        // the estimated poses' vectors, carried with the fit
+        let positions = oc
+            .orientation
+            .as_ref()
+            .map_or(&rec.positions, |o| &o.positions);
+        let model = Model {
+            rec,
+            positions,
+            fit: &oc.fit,
+            noise: &oc.noise,
+        };
+        Cache::for_model(&model, cal, given)
+    }
+
+    /// [`Cache::choose`] for the model `fit` of `rec`: the floor is the noise a
+    /// verification dwell of the recording's median length adds of its own (1 sigma,
+    /// worst of its verification directions, as `fit` predicts it); `cal` takes the step.
+    pub fn for_model(m: &Model, cal: &mut Calibration<f64>, given: Option<f64>) -> Cache {
+        let (fit, noise) = (m.fit, m.noise);
+        let floor = (!fit.axis_cov.is_empty()).then(|| {
+            let (dirs, n) = directions(m.rec, m.positions);
+            dirs.iter()
+                .map(|d| sigma_dwell_noise(fit, noise, fit.t0_c, d.a, n))
+                .fold(0.0, f64::max)
+                * 1e3
+        });
+        let cache = Cache::choose(cal, floor, given);
+        cal.update_step_c = cache.step_c;
+        cache
+    }
+
+    /// One line for the command's text output.
+    pub fn text(&self) -> String {
+        let how = if self.chosen {
+            match self.floor_mg {
+                Some(f) => format!(
+                    "chosen from the unit's slopes to stay within the dwell-noise floor {f:.4} mg"
+                ),
+                None => "no noise floor known: the model at every temperature".to_string(),
+            }
+        } else {
+            "as given (--update-step)".to_string()
+        };
+        format!(
+            "firmware cache: N(T) recomputed after {} C ({how}); it costs at most {:.4} mg anywhere in the valid range, at any attitude",
+            self.step_c, self.worst_mg
+        )
+    }
+}
+
+/// Largest |a_f32 - a_f64| (g) over a grid of temperatures (0.5 C steps) and 26
+/// directions, for method 1 and method 2 (full): inside the valid range, and in the
+/// 10 C beyond it.
+pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Result<(f64, f64)> {
+    let mut c64 = cal64.clone();
+    c64.update_step_c = 0.0;
+    let mut c32 = cal32.clone();
+    c32.update_step_c = 0.0;
+    let dirs = directions26();
     let (mut inside, mut beyond): (f64, f64) = (0.0, 0.0);
     for method in [
         Method::CorrectConstants,
         Method::CorrectResult(ErrorModel::Full),
     ] {
-        let mut m64 = Compensator::new(&c64, method).map_err(|e| HostError::msg(e.to_string()))?;
-        let mut m32 = Compensator::new(&c32, method).map_err(|e| HostError::msg(e.to_string()))?;
+        // one sample a second: the physics terms' machines follow the sweep alike in both
+        let mut m64 =
+            Compensator::new(&c64, method, 1.0).map_err(|e| HostError::msg(e.to_string()))?;
+        let mut m32 =
+            Compensator::new(&c32, method, 1.0).map_err(|e| HostError::msg(e.to_string()))?;
         let mut t = cal64.t_min_c - 10.0;
         while t <= cal64.t_max_c + 10.0 {
             let t32 = t as f32;
@@ -66,21 +232,29 @@ pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Resu
     Ok((inside, beyond))
 }
 
-/// Build and encode the blob for `serial` from an f64 calibration; checks the f32 path
-/// against [`F32_BOUND_G`]. Returns the blob, its bytes and the measured departure.
-pub fn build_blob(serial: &str, cal64: &Calibration<f64>) -> Result<(Blob, Vec<u8>, f64)> {
-    let (blob, bytes, (inside, _)) = build_blob_checked(serial, cal64)?;
+/// Build and encode the blob for `serial` from an f64 calibration whose K and U0 are in
+/// `output_unit` (the recording's `output_unit`, recorded in the blob); checks the f32
+/// path against [`F32_BOUND_G`]. Returns the blob, its bytes and the measured departure.
+pub fn build_blob(
+    serial: &str,
+    output_unit: &str,
+    cal64: &Calibration<f64>,
+) -> Result<(Blob, Vec<u8>, f64)> {
+    let (blob, bytes, (inside, _)) = build_blob_checked(serial, output_unit, cal64)?;
     Ok((blob, bytes, inside))
 }
 
 /// [`build_blob`], returning the departure inside the range and beyond it.
 pub fn build_blob_checked(
     serial: &str,
+    output_unit: &str,
     cal64: &Calibration<f64>,
 ) -> Result<(Blob, Vec<u8>, (f64, f64))> {
     let s = blob_serial(serial)?;
     let blob = Blob {
         serial: s,
+        output_unit: OutputUnit::from_label(output_unit),
+        run_id: RunId::NONE,
         calibration: cal64.convert(),
     };
     let mut buf = [0u8; MAX_BLOB_LEN];
@@ -160,6 +334,10 @@ pub struct Inspection {
     pub bytes: usize,
     /// Unit serial.
     pub serial: String,
+    /// The unit K and U0 are in (`V`, `m/s2`, ...; `unstated`, `other`).
+    pub output_unit: &'static str,
+    /// The host-fit run that made the blob (32 hex digits), None when it has none.
+    pub run_id: Option<String>,
     /// Reference temperature, C.
     pub t0_c: f32,
     /// Valid range, C.
@@ -181,26 +359,20 @@ pub struct Inspection {
     pub physics: Option<PhysicsTerms>,
 }
 
-/// Every in-flight term of a blob, as stored, with the time constants they stand for.
+/// Every in-flight term of a blob, as stored (time constants in seconds).
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct PhysicsTerms {
-    /// The sample period the per-sample constants are for, s.
-    pub sample_period_s: f32,
-    /// `thermal_lag`: the filter constant (1 = no lag).
-    pub lag_alpha: f32,
-    /// Its time constant, s (None: no lag).
-    pub lag_tau_s: Option<f64>,
+    /// `thermal_lag`: the time constant, s (0: no lag).
+    pub lag_tau_s: f32,
     /// `temp_rate`: offset per C/s, per axis.
     pub rate: [f32; 3],
-    /// The rate's low-pass constant.
-    pub rate_alpha: f32,
-    /// Its time constant, s.
-    pub rate_tau_s: Option<f64>,
+    /// The rate estimator's low-pass time constant, s.
+    pub rate_tau_s: f32,
     /// `hysteresis`: the offset split, per axis.
     pub hysteresis: [f32; 3],
     /// The change that sets the direction, C.
     pub hysteresis_threshold_c: f32,
-    /// The direction at power-on.
+    /// The direction at power-on (+1 heated, -1 cooled, 0 unknown).
     pub hysteresis_initial: f32,
     /// `nonlinearity_k2`, per axis.
     pub k2: [f32; 3],
@@ -208,61 +380,45 @@ pub struct PhysicsTerms {
     pub asymmetry: [f32; 3],
     /// `warmup_drift` amplitude, per axis.
     pub warmup: [f32; 3],
-    /// Its per-sample decay.
-    pub warmup_decay: f32,
-    /// Its time constant, s (None: no warm-up).
-    pub warmup_tau_s: Option<f64>,
-}
-
-/// The time constant of a one-pole constant `alpha = 1 - exp(-dt/tau)`.
-fn tau_of_alpha(dt: f32, alpha: f32) -> Option<f64> {
-    let a = f64::from(alpha);
-    (a > 0.0 && a < 1.0).then(|| -f64::from(dt) / (1.0 - a).ln())
+    /// Its time constant since power-on, s (0: no warm-up).
+    pub warmup_tau_s: f32,
 }
 
 impl PhysicsTerms {
     fn of(p: &Physics<f32>) -> Self {
-        let decay = f64::from(p.warmup_decay);
         PhysicsTerms {
-            sample_period_s: p.sample_period_s,
-            lag_alpha: p.lag_alpha,
-            lag_tau_s: tau_of_alpha(p.sample_period_s, p.lag_alpha),
+            lag_tau_s: p.lag_tau_s,
             rate: p.rate,
-            rate_alpha: p.rate_alpha,
-            rate_tau_s: tau_of_alpha(p.sample_period_s, p.rate_alpha),
+            rate_tau_s: p.rate_tau_s,
             hysteresis: p.hysteresis,
             hysteresis_threshold_c: p.hysteresis_threshold_c,
             hysteresis_initial: p.hysteresis_initial,
             k2: p.k2,
             asymmetry: p.asymmetry,
             warmup: p.warmup,
-            warmup_decay: p.warmup_decay,
-            warmup_tau_s: (decay > 0.0 && decay < 1.0)
-                .then(|| -f64::from(p.sample_period_s) / decay.ln()),
+            warmup_tau_s: p.warmup_tau_s,
         }
     }
 
     fn text(&self) -> String {
-        let tau = |t: Option<f64>| t.map_or("none".to_string(), |t| format!("{t:.4e} s"));
+        let tau = |t: f32| {
+            if t > 0.0 {
+                format!("{t:.4e} s")
+            } else {
+                "none".to_string()
+            }
+        };
         let v = |a: [f32; 3]| format!("[{:.4e}, {:.4e}, {:.4e}]", a[0], a[1], a[2]);
         [
+            "in-flight terms (time constants in seconds; the firmware steps them on its own sample period):".to_string(),
+            format!("  thermal_lag      tau {}", tau(self.lag_tau_s)),
             format!(
-                "in-flight terms (sample period {} s):",
-                self.sample_period_s
-            ),
-            format!(
-                "  thermal_lag      alpha {:.6e}, tau {}",
-                self.lag_alpha,
-                tau(self.lag_tau_s)
-            ),
-            format!(
-                "  temp_rate        r {} per C/s, alpha {:.6e} (tau {})",
+                "  temp_rate        r {} per C/s, rate low-pass tau {}",
                 v(self.rate),
-                self.rate_alpha,
                 tau(self.rate_tau_s)
             ),
             format!(
-                "  hysteresis       h {}, threshold {} C, initial direction {}",
+                "  hysteresis       h {}, threshold {} C, direction at power-on {}",
                 v(self.hysteresis),
                 self.hysteresis_threshold_c,
                 self.hysteresis_initial
@@ -270,9 +426,8 @@ impl PhysicsTerms {
             format!("  nonlinearity_k2  k2 {}", v(self.k2)),
             format!("  scale_asymmetry  c {}", v(self.asymmetry)),
             format!(
-                "  warmup_drift     d {}, decay {:.9} per sample (tau {})",
+                "  warmup_drift     d {}, tau {} since power-on",
                 v(self.warmup),
-                self.warmup_decay,
                 tau(self.warmup_tau_s)
             ),
         ]
@@ -324,6 +479,8 @@ impl Inspection {
             format_version: FORMAT_VERSION,
             bytes,
             serial: b.serial.to_string(),
+            output_unit: b.output_unit.label(),
+            run_id: (!b.run_id.is_none()).then(|| b.run_id.to_string()),
             t0_c: c.t0_c,
             t_min_c: c.t_min_c,
             t_max_c: c.t_max_c,
@@ -339,11 +496,12 @@ impl Inspection {
     /// As text (the blob's path as given on the command line).
     pub fn text(&self, path: &Path) -> String {
         let mut s = format!(
-            "blob {} ({} bytes, format {}): serial {}\n",
+            "blob {} ({} bytes, format {}): serial {}, run {}\n",
             path.display(),
             self.bytes,
             self.format_version,
-            self.serial
+            self.serial,
+            self.run_id.as_deref().unwrap_or("not recorded")
         );
         // the header's values are f32: two decimals say what they mean, not their rounding
         s.push_str(&format!(
@@ -359,9 +517,14 @@ impl Inspection {
             self.update_step_c,
             self.model
         ));
-        s.push_str(
-            "table (K in the recording's output unit per g, U0 in that unit; a polynomial's row dT^k per C^k):\n",
-        );
+        let unit = match self.output_unit {
+            "unstated" => "the output unit (not stated in the blob)".to_string(),
+            "other" => "the recording's own output unit (not one the format lists)".to_string(),
+            u => u.to_string(),
+        };
+        s.push_str(&format!(
+            "table (K in {unit} per g, U0 in {unit}; a polynomial's row dT^k per C^k):\n"
+        ));
         s.push_str(&format!(
             "{:>10} {}\n",
             "",

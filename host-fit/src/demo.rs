@@ -10,7 +10,7 @@ use crate::error::{HostError, Result};
 use crate::fit::select::Selection;
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::simulate::{simulate, SimConfig, TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
-use crate::store::record::{AtT0, Command, HashingReader, Record};
+use crate::store::record::{stamp, AtT0, Command, HashingReader, Record};
 use crate::store::Store;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
@@ -97,7 +97,7 @@ fn records(oc: &DemoOutcome, rec_path: &Path, csv: &str, seed: u64) -> Result<Ve
             values: cal.at_t0(),
             sigma: None,
         });
-        r.blob = Some(m.blob.clone());
+        r.blob = Some(stamp(&m.blob, r.run_id)?);
         r.worst_dg_mg = m.verifications[0]
             .max_by_temperature
             .iter()
@@ -137,9 +137,16 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<DemoOutcome> {
     write_json(&dir.join("truth.json"), &truth, force)?;
     let rec = Recording::from_reader(&rec_path, sim.csv.as_bytes(), Positions::default())?;
     let oc = analyse(rec, Some(TrueUnit::new(&cfg)?))?;
-    store.append(&mut records(&oc, &rec_path, &sim.csv, seed)?)?;
+    let mut recorded = records(&oc, &rec_path, &sim.csv, seed)?;
+    store.append(&mut recorded)?;
+    // each blob as recorded: with its run's id
     for m in &oc.models {
-        write_atomic(&dir.join(m.file), &m.blob, force)?;
+        let blob = recorded
+            .iter()
+            .find(|r| r.options["blob"] == m.file)
+            .and_then(|r| r.blob.as_deref())
+            .unwrap_or(&m.blob);
+        write_atomic(&dir.join(m.file), blob, force)?;
     }
     let summary = Summary {
         unit: &oc.recording.unit,

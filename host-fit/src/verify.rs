@@ -43,7 +43,9 @@ pub struct Verification {
     pub max_by_temperature: Vec<TempMax>,
 }
 
-/// Compensate the whole recording sample by sample in time order (as the MCU would),
+/// Compensate the whole recording sample by sample in time order, as the MCU would, on
+/// the recording's own clock (each row's time step, the stated power-ons of the sensor:
+/// [`Recording::clock`]),
 /// and evaluate formula (13) on the mean acceleration of every selected dwell.
 pub fn verify(
     rec: &Recording,
@@ -54,7 +56,9 @@ pub fn verify(
     let cal = &blob.calibration;
     let c0: Coeffs<f64> = Coeffs::from_array(&cal.at_t0().map(f64::from));
     let n0 = invert(&c0.k)?;
-    let mut comp = Compensator::new(cal, method).ok()?;
+    // every row is given its own time step; the period is only the constructor's
+    let period = rec.median_step_s() as f32;
+    let mut comp = Compensator::new(cal, method, period.max(1e-6)).ok()?;
     let mut acc: Vec<([f64; 3], usize, usize)> = vec![([0.0; 3], 0, 0); rec.dwells.len()];
     let mut dwell_of_row = vec![usize::MAX; rec.rows.len()];
     for (i, d) in rec.dwells.iter().enumerate() {
@@ -62,8 +66,15 @@ pub fn verify(
             dwell_of_row[d.start..d.end].iter_mut().for_each(|x| *x = i);
         }
     }
-    for (r, row) in rec.rows.iter().enumerate() {
-        let out = comp.compensate(row.u.map(|v| v as f32), row.temp_c as f32);
+    for (r, (row, clock)) in rec.rows.iter().zip(rec.clock()).enumerate() {
+        if let Some(on) = clock.power_on_s {
+            comp.power_on(on as f32);
+        }
+        let out = comp.compensate_dt(
+            row.u.map(|v| v as f32),
+            row.temp_c as f32,
+            clock.dt_s as f32,
+        );
         if let Some(slot) = acc.get_mut(dwell_of_row[r]) {
             if out.accel.iter().all(|v| v.is_finite()) {
                 for (s, v) in slot.0.iter_mut().zip(out.accel) {

@@ -379,6 +379,48 @@ fn crlf_and_bom_are_read() {
     assert!(out.contains("unit CR"), "{out}");
 }
 
+/// `power_off_s` (recording-format.md): spans that are not `start-end` numbers, or end
+/// before they start, are errors naming the line and the field; good spans are power-ons
+/// on the recording's clock: the first row after each span's end says how long before it
+/// the unit was powered on again (the warm-up clock's restart).
+#[test]
+fn power_off_spans_are_read_and_checked() {
+    for (i, bad) in ["abc", "10-5", "1-x", "-"].iter().enumerate() {
+        let text = format!("# power_off_s={bad}\n{HEAD}{}", good_rows(0));
+        expect_error(
+            &format!("poweroff{i}.csv"),
+            &text,
+            1,
+            Some("power_off_s"),
+            "",
+        );
+    }
+    let text = format!("# power_off_s=3.5-5.5, 100-110\n{HEAD}{}", good_rows(0));
+    let tmp = tempfile::tempdir().unwrap();
+    let p = write(tmp.path(), "poweroff-good.csv", &text);
+    let rec = host_fit::data::recording::Recording::read(
+        &p,
+        host_fit::data::positions::Positions::default(),
+    )
+    .unwrap();
+    assert!(
+        rec.warnings.iter().all(|w| !w.contains("power_off_s")),
+        "{:?}",
+        rec.warnings
+    );
+    assert_eq!(rec.power_off, [[3.5, 5.5], [100.0, 110.0]]);
+    let c = rec.clock();
+    // rows at t = 0, 1, 2, ...: row 6 (t = 6) is the first after the power-on at 5.5
+    assert_eq!((c[0].dt_s, c[0].power_on_s), (0.0, None));
+    assert_eq!((c[1].dt_s, c[1].power_on_s), (1.0, None));
+    assert_eq!((c[6].dt_s, c[6].power_on_s), (1.0, Some(0.5)));
+    assert_eq!(
+        c.iter().filter(|r| r.power_on_s.is_some()).count(),
+        1,
+        "the second span is after the last row"
+    );
+}
+
 #[test]
 fn bad_format_metadata_is_an_error() {
     expect_error(

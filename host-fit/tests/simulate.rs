@@ -91,6 +91,112 @@ fn toml_config_with_every_effect_parses_and_the_recording_reads() {
     );
 }
 
+/// The flight block of all-effects.toml, uncommented, writes a flight recording whose
+/// attitudes its positions file names, with the power-off stated.
+#[test]
+fn the_documented_flight_block_writes_a_flight() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/sim/all-effects.toml"
+    ))
+    .unwrap();
+    let at = text.find("# [flight]").unwrap();
+    let flight: String = text[at..]
+        .lines()
+        .map(|l| l.strip_prefix("# ").unwrap_or(l))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let mut cfg = parse_config(
+        Path::new("flight.toml"),
+        &format!("{}{flight}", &text[..at]),
+    )
+    .unwrap();
+    let f = cfg.flight.as_mut().unwrap();
+    assert_eq!(f.legs.len(), 4);
+    // a shorter flight for the test: the first two legs
+    f.legs.truncate(2);
+    f.legs[1].hold_s = 60.0;
+    let sim = simulate(&cfg, |_| {}).unwrap();
+    assert!(
+        sim.csv.contains("# power_off_s=300-420\n"),
+        "{}",
+        &sim.csv[..300]
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let pos = dir.path().join("attitudes.csv");
+    std::fs::write(&pos, sim.positions_csv.as_ref().unwrap()).unwrap();
+    let (positions, _) = host_fit::data::positions::Positions::with_file(&pos).unwrap();
+    let rec =
+        Recording::from_reader(Path::new("flight.csv"), sim.csv.as_bytes(), positions).unwrap();
+    // 20 Hz, the two minutes off not logged
+    let dt = rec.rows[1].t_s - rec.rows[0].t_s;
+    assert!((dt - 0.05).abs() < 1e-9, "{dt}");
+    assert!(rec.rows.iter().all(|r| !(300.0..420.0).contains(&r.t_s)));
+    // attitudes all over the sphere, each held 40 s (800 rows)
+    let names: std::collections::BTreeSet<&str> = rec
+        .dwells
+        .iter()
+        .map(|d| rec.positions.name(d.position))
+        .collect();
+    assert!(names.len() >= 20, "{names:?}");
+    assert!(rec.dwells.iter().filter(|d| d.len() == 800).count() > 20);
+    let temps: Vec<f64> = rec.rows.iter().map(|r| r.temp_c).collect();
+    let (lo, hi) = temps
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), t| {
+            (l.min(*t), h.max(*t))
+        });
+    // the case lags the warming air: 35 C after a minute at 45 C
+    assert!(lo < -29.0 && hi > 30.0, "{lo} {hi}");
+}
+
+/// The logger's clock: rows at 0.1 Hz at rest and at 1 Hz in the dwells, each up to
+/// 0.3 s late, 1 % lost, a power-off stated; the physics underneath is the same.
+#[test]
+fn the_logger_writes_an_uneven_clock() {
+    let mut cfg = base();
+    cfg.schedule.power_offs = vec![[2000.0, 300.0]];
+    cfg.logger = host_fit::simulate::Logger {
+        rest_rate_hz: 0.1,
+        jitter_s: 0.3,
+        drop_rate: 0.01,
+        power_off_metadata: true,
+    };
+    let sim = simulate(&cfg, |_| {}).unwrap();
+    assert!(sim.csv.contains("# power_off_s=2000-2300\n"));
+    let rec =
+        Recording::from_reader(Path::new("u.csv"), sim.csv.as_bytes(), Default::default()).unwrap();
+    let steps: Vec<f64> = rec.rows.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
+    let near = |a: f64, b: f64| (a - b).abs() <= 0.31;
+    assert!(
+        steps.iter().any(|d| near(*d, 10.0)),
+        "rows every 10 s at rest"
+    );
+    assert!(steps.iter().filter(|d| near(**d, 1.0)).count() > steps.len() / 2);
+    assert!(
+        steps.iter().any(|d| d.fract().abs() > 0.01),
+        "jittered stamps"
+    );
+    assert!(steps.iter().all(|d| *d > 0.0));
+    assert_eq!(rec.power_off, [[2000.0, 2300.0]]);
+    let plain = simulate(&base(), |_| {}).unwrap();
+    assert!(
+        sim.rows < plain.rows * 9 / 10,
+        "{} vs {}",
+        sim.rows,
+        plain.rows
+    );
+    let bad = host_fit::simulate::Logger {
+        jitter_s: 2.0,
+        ..cfg.logger.clone()
+    };
+    cfg.logger = bad;
+    assert!(
+        simulate(&cfg, |_| {}).is_err(),
+        "jitter of more than a tick"
+    );
+}
+
 #[test]
 fn same_seed_same_recording() {
     let a = simulate(&base(), |_| {}).unwrap().csv;

@@ -9,6 +9,7 @@ pub mod lab;
 pub mod readme;
 pub mod run;
 pub mod synthetic;
+pub mod time_true;
 pub mod twins;
 
 pub use run::{cli, cli_json, real_diagnosis};

@@ -7,13 +7,14 @@
 use crate::repo;
 
 /// Every figure of the README and the test file that checks it (`tests/tests/FILE`).
-pub const FIGURES: [(&str, &str); 10] = [
+pub const FIGURES: [(&str, &str); 11] = [
     ("demo", "readme.rs"),
     ("coverage", "production.rs"),
     ("model-choice", "production.rs"),
     ("ggir-wrist", "production.rs"),
     ("imucal", "production.rs"),
     ("physics-blob", "diagnose.rs"),
+    ("time-true", "time_true.rs"),
     ("blind-long", "readme.rs"),
     ("real-recordings", "readme.rs"),
     ("cats-tag", "readme.rs"),

@@ -233,7 +233,8 @@ fn batch_with_the_diagnosis_takes_the_diagnosed_blob() {
     let row = r.records().next().unwrap().unwrap();
     let model = &row[header.iter().position(|h| h == "model").unwrap()];
     assert!(model.starts_with("diagnosed"), "{row:?}");
-    // the blob is the diagnosis's: byte for byte what `diagnose --out` writes
+    // the blob is the diagnosis's: byte for byte what `diagnose --out` writes, but for the
+    // run id each run stamps into its blob (the batch records, this diagnose does not)
     let own = root.join("diagnosed.blob");
     let (code, _, err) = cli(&[
         "diagnose",
@@ -242,9 +243,11 @@ fn batch_with_the_diagnosis_takes_the_diagnosed_blob() {
         own.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{err}");
+    let batch_blob = std::fs::read(out.join("u1.blob")).unwrap();
+    let run = host_fit::store::record::blob_run_id(&batch_blob).expect("a run id");
     assert_eq!(
-        std::fs::read(out.join("u1.blob")).unwrap(),
-        std::fs::read(&own).unwrap()
+        batch_blob,
+        host_fit::store::record::stamp(&std::fs::read(&own).unwrap(), run).unwrap()
     );
     let u: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("u1.json")).unwrap()).unwrap();

@@ -229,12 +229,16 @@ fn the_flashed_model_reaches_the_fits_own_residual_in_firmware() {
     assert!(cal.physics.is_some());
     let data = &d.data;
     let fit_dg = host_fit::diagnose::metrics::dg_per_window(data, &d.flashed.fit);
-    let mut comp = Compensator::new(&cal, Method::CorrectConstants).unwrap();
+    let mut comp = Compensator::new(&cal, Method::CorrectConstants, 1.0).unwrap();
     let accel: Vec<[f64; 3]> = rec
         .rows
         .iter()
-        .map(|r| {
-            comp.compensate(r.u.map(|v| v as f32), r.temp_c as f32)
+        .zip(rec.clock())
+        .map(|(r, c)| {
+            if let Some(on) = c.power_on_s {
+                comp.power_on(on as f32);
+            }
+            comp.compensate_dt(r.u.map(|v| v as f32), r.temp_c as f32, c.dt_s as f32)
                 .accel
                 .map(f64::from)
         })

@@ -297,9 +297,20 @@ fn the_default_fit_states_its_choice_and_its_predicted_error() {
         let v = q["dg_1sigma_mg"].as_f64().unwrap();
         assert!(v > 0.0 && v < 0.05, "{q}");
     }
-    // the cache's lag, stated apart, scales with the step
-    let lag = p["cache_lag_max_mg"].as_f64().unwrap();
-    assert!(lag > 0.001 && lag < 0.1, "{lag}");
+    // the firmware's cache, stated apart: by default its step is chosen from the unit's
+    // slopes so that it never costs more than a verification dwell's own noise anywhere
+    // in the valid range; a given step scales its cost
+    let c = &j["cache"];
+    let (step, lag, floor) = (
+        c["step_c"].as_f64().unwrap(),
+        c["worst_mg"].as_f64().unwrap(),
+        c["floor_mg"].as_f64().unwrap(),
+    );
+    assert_eq!(c["chosen"], true, "{c}");
+    assert!(step > 0.0 && step <= 0.1, "{c}");
+    assert!(lag > 0.0 && lag <= floor, "{c}");
+    assert_eq!(p["cache_lag_max_mg"].as_f64().unwrap(), lag);
+    assert_eq!(p["dwell_noise_1sigma_mg"].as_f64().unwrap(), floor);
     let j2 = cli_json(&[
         "fit",
         s(&rec),
@@ -311,7 +322,8 @@ fn the_default_fit_states_its_choice_and_its_predicted_error() {
         "0.2",
     ]);
     let lag2 = j2["predicted_error"]["cache_lag_max_mg"].as_f64().unwrap();
-    assert!((lag2 / lag - 2.0).abs() < 1e-9, "{lag} {lag2}");
+    assert!((lag2 / lag - 0.2 / step).abs() < 1e-9, "{lag} {lag2}");
+    assert_eq!(j2["cache"]["chosen"], false);
     let ex = &j["excluded_not_in_equilibrium"];
     assert_eq!(ex["dwells"], 5, "the five rests through the ramps: {ex}");
 }
@@ -418,19 +430,18 @@ fn inspect_shows_every_in_flight_term() {
     assert!(j["physics"].is_null());
 
     let mut b = example_blob();
-    let dt = 1.0f32;
+    b.output_unit = firmware_core::blob::OutputUnit::MetrePerSecond2;
     b.calibration.physics = Some(Physics {
-        sample_period_s: dt,
-        lag_alpha: 1.0 - (-dt / 250.0f32).exp(),
+        lag_tau_s: 250.0,
         rate: [0.011, -0.012, 0.013],
-        rate_alpha: 1.0 - (-dt / 30.0f32).exp(),
+        rate_tau_s: 30.0,
         hysteresis: [1.1e-4, -1.2e-4, 1.3e-4],
         hysteresis_threshold_c: 0.5,
         hysteresis_initial: -1.0,
         k2: [2.1e-4, -2.2e-4, 2.3e-4],
         asymmetry: [3.1e-4, -3.2e-4, 3.3e-4],
         warmup: [4.1e-4, -4.2e-4, 4.3e-4],
-        warmup_decay: (-dt / 3600.0f32).exp(),
+        warmup_tau_s: 3600.0,
     });
     let p = write(&b, "physics.blob");
     let j = cli_json(&["inspect", s(&p), "--json"]);
@@ -452,10 +463,12 @@ fn inspect_shows_every_in_flight_term() {
     }
     close(&ph["hysteresis_threshold_c"], 0.5, 0.0);
     close(&ph["hysteresis_initial"], -1.0, 0.0);
-    // the time constants the per-sample constants stand for (f32 constants: 1e-3)
-    close(&ph["lag_tau_s"], 250.0, 1e-3);
-    close(&ph["rate_tau_s"], 30.0, 1e-3);
-    close(&ph["warmup_tau_s"], 3600.0, 1e-2);
+    // the time constants, in seconds as the blob stores them (format 4)
+    close(&ph["lag_tau_s"], 250.0, 0.0);
+    close(&ph["rate_tau_s"], 30.0, 0.0);
+    close(&ph["warmup_tau_s"], 3600.0, 0.0);
+    assert_eq!(j["output_unit"], "m/s2");
+    assert_eq!(j["format_version"], 4);
     let (_, text, _) = cli(&["inspect", s(&p)]);
     for term in [
         "thermal_lag",

@@ -5,7 +5,7 @@
 //! that moves from a lot on) with the rule such a shift trips, and a stable process no
 //! more than the stated false-alarm rate; bad stores are refused, named, left alone.
 use host_fit::simulate::{PAPER_UNIT, PAPER_UNIT_TEMPS};
-use host_fit::store::record::{Command, Record};
+use host_fit::store::record::{blob_run_id, Command, Record};
 use host_fit::store::trend::all_rules_rate;
 use host_fit::store::Store;
 use serde_json::Value;
@@ -149,6 +149,14 @@ fn assert_records_hold_what_was_made(
     assert_eq!(j.reason, ver["reason"].as_str().unwrap());
     close(v.worst_dg_mg.unwrap(), worst(ver));
     assert!(v.at_t0.unwrap().sigma.is_none());
+    // the blobs carry their run's id: the fit's as `inspect` and the firmware read it,
+    // the verified one the fit's, the diagnosis' its own
+    let fit_bytes = std::fs::read(fb).unwrap();
+    assert_eq!(insp["run_id"], f.run_id.to_string());
+    let view = firmware_core::blob::BlobView::new(&fit_bytes).unwrap();
+    assert_eq!(view.run_id().0, f.run_id.0);
+    assert_eq!(blob_run_id(v.blob.as_ref().unwrap()), Some(f.run_id));
+    assert_eq!(blob_run_id(d.blob.as_ref().unwrap()), Some(d.run_id));
     // diagnose: the contract's verdict and findings, its blob
     assert_eq!(d.diagnosis_verdict.as_deref(), diag["verdict"].as_str());
     assert_eq!(d.findings.as_ref(), Some(&diag["findings"]));
@@ -359,6 +367,7 @@ fn assert_default_store_matches_the_files(root: &Path, dir: &Path, n: usize) {
         assert_eq!((j.verdict.as_str(), j.reason.as_str()), (acc, reason));
         let blob = own.join(format!("{unit}.blob"));
         assert_eq!(r.blob.as_deref(), Some(&std::fs::read(&blob).unwrap()[..]));
+        assert_eq!(blob_run_id(r.blob.as_ref().unwrap()), Some(r.run_id));
         let uj: Value = serde_json::from_str(
             &std::fs::read_to_string(own.join(format!("{unit}.json"))).unwrap(),
         )
@@ -608,6 +617,11 @@ fn the_demo_records_its_blobs_and_shows_the_history() {
         assert_eq!(r.command, Command::Demo);
         assert_eq!(r.input_sha256.as_deref(), Some(sha.as_str()));
         let file = r.options["blob"].as_str().unwrap();
+        assert_eq!(
+            blob_run_id(r.blob.as_ref().unwrap()),
+            Some(r.run_id),
+            "{file}"
+        );
         assert_eq!(
             r.blob.as_deref(),
             Some(&std::fs::read(dir.join(file)).unwrap()[..]),

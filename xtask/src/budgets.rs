@@ -4,6 +4,9 @@ use crate::measure::Measured;
 
 /// Method 1's floor: 9 multiplications, 6 additions, 3 subtractions per sample.
 pub const M1_FLOOR: u64 = 18;
+/// Method 1 with the physics terms between the machines' steps: its floor, the offsets
+/// (15) and the K2/asymmetry correction (30).
+pub const PM1_FLOOR: u64 = M1_FLOOR + 15 + 30;
 
 /// One budget of a firmware build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -14,10 +17,21 @@ pub enum Budget {
     CompensateStack,
     /// `size_of::<FlashCompensator>`.
     State,
-    /// Flash of compensation + blob validation (the library components).
+    /// Flash of compensation + blob validation (the library components), built without
+    /// `physics`.
     Flash,
+    /// The same with `physics`.
+    PhysicsFlash,
     /// Method 1's net instructions per sample: at most 2.5x its floor.
     Method1,
+    /// The physics path's method 1 per sample, between the machines' steps.
+    PhysicsSample,
+    /// The physics path's temperature machines stepping (once per 0.1 s), the cached
+    /// matrices kept.
+    PhysicsStep,
+    /// The physics path's temperature update: the machines' step and the cached matrices
+    /// of the diagnosed blob's table recomputed.
+    PhysicsUpdate,
     /// No soft-double routine linked.
     NoSoftDouble,
 }
@@ -45,24 +59,56 @@ impl Verdict {
 
 impl Budget {
     /// Every budget, in the report's order.
-    pub const ALL: [Budget; 6] = [
+    pub const ALL: [Budget; 10] = [
         Budget::DecodeStack,
         Budget::CompensateStack,
         Budget::State,
         Budget::Flash,
+        Budget::PhysicsFlash,
         Budget::Method1,
+        Budget::PhysicsSample,
+        Budget::PhysicsStep,
+        Budget::PhysicsUpdate,
         Budget::NoSoftDouble,
     ];
 
     /// The limit, in the budget's unit.
+    ///
+    /// The physics path's: flash 6.5 KiB (the machines, their f32 exponential and the
+    /// offsets, 1.7 KiB over the build without); per sample no more than the format-3 path
+    /// (230); the machines' step at most 600 (three exponentials of about 40 instructions,
+    /// six divisions, the filters, the direction and the offsets: 464 measured at format
+    /// 4's introduction); a temperature update at most 3000 (the machines' step and a
+    /// fifth-order table's 12 polynomials and inverse: 2722 measured).
     pub fn limit(self) -> u64 {
         match self {
             Budget::DecodeStack => 1024,
             Budget::CompensateStack => 512,
             Budget::State => 256,
             Budget::Flash => 6 * 1024,
+            Budget::PhysicsFlash => 13 * 512,
             Budget::Method1 => M1_FLOOR * 5 / 2,
+            Budget::PhysicsSample => 230,
+            Budget::PhysicsStep => 600,
+            Budget::PhysicsUpdate => 3000,
             Budget::NoSoftDouble => 0,
+        }
+    }
+
+    /// Whether the budget is for the build `m` (the physics budgets for the build with
+    /// `physics`, the plain flash budget for the one without).
+    pub fn applies(self, m: &Measured) -> bool {
+        match self {
+            Budget::Flash => m.physics_refused,
+            Budget::PhysicsFlash
+            | Budget::PhysicsSample
+            | Budget::PhysicsStep
+            | Budget::PhysicsUpdate => !m.physics_refused,
+            Budget::DecodeStack
+            | Budget::CompensateStack
+            | Budget::State
+            | Budget::Method1
+            | Budget::NoSoftDouble => true,
         }
     }
 
@@ -72,8 +118,11 @@ impl Budget {
             Budget::DecodeStack => m.stack_decode,
             Budget::CompensateStack => m.stack_compensate,
             Budget::State => m.state,
-            Budget::Flash => Some(m.library_bytes()),
+            Budget::Flash | Budget::PhysicsFlash => Some(m.library_bytes()),
             Budget::Method1 => m.net("sample_m1"),
+            Budget::PhysicsSample => m.net("sample_pm1"),
+            Budget::PhysicsStep => m.net("step_pm1"),
+            Budget::PhysicsUpdate => m.net("update_pm1"),
             Budget::NoSoftDouble => Some(m.soft_double.len() as u64),
         }
     }
@@ -94,7 +143,11 @@ impl Budget {
             Budget::CompensateStack => "compensate stack",
             Budget::State => "compensator state",
             Budget::Flash => "flash for compensation + blob validation",
+            Budget::PhysicsFlash => "flash for compensation + blob validation with physics",
             Budget::Method1 => "method 1 per sample (2.5x the floor of 18)",
+            Budget::PhysicsSample => "method 1 per sample with the physics terms",
+            Budget::PhysicsStep => "the physics terms' step",
+            Budget::PhysicsUpdate => "the physics path's temperature update",
             Budget::NoSoftDouble => "no soft-double routines",
         }
     }
@@ -102,11 +155,16 @@ impl Budget {
     /// The unit of the figure.
     fn unit(self) -> &'static str {
         match self {
-            Budget::Method1 => "instructions",
+            Budget::Method1
+            | Budget::PhysicsSample
+            | Budget::PhysicsStep
+            | Budget::PhysicsUpdate => "instructions",
             Budget::NoSoftDouble => "routines",
-            Budget::DecodeStack | Budget::CompensateStack | Budget::State | Budget::Flash => {
-                "bytes"
-            }
+            Budget::DecodeStack
+            | Budget::CompensateStack
+            | Budget::State
+            | Budget::Flash
+            | Budget::PhysicsFlash => "bytes",
         }
     }
 
@@ -133,9 +191,20 @@ impl Budget {
                 format!("compensate stack {v} bytes (<= {limit}: {verdict})")
             }
             Budget::State => format!("compensator state {v} bytes (<= {limit}: {verdict})"),
-            Budget::Flash => format!("flash {v} bytes (<= {limit}: {verdict})"),
+            Budget::Flash | Budget::PhysicsFlash => {
+                format!("flash {v} bytes (<= {limit}: {verdict})")
+            }
             Budget::Method1 => format!(
                 "method 1 {v} instructions per sample (<= {limit}, 2.5x the floor: {verdict})"
+            ),
+            Budget::PhysicsSample => format!(
+                "method 1 with the physics terms {v} instructions per sample (<= {limit}: {verdict})"
+            ),
+            Budget::PhysicsStep => {
+                format!("the physics terms' step {v} instructions (<= {limit}: {verdict})")
+            }
+            Budget::PhysicsUpdate => format!(
+                "the physics path's temperature update {v} instructions (<= {limit}: {verdict})"
             ),
             Budget::NoSoftDouble => format!(
                 "soft-double routines: {}",
@@ -153,8 +222,19 @@ impl Budget {
 pub fn missed(m: &Measured, build: &str) -> Vec<(String, String)> {
     Budget::ALL
         .iter()
+        .filter(|b| b.applies(m))
         .filter_map(|b| b.miss(m, build))
         .collect()
+}
+
+/// The report's clauses of the budgets for build `m`, joined.
+pub fn report(m: &Measured) -> String {
+    Budget::ALL
+        .iter()
+        .filter(|b| b.applies(m))
+        .map(|b| b.report(m))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 #[cfg(test)]
@@ -164,7 +244,7 @@ mod tests {
     fn measured() -> Measured {
         Measured {
             samples: 10,
-            physics_refused: false,
+            physics_refused: true,
             departures: Vec::new(),
             sizes: Vec::new(),
             components: vec![("firmware-core compensate".into(), 6084)],
@@ -182,9 +262,9 @@ mod tests {
     #[test]
     fn a_build_within_every_budget_misses_none() {
         let m = measured();
-        assert_eq!(missed(&m, "with physics"), []);
+        assert_eq!(missed(&m, "without physics"), []);
         assert_eq!(
-            Budget::ALL.map(|b| b.report(&m)).join(", "),
+            report(&m),
             "decode stack 472 bytes (<= 1024: met), compensate stack 464 bytes (<= 512: met), \
              compensator state 200 bytes (<= 256: met), flash 6084 bytes (<= 6144: met), \
              method 1 43 instructions per sample (<= 45, 2.5x the floor: met), \
@@ -223,5 +303,34 @@ mod tests {
             "soft-double routines: linked (missed)"
         );
         assert_eq!(Budget::State.verdict(&m), Verdict::Met);
+    }
+
+    /// The build with `physics` is held to its own flash limit and to the physics path's
+    /// instruction budgets; a physics figure missing is a miss.
+    #[test]
+    fn the_physics_build_has_its_own_budgets() {
+        let mut m = measured();
+        m.physics_refused = false;
+        m.components[0].1 = 6600;
+        m.icount
+            .extend([("sample_pm1", 211), ("step_pm1", 484)].map(|(k, v)| (k.to_string(), v)));
+        let text: Vec<String> = missed(&m, "with physics")
+            .into_iter()
+            .map(|(name, why)| format!("{name}: {why}"))
+            .collect();
+        assert_eq!(
+            text,
+            ["the physics path's temperature update (with physics): not measured"]
+        );
+        assert!(
+            report(&m).contains("flash 6600 bytes (<= 6656: met)"),
+            "{}",
+            report(&m)
+        );
+        assert!(report(&m)
+            .contains("method 1 with the physics terms 191 instructions per sample (<= 230: met)"));
+        m.components[0].1 = 6657;
+        assert_eq!(Budget::PhysicsFlash.verdict(&m), Verdict::Missed);
+        assert!(!Budget::Flash.applies(&m));
     }
 }

@@ -28,18 +28,23 @@ const METHODS: [(&str, Method); 3] = [
     ("m2simp", Method::CorrectResult(ErrorModel::Simplified)),
 ];
 
-fn input(i: usize) -> ([f32; 3], f32) {
+/// Bytes of one input record: ux uy uz temp dt (f32 LE; dt the sample's own time step).
+const RECORD: usize = 20;
+/// The sample period the compensators are made with (a 100 Hz MCU), s.
+const PERIOD: f32 = 0.01;
+
+fn input(i: usize) -> ([f32; 3], f32, f32) {
     let f = |k: usize| {
-        let o = i * 16 + k * 4;
+        let o = i * RECORD + k * 4;
         f32::from_le_bytes([INPUTS[o], INPUTS[o + 1], INPUTS[o + 2], INPUTS[o + 3]])
     };
-    ([f(0), f(1), f(2)], f(3))
+    ([f(0), f(1), f(2)], f(3), f(4))
 }
 
 /// A compensator, or a failed run. Not `unwrap`: its `Debug` formatting of the error
 /// would be linked in and counted against the library's flash.
 fn new(blob: BlobView<'static>, m: Method) -> FlashCompensator<'static> {
-    match Compensator::from_blob(blob, m) {
+    match Compensator::from_blob(blob, m, PERIOD) {
         Ok(c) => c,
         Err(_) => {
             hprintln!("error: Compensator::new refused a test calibration");
@@ -113,7 +118,7 @@ fn view(bytes: &'static [u8], what: &str) -> BlobView<'static> {
 
 #[entry]
 fn main() -> ! {
-    let n_inputs = INPUTS.len() / 16;
+    let n_inputs = INPUTS.len() / RECORD;
 
     let sp = cortex_m::register::msp::read() as usize;
     paint();
@@ -126,7 +131,7 @@ fn main() -> ! {
     #[cfg(not(feature = "physics"))]
     let sets = {
         // built without the terms: the physics blob must be refused, not half-applied
-        match Compensator::from_blob(phys, Method::CorrectConstants) {
+        match Compensator::from_blob(phys, Method::CorrectConstants, PERIOD) {
             Err(firmware_core::Error::PhysicsNotBuiltIn) => hprintln!("physics refused"),
             _ => {
                 hprintln!("error: a physics blob was accepted without the physics feature");
@@ -139,8 +144,8 @@ fn main() -> ! {
         for (tag, m) in METHODS {
             let mut c = new(b, m);
             for i in 0..n_inputs {
-                let (u, t) = input(i);
-                let o = c.compensate(u, t);
+                let (u, t, dt) = input(i);
+                let o = c.compensate_dt(u, t, dt);
                 hprintln!("vec {}{} {} {:08x} {:08x} {:08x} {}", prefix, tag, i, o.accel[0].to_bits(), o.accel[1].to_bits(), o.accel[2].to_bits(), o.status.bits());
             }
         }
@@ -150,14 +155,14 @@ fn main() -> ! {
     let mut c = new(blob, Method::CorrectResult(ErrorModel::Full));
     let sp = cortex_m::register::msp::read() as usize;
     paint();
-    let (u, _) = input(0);
+    let (u, _, _) = input(0);
     black_box(c.compensate(black_box(u), black_box(-20.0)));
     black_box(c.compensate(black_box(u), black_box(60.0)));
     let stack_compensate = used(sp);
 
     // Instruction counts: the icount plugin counts from the first instruction of
     // `fw_mark_start` to that of `fw_mark_stop`; windows come in the order printed.
-    let (u, t) = input(1);
+    let (u, t, _) = input(1);
     hprintln!("measure empty");
     fw_mark_start();
     fw_mark_stop();
@@ -178,12 +183,33 @@ fn main() -> ! {
     }
     #[cfg(feature = "physics")]
     for (tag, m) in METHODS {
+        // a sample between the machines' steps (at 100 Hz, nine in ten)
         let mut c = new(phys, m);
         c.compensate(u, t);
         let du = [u[0] + 1e-6, u[1], u[2]];
         hprintln!("measure sample_p{}", tag);
         fw_mark_start();
         black_box(c.compensate(black_box(du), black_box(t)));
+        fw_mark_stop();
+    }
+    #[cfg(feature = "physics")]
+    {
+        // a sample at which the machines step (every 0.1 s), the temperature unchanged:
+        // no recomputation of the cached matrices
+        let mut c = new(phys, Method::CorrectConstants);
+        c.compensate(u, t);
+        let du = [u[0] + 1e-6, u[1], u[2]];
+        hprintln!("measure step_pm1");
+        fw_mark_start();
+        black_box(c.compensate_dt(black_box(du), black_box(t), black_box(0.2)));
+        fw_mark_stop();
+        // ... and one at which they step to a temperature 5 C away: the cached matrices
+        // recomputed too (the physics path's temperature update)
+        let mut c = new(phys, Method::CorrectConstants);
+        c.compensate(u, t);
+        hprintln!("measure update_pm1");
+        fw_mark_start();
+        black_box(c.compensate_dt(black_box(du), black_box(t + 5.0), black_box(0.2)));
         fw_mark_stop();
     }
     for (tag, bytes) in [("update_poly3", BLOB_POLY3), ("update_pwl5", BLOB_PWL5)] {

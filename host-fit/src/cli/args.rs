@@ -251,9 +251,12 @@ pub struct FitArgs {
     /// The serial written into the blob (default: the recording's `unit`).
     #[arg(long)]
     pub serial: Option<String>,
-    /// Recompute the firmware's cached matrices after this temperature change, C.
-    #[arg(long, default_value_t = crate::fit::temperature::UPDATE_STEP_C)]
-    pub update_step: f64,
+    /// Recompute the firmware's cached matrices after this temperature change, C
+    /// (default: chosen from the unit's own slopes so that the cache never costs more
+    /// than a verification dwell's own noise anywhere in the valid range, at most 0.1;
+    /// 0: the model at every temperature).
+    #[arg(long)]
+    pub update_step: Option<f64>,
     /// Clamp the temperature to the valid range instead of extrapolating.
     #[arg(long)]
     pub clamp: bool,
@@ -404,6 +407,10 @@ pub struct SimulateArgs {
     /// Also write the truth (all parameters) as JSON here.
     #[arg(long)]
     pub truth: Option<PathBuf>,
+    /// Where to write the positions file the recording needs (a `[flight]`
+    /// configuration's attitudes; required with one).
+    #[arg(long)]
+    pub positions_out: Option<PathBuf>,
     /// Overwrite existing outputs.
     #[arg(long)]
     pub force: bool,

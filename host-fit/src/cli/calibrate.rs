@@ -1,7 +1,7 @@
 //! `temp-fit`, `identify` and `fit`: from data to coefficients and blobs.
 use super::args::{FitArgs, IdentifyArgs, TempFitArgs};
 use super::common::{load_to_fit, oriented, serial, w};
-use crate::blob::{build_blob, F32_BOUND_G};
+use crate::blob::{build_blob, Cache, F32_BOUND_G};
 use crate::data::table::{read_table, to_csv, TableRow};
 use crate::error::{HostError, Result};
 use crate::fit::describe::ModelDescription;
@@ -183,6 +183,8 @@ struct Fitted<'a> {
     t0_c: f64,
     t_min_c: f64,
     t_max_c: f64,
+    /// The firmware's cache of N(T): its step and its worst cost.
+    cache: Cache,
     noise_sigma: [f64; 3],
     noise_source: &'static str,
     /// Where every noise figure of this output comes from.
@@ -253,6 +255,8 @@ struct Written<'a> {
     serial: &'a str,
     bytes: usize,
     f32_departure_g: f64,
+    /// The firmware's cache of N(T), as chosen.
+    cache: Cache,
 }
 
 fn fitted<'a>(
@@ -276,7 +280,11 @@ fn fitted<'a>(
             t_max_c: cal.t_max_c,
             update_step_c: cal.update_step_c,
         };
-        predict(&oc.fit, &oc.noise, &req)
+        let mut p = predict(&oc.fit, &oc.noise, &req);
+        // the cache's cost over the whole range and every attitude, as chosen
+        p.cache_step_c = written.cache.step_c;
+        p.cache_lag_max_mg = written.cache.worst_mg;
+        p
     });
     let one_temp = crate::fit::predict::is_constant(&oc.fit.basis);
     Fitted {
@@ -291,6 +299,7 @@ fn fitted<'a>(
         t0_c: cal.t0_c,
         t_min_c: cal.t_min_c,
         t_max_c: cal.t_max_c,
+        cache: written.cache,
         noise_sigma: oc.noise.sigma,
         noise_source: oc.noise.source(),
         noise_figures: NoiseFigures::of(&oc.noise),
@@ -343,9 +352,10 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
             route,
         )?,
     };
-    let cal = oc.fit.calibration(a.update_step, a.clamp);
+    let mut cal = oc.fit.calibration(0.0, a.clamp);
+    let cache = Cache::for_fit(&rec, &oc, &mut cal, a.update_step);
     let serial_name = a.serial.as_deref().unwrap_or(serial(&rec));
-    let (blob, bytes, dep) = build_blob(serial_name, &cal)?;
+    let (blob, bytes, dep) = build_blob(serial_name, &rec.output_unit, &cal)?;
     let run = super::records::Run {
         args: &a.record,
         serial: serial_name,
@@ -358,6 +368,7 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
         serial: serial_name,
         bytes: bytes.len(),
         f32_departure_g: dep,
+        cache,
     };
     let j = fitted(&a, &rec, &oc, &cal, &written);
     if a.json {
@@ -437,10 +448,11 @@ fn fit_text(j: &Fitted<'_>) -> String {
             pts.join(", ")
         ));
         s.push(format!(
-            "a verification dwell of {} samples adds {:.4} mg of its own noise (noise: {}, over the root of its samples; not the model's residuals); the firmware's {} C cache step up to {:.4} mg; valid range {:.2}..{:.2} C",
-            p.dwell_samples, p.dwell_noise_1sigma_mg, j.noise_source, p.cache_step_c, p.cache_lag_max_mg, p.t_min_c, p.t_max_c
+            "a verification dwell of {} samples adds {:.4} mg of its own noise (noise: {}, over the root of its samples; not the model's residuals); valid range {:.2}..{:.2} C",
+            p.dwell_samples, p.dwell_noise_1sigma_mg, j.noise_source, p.t_min_c, p.t_max_c
         ));
     }
+    s.push(j.cache.text());
     if !j.stops.is_empty() {
         let stops: Vec<String> = j
             .stops

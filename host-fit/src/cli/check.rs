@@ -172,17 +172,21 @@ pub(super) fn fw_vectors(a: FwVectorsArgs, out: &mut dyn Write) -> Result<()> {
         write_atomic(&p, &table, a.force)?;
         return w(
             out,
-            format!("wrote {} ({} inputs)", p.display(), table.len() / 16),
+            format!(
+                "wrote {} ({} inputs)",
+                p.display(),
+                table.len() / crate::vectors::RECORD
+            ),
         );
     }
     let p = a
         .inputs
         .ok_or_else(|| HostError::msg("give --inputs FILE or --make-inputs FILE"))?;
     let table = std::fs::read(&p).map_err(|e| HostError::io(&p, &e))?;
-    if table.len() % 16 != 0 {
+    if table.len() % crate::vectors::RECORD != 0 {
         return Err(HostError::in_file(
             &p,
-            "length is not a multiple of 16 bytes (ux uy uz temp, f32)",
+            "length is not a multiple of 20 bytes (ux uy uz temp dt, f32)",
         ));
     }
     let (lines, worst) = crate::vectors::expected(&b, &table, &a.tag_prefix);

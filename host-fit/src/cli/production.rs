@@ -119,8 +119,19 @@ pub(super) fn simulate(a: SimulateArgs, out: &mut dyn Write) -> Result<()> {
     if let Some(s) = a.seed {
         cfg.seed = s;
     }
+    if let Some(p) = &a.positions_out {
+        check_writable(p, a.force)?;
+    }
+    if cfg.flight.is_some() && a.positions_out.is_none() {
+        return Err(HostError::msg(
+            "a [flight] configuration names its attitudes in a positions file: give --positions-out FILE",
+        ));
+    }
     let sim = crate::simulate::simulate(&cfg, |_| {})?;
     write_atomic(&a.out, sim.csv.as_bytes(), a.force)?;
+    if let (Some(p), Some(text)) = (&a.positions_out, &sim.positions_csv) {
+        write_atomic(p, text.as_bytes(), a.force)?;
+    }
     if let Some(t) = &a.truth {
         write_json(t, &Truth { config: &cfg }, a.force)?;
     }

@@ -14,7 +14,7 @@ use crate::fit::pipeline::FitOutcome;
 use crate::fit::predict::coefficient_sigma;
 use crate::output::{check_writable, json, write_atomic};
 use crate::store::history::{history as unit_history, stored_blob};
-use crate::store::record::{sha256_file, AtT0, Command as Recorded, Record};
+use crate::store::record::{sha256_file, stamp, AtT0, Command as Recorded, Record};
 use crate::store::trend::{parse_rules, trend as make_trend, Reference};
 use crate::store::{clock, Invocation, Store, Target};
 use crate::verify::Verification;
@@ -158,7 +158,7 @@ pub(super) fn fit(
             values: cal.at_t0(),
             sigma: Some(sigma),
         });
-        r.blob = Some(blob.clone());
+        r.blob = Some(stamp(&blob, r.run_id)?);
         Ok(())
     })?;
     Ok(saved.and_then(|r| r.blob).unwrap_or(blob))
@@ -219,7 +219,7 @@ pub(super) fn diagnose(
             values: cal.at_t0(),
             sigma: None,
         });
-        r.blob.clone_from(&blob);
+        r.blob = blob.as_deref().map(|b| stamp(b, r.run_id)).transpose()?;
         r.with_diagnosis(c)
     })?;
     Ok(match saved {

@@ -22,7 +22,11 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
     let mut c = d.contract();
     let name = a.serial.as_deref().unwrap_or(serial(&rec));
     let built = match &a.out {
-        Some(_) => Some(build_blob(name, &d.calibration(rec.t0_c)?)?),
+        Some(_) => Some(build_blob(
+            name,
+            &rec.output_unit,
+            &d.calibration(rec.t0_c)?,
+        )?),
         None => None,
     };
     let run = super::records::Run {

@@ -23,6 +23,49 @@ pub struct Row {
     pub line: usize,
 }
 
+/// One row on the in-flight terms' clock ([`Recording::clock`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RowClock {
+    /// Seconds since the previous row (the first row: since the power-on before it).
+    pub dt_s: f64,
+    /// The unit was powered on again this many seconds before this row (a stated
+    /// power-off ended since the previous row).
+    pub power_on_s: Option<f64>,
+}
+
+/// `power_off_s`: comma-separated `start-end` spans (s), each with start <= end.
+fn power_off_spans(path: &Path, line: usize, v: &str) -> Result<Vec<[f64; 2]>> {
+    let mut out = Vec::new();
+    for span in v.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        // a span's '-' is the one after its first character (a start may be negative)
+        let cut = span
+            .char_indices()
+            .skip(1)
+            .find(|(_, c)| *c == '-')
+            .map(|(i, _)| i);
+        let Some(cut) = cut else {
+            return Err(HostError::at_field(
+                path,
+                line,
+                "power_off_s",
+                format!("`{span}` is not a span `start-end` in seconds"),
+            ));
+        };
+        let start = parse_num(path, line, "power_off_s", span[..cut].trim())?;
+        let end = parse_num(path, line, "power_off_s", span[cut + 1..].trim())?;
+        if end < start {
+            return Err(HostError::at_field(
+                path,
+                line,
+                "power_off_s",
+                format!("span `{span}` ends before it starts"),
+            ));
+        }
+        out.push([start, end]);
+    }
+    Ok(out)
+}
+
 /// A maximal run of consecutive rows with the same (known) position.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Dwell {
@@ -64,6 +107,9 @@ pub struct Recording {
     pub t0_c: f64,
     /// Output unit (`output_unit`, default `V`).
     pub output_unit: String,
+    /// Spans `[start, end]` (s, on `t_s`) the unit was powered off (`power_off_s`): each
+    /// end is a power-on, where the in-flight terms' machines start again.
+    pub power_off: Vec<[f64; 2]>,
     /// The positions in use (built-in + positions file).
     pub positions: Positions,
     /// Samples in time order.
@@ -86,7 +132,14 @@ pub const MAX_DWELL_DRIFT_C: f64 = 0.5;
 /// once for all such dwells.
 pub const RAMP_SPAN_C: f64 = 2.0;
 
-const KNOWN_META: [&str; 5] = ["unit", "t0_c", "g_local", "format", "output_unit"];
+const KNOWN_META: [&str; 6] = [
+    "unit",
+    "t0_c",
+    "g_local",
+    "format",
+    "output_unit",
+    "power_off_s",
+];
 const REQUIRED: [&str; 6] = ["t_s", "position", "temp_c", "ux_v", "uy_v", "uz_v"];
 
 impl Recording {
@@ -104,6 +157,7 @@ impl Recording {
             unit: String::new(),
             t0_c: 20.0,
             output_unit: "V".into(),
+            power_off: Vec::new(),
             positions,
             rows: Vec::new(),
             dwells: Vec::new(),
@@ -198,6 +252,7 @@ impl Recording {
             "t0_c" => self.t0_c = parse_temp(&self.path, line, "t0_c", &v)?,
             "unit" => self.unit = v.clone(),
             "output_unit" => self.output_unit = v.clone(),
+            "power_off_s" => self.power_off = power_off_spans(&self.path, line, &v)?,
             _ => {}
         }
         if !KNOWN_META.contains(&k.as_str()) {
@@ -208,6 +263,58 @@ impl Recording {
         }
         self.metadata.insert(k, v);
         Ok(())
+    }
+
+    /// The clock the in-flight terms run on, per row: the time step before it (from the
+    /// previous row; for the first row from the power-on before it, 0 when none is
+    /// stated), and when a stated `power_off_s` span ended between the previous row and
+    /// this one, how long before this row the unit was powered on again. The firmware's
+    /// `compensate_dt` and `power_on` take exactly these, in `verify` as in the
+    /// diagnosis's regressors.
+    pub fn clock(&self) -> Vec<RowClock> {
+        let mut ends: Vec<f64> = self.power_off.iter().map(|s| s[1]).collect();
+        ends.sort_by(f64::total_cmp);
+        let mut next = ends.iter().copied().peekable();
+        let mut prev: Option<f64> = None;
+        self.rows
+            .iter()
+            .map(|r| {
+                let mut on = None;
+                while let Some(e) = next.peek().copied() {
+                    if e > r.t_s {
+                        break;
+                    }
+                    if prev.is_none_or(|p| e > p) {
+                        on = Some(e);
+                    }
+                    next.next();
+                }
+                let c = match prev {
+                    Some(p) => RowClock {
+                        dt_s: r.t_s - p,
+                        power_on_s: on.map(|e| r.t_s - e),
+                    },
+                    None => RowClock {
+                        dt_s: on.map_or(0.0, |e| r.t_s - e),
+                        power_on_s: None,
+                    },
+                };
+                prev = Some(r.t_s);
+                c
+            })
+            .collect()
+    }
+
+    /// The median time between successive rows, s (1 when there are fewer than two).
+    pub fn median_step_s(&self) -> f64 {
+        let mut d: Vec<f64> = self
+            .rows
+            .windows(2)
+            .map(|w| w[1].t_s - w[0].t_s)
+            .filter(|d| *d > 0.0)
+            .collect();
+        d.sort_by(f64::total_cmp);
+        d.get(d.len() / 2).copied().unwrap_or(1.0)
     }
 
     fn build_dwells(&mut self) {

@@ -1,17 +1,19 @@
 //! The diagnosed model in the firmware's form, for `diagnose --out`: the final model in
 //! the forms the firmware applies (one lag pole for all axes, hysteresis of the offsets,
-//! one warm-up since power-on), refitted in those forms where the diagnosis found a
-//! richer one, so the blob carries exactly a model that was fitted; its coefficients as
+//! one warm-up since power-on, a rate estimator smoothing for flight), refitted in those
+//! forms where the diagnosis found another, so the blob carries exactly a model that was
+//! fitted; every time constant in seconds (the firmware derives its per-step constants
+//! from its own clock); its coefficients as
 //! the polynomial itself or a piecewise-linear table over the data's temperatures, and
 //! its in-flight physics terms.
+use crate::blob::Cache;
 use crate::diagnose::data::Data;
 use crate::diagnose::effects::Extra;
 use crate::diagnose::fit::{Depth, Fit};
 use crate::diagnose::params::{Param, Term};
 use crate::diagnose::profile::{time_constant, Grid};
-use crate::diagnose::regressors::{alpha, median_step};
 use crate::error::{HostError, Result};
-use crate::fit::temperature::{Basis, POLY_SCALE_C, UPDATE_STEP_C};
+use crate::fit::temperature::{Basis, POLY_SCALE_C};
 use firmware_core::model::{K_INDEX, U0_INDEX};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
 
@@ -23,17 +25,19 @@ pub struct Flashed {
     /// Its coefficients on a grid over the data's temperatures: `(temperature, the 12
     /// coefficients)`.
     pub table: Vec<(f64, [f64; 12])>,
-    /// Median sample period of the recording, s (the in-flight filters' step).
-    pub sample_period_s: f64,
+    /// The floor of a window mean, output units: the firmware's cache step is chosen to
+    /// cost no more than it.
+    pub noise_rms: f64,
 }
 
 impl Flashed {
-    /// The final model `f` of `data` in the firmware's forms.
-    pub fn of(data: &Data, f: &Fit) -> Flashed {
+    /// The final model `f` of `data` in the firmware's forms; `noise_rms` the floor of
+    /// a window mean (output units).
+    pub fn of(data: &Data, f: &Fit, noise_rms: f64) -> Flashed {
         let fit = flashable(data, f);
         Flashed {
             table: table(data, &fit),
-            sample_period_s: median_step(data.rec),
+            noise_rms,
             fit,
         }
     }
@@ -47,18 +51,25 @@ impl Flashed {
             self.table.first().map(|r| r.0).unwrap_or(t0 - 1.0),
             self.table.last().map(|r| r.0).unwrap_or(t0 + 1.0),
         );
-        Ok(Calibration {
+        let mut cal = Calibration {
             t0_c: t0,
             t_min_c: lo,
             t_max_c: hi.max(lo + 1.0),
             clamp: false,
-            update_step_c: UPDATE_STEP_C,
+            update_step_c: 0.0,
             model: self.poly_table().unwrap_or_else(|| TempModel::Pwl {
                 breakpoints: self.table.iter().map(|r| r.0).collect(),
                 values: self.table.iter().map(|r| r.1).collect(),
             }),
             physics: self.physics()?,
-        })
+        };
+        // the firmware's cache within the floor of a window mean (in g: over the mean
+        // scale factor at T0), as `fit` keeps it within a dwell's own noise
+        let c0 = cal.at_t0();
+        let k = (c0[0].abs() + c0[1].abs() + c0[2].abs()) / 3.0;
+        let floor_mg = (k > 0.0).then(|| self.noise_rms / k * 1e3);
+        cal.update_step_c = Cache::choose(&cal, floor_mg, None).step_c;
+        Ok(cal)
     }
 
     /// The model's values of a per-axis term of extra `e` (0 where not fitted).
@@ -79,22 +90,12 @@ impl Flashed {
         })
     }
 
-    /// The in-flight terms in the firmware's form; `None` when there are none.
+    /// The in-flight terms in the firmware's form, every time constant in seconds (the
+    /// firmware derives its per-step constants from its own clock); `None` when there
+    /// are none.
     fn physics(&self) -> Result<Option<Physics<f64>>> {
-        let dt = self.sample_period_s;
-        let mut ph = Physics {
-            sample_period_s: dt,
-            lag_alpha: 1.0,
-            rate: [0.0; 3],
-            rate_alpha: 1.0,
-            hysteresis: [0.0; 3],
-            hysteresis_threshold_c: 0.5,
-            hysteresis_initial: 0.0,
-            k2: [0.0; 3],
-            asymmetry: [0.0; 3],
-            warmup: [0.0; 3],
-            warmup_decay: 1.0,
-        };
+        let mut ph = Physics::<f64>::neutral();
+        ph.hysteresis_threshold_c = 0.5;
         let refuse = |what: &str| {
             Err(HostError::msg(format!(
                 "the fitted {what} cannot be flashed by this firmware's physics block; the blob would not compensate what was fitted"
@@ -111,11 +112,11 @@ impl Flashed {
                     if taus.iter().any(|t| *t != taus[0] || t[1] > 0.0) {
                         return refuse("thermal lag (per-axis or two-pole)");
                     }
-                    ph.lag_alpha = alpha(dt, taus[0][0]);
+                    ph.lag_tau_s = taus[0][0];
                 }
                 Extra::Rate { tau_s } => {
                     ph.rate = self.term(e, Term::Rate);
-                    ph.rate_alpha = alpha(dt, *tau_s);
+                    ph.rate_tau_s = *tau_s;
                 }
                 Extra::Hysteresis {
                     threshold_c,
@@ -133,12 +134,13 @@ impl Flashed {
                 Extra::Asymmetry => ph.asymmetry = self.term(e, Term::Asymmetry),
                 Extra::Warmup { tau_s, .. } => {
                     // in flight the clock restarts at power-on only, as it does here at
-                    // the recording's start (and its gaps); handling does not happen
+                    // the recording's start and its stated power-offs; handling does not
+                    // happen
                     if ph.warmup != [0.0; 3] {
                         return refuse("second warm-up time constant");
                     }
                     ph.warmup = self.term(e, Term::Warmup);
-                    ph.warmup_decay = (-dt / tau_s).exp();
+                    ph.warmup_tau_s = *tau_s;
                 }
                 Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(_) => {}
             }
@@ -176,9 +178,47 @@ impl Flashed {
     }
 }
 
+/// The rate estimator's time constant the blob carries at most, s: chosen for flight, not
+/// for the chamber (`r` is refitted with it). `r` is the unit's physics, an offset per C/s
+/// of its temperature's rate; the estimator only measures that rate. The one that fits a
+/// chamber recording best smooths its 10-s rows of a quantised sensor over tens of
+/// seconds, which in flight lags a fast change by as much (the twin's flight, warming and
+/// cooling at 5-8 C/min: 0.44 mg at the chamber's 40 s, 0.045 mg at 2 s). The price is
+/// noise: the mean of the estimate over a held attitude of D seconds is the change of its
+/// low-pass over the hold over D, whose noise is about sigma sqrt(h / tau) / D (sigma the
+/// sensor's 0.027 C, h the 0.1 s step: 1.5e-4 C/s over 40 s at 2 s, times `r`); each
+/// sample's, about sigma h / tau / h = sigma / tau (0.013 C/s at 2 s, 0.0007 C/s at 40 s).
+pub const FLIGHT_RATE_TAU_S: f64 = 2.0;
+
+/// `f` with its rate estimator at [`FLIGHT_RATE_TAU_S`] at most, `r` refitted with it
+/// (`f` itself without a rate term, or when the refit is not determined).
+fn rate_for_flight(data: &Data, f: Fit) -> Fit {
+    let at = f
+        .spec
+        .extras
+        .iter()
+        .position(|e| matches!(e, Extra::Rate { tau_s } if *tau_s > FLIGHT_RATE_TAU_S));
+    let Some(i) = at else {
+        return f;
+    };
+    let spec = f.spec.replaced(
+        i,
+        Extra::Rate {
+            tau_s: FLIGHT_RATE_TAU_S,
+        },
+    );
+    data.fit(&spec, None, Depth::Full).unwrap_or(f)
+}
+
 /// `f` in the firmware's forms, refitted (a single lag pole profiled again) where it
-/// differs; `f` itself when it is already flashable or a refit is not determined.
+/// differs, its rate estimator for flight ([`FLIGHT_RATE_TAU_S`]); `f` itself when it is
+/// already flashable or a refit is not determined.
 fn flashable(data: &Data, f: &Fit) -> Fit {
+    rate_for_flight(data, firmware_forms(data, f))
+}
+
+/// `f` in the firmware's forms, the rate estimator aside (see [`flashable`]).
+fn firmware_forms(data: &Data, f: &Fit) -> Fit {
     let mut spec = f.spec.clone();
     let mut changed = false;
     let mut warmups = 0;

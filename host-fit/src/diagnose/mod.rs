@@ -159,9 +159,10 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         n_temps,
         rules: &rules,
     });
+    let noise_rms = metrics::floor_rms(&data);
     Ok(Diagnosis {
-        noise_rms: metrics::floor_rms(&data),
-        flashed: Flashed::of(&data, &final_fit),
+        noise_rms,
+        flashed: Flashed::of(&data, &final_fit, noise_rms),
         floor,
         floor_measured: measured,
         baseline,

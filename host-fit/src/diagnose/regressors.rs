@@ -1,18 +1,14 @@
 //! The regressors of the in-flight effects, made by stepping firmware-core's own state
-//! machines (`firmware_core::inflight`) over the recording's rows, so the diagnosis fits
-//! exactly what the firmware will apply; plus the recording's restart events.
+//! machines (`firmware_core::inflight`) over the recording's rows on its own clock (each
+//! row's time step, the stated power-ons), with the firmware's discretisation, so the
+//! diagnosis fits exactly what the firmware will apply on any row spacing; plus the
+//! recording's restart events.
 use crate::data::recording::Recording;
 use crate::diagnose::rules::Rules;
-use firmware_core::inflight::{Direction, Lag, Rate, Warmup};
-
-/// The low-pass constant of a step of `dt` for time constant `tau` (1 = no lag).
-pub fn alpha(dt: f64, tau: f64) -> f64 {
-    if tau > 0.0 {
-        1.0 - (-dt.max(0.0) / tau).exp()
-    } else {
-        1.0
-    }
-}
+use firmware_core::inflight::{
+    power_on_direction, Clock, Direction, Lag, Rate, Step, Tick, Warmup,
+};
+use firmware_core::temperature::Physics;
 
 /// Median time step, s.
 pub fn median_step(rec: &Recording) -> f64 {
@@ -68,72 +64,119 @@ pub fn events(rec: &Recording, rules: &Rules) -> Events {
     e
 }
 
-/// The first row's temperature: where the firmware's filters start.
-fn first_temp(rec: &Recording) -> f64 {
-    rec.rows.first().map(|r| r.temp_c).unwrap_or(0.0)
-}
-
-/// The time step before each row (the median step for the first).
-fn steps(rec: &Recording) -> Vec<f64> {
-    let first = median_step(rec);
-    std::iter::once(first)
-        .chain(rec.rows.windows(2).map(|w| (w[1].t_s - w[0].t_s).max(0.0)))
+/// Runs a machine over the recording on the firmware's clock: each row's time step and
+/// the stated power-ons ([`Recording::clock`]) through firmware-core's [`Clock`], so the
+/// machine starts and steps at the rows where the firmware's would (a power-on steps at
+/// its row, across the gap, as `Compensator::power_on` makes the firmware do).
+/// `on(tick, temp)` is called at a start or a step and returns the machine's output,
+/// held between steps.
+fn drive(rec: &Recording, mut on: impl FnMut(Tick<f64>, f64) -> f64) -> Vec<f64> {
+    let mut clock = Clock::<f64>::default();
+    let mut held = 0.0;
+    rec.rows
+        .iter()
+        .zip(rec.clock())
+        .map(|(r, c)| {
+            if c.power_on_s.is_some() && clock.started() {
+                clock.force_step();
+            }
+            let tick = clock.tick(c.dt_s);
+            if tick != Tick::Hold {
+                held = on(tick, r.temp_c);
+            }
+            held
+        })
         .collect()
 }
 
 /// Per row, each axis's element temperature through the lag of time constants
-/// `taus[axis] = [tau1, tau2]` (tau2 = 0: one pole).
+/// `taus[axis] = [tau1, tau2]` (tau2 = 0: one pole), as the firmware steps it.
 pub fn lagged(rec: &Recording, taus: &[[f64; 2]; 3]) -> [Vec<f64>; 3] {
-    let dts = steps(rec);
     std::array::from_fn(|axis| {
-        let mut lag = Lag::<f64>::default();
-        lag.start(first_temp(rec));
+        let (mut lag, mut x) = (Lag::<f64>::default(), 0.0);
         let [t1, t2] = taus[axis];
-        rec.rows
-            .iter()
-            .zip(&dts)
-            .map(|(r, dt)| lag.step(alpha(*dt, t1), alpha(*dt, t2), r.temp_c))
-            .collect()
+        drive(rec, |tick, t| {
+            let out = match tick {
+                Tick::Step(h) => lag.step(Step::new(h, t1), Step::new(h, t2), t, t - x),
+                _ => {
+                    lag.start();
+                    t
+                }
+            };
+            x = t;
+            out
+        })
     })
 }
 
 /// Per row, the firmware's rate estimate (C/s) with low-pass time constant `tau_s`.
 pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
-    let dts = steps(rec);
-    let mut m = Rate::<f64>::default();
-    m.start(first_temp(rec));
-    rec.rows
-        .iter()
-        .zip(&dts)
-        .map(|(r, dt)| m.step(alpha(*dt, tau_s), r.temp_c, dt.max(1e-9)))
-        .collect()
+    let (mut m, mut x) = (Rate::<f64>::default(), 0.0);
+    drive(rec, |tick, t| {
+        let out = match tick {
+            Tick::Step(h) => m.step(Step::new(h, tau_s), t - x, h),
+            _ => {
+                m.start();
+                0.0
+            }
+        };
+        x = t;
+        out
+    })
 }
 
-/// Per row, the hysteresis direction (threshold in C, initial state +1 or -1).
+/// Per row, the hysteresis direction (threshold in C; at the first row the state the
+/// firmware takes at power-on: `initial` within the threshold of the recording's T0, else
+/// the way from T0, `firmware_core::inflight::power_on_direction`).
 pub fn directions(rec: &Recording, threshold_c: f64, initial: f64) -> Vec<f64> {
     let mut m = Direction::default();
-    m.start(initial, first_temp(rec));
-    rec.rows
-        .iter()
-        .map(|r| m.step(threshold_c, r.temp_c))
-        .collect()
+    let p = Physics {
+        hysteresis_threshold_c: threshold_c,
+        hysteresis_initial: initial,
+        ..Physics::neutral()
+    };
+    drive(rec, |tick, t| match tick {
+        Tick::Step(_) => m.step(threshold_c, t),
+        _ => {
+            m.start(power_on_direction(&p, t, rec.t0_c), t);
+            m.value()
+        }
+    })
 }
 
-/// Per row, the warm-up weight for time constant `tau_s`, the clock restarted at the
-/// rows `restarts` (sorted) as well as at the first row.
+/// Per row, the warm-up weight `exp(-t_on / tau_s)`, its clock started at each power-on
+/// (the first row, and the end of each stated power-off) as the firmware's is, and
+/// also at the rows `restarts` (sorted: gaps or handling, the diagnosis's other forms).
 pub fn warmup(rec: &Recording, tau_s: f64, restarts: &[usize]) -> Vec<f64> {
-    let dts = steps(rec);
     let mut m = Warmup::<f64>::default();
-    let mut next = restarts.iter().peekable();
-    (0..rec.rows.len())
-        .map(|k| {
-            if next.peek() == Some(&&k) {
-                next.next();
-                m.restart();
+    let mut next = restarts.iter().copied().peekable();
+    let mut clock = Clock::<f64>::default();
+    rec.clock()
+        .into_iter()
+        .enumerate()
+        .map(|(k, c)| {
+            if c.power_on_s.is_some() && clock.started() {
+                clock.force_step();
             }
-            // the weight of this row, then decay over the step to the next one
-            let decay = (-dts.get(k + 1).copied().unwrap_or(0.0) / tau_s).exp();
-            m.step(decay)
+            let tick = clock.tick(c.dt_s);
+            match (tick, c.power_on_s) {
+                (Tick::Start(on), _) => {
+                    m.start(Step::new(on, tau_s));
+                }
+                (Tick::Step(_), Some(on)) => {
+                    m.start(Step::new(on, tau_s));
+                }
+                (Tick::Step(h), None) => {
+                    m.step(Step::new(h, tau_s));
+                }
+                (Tick::Hold, _) => {}
+            }
+            if next.peek() == Some(&k) {
+                next.next();
+                // a restart the recording does not state: from this row, weight 1
+                m.start(Step::new(0.0, tau_s));
+            }
+            m.value()
         })
         .collect()
 }

@@ -21,6 +21,72 @@ pub struct SimConfig {
     pub unit: Unit,
     /// Physics beyond the paper's model.
     pub effects: Effects,
+    /// How the logger writes rows (uneven clocks, dropped rows, jitter).
+    pub logger: Logger,
+    /// A flight-like recording of the same unit instead of the production test (none by
+    /// default).
+    pub flight: Option<Flight>,
+}
+
+/// The logger's clock: which ticks of the twin become rows, and when they are taken.
+/// The physics runs on every tick (`schedule.rate_hz`) whatever is written.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Logger {
+    /// Rows per second while the unit rests through ramps and soaks (0: every tick, as in
+    /// the dwells); a common setting logs 1 Hz in the dwells and 0.1 Hz at rest.
+    pub rest_rate_hz: f64,
+    /// Each row is taken up to this many seconds after its tick (uniform), and stamped
+    /// with its own time: an uneven clock (less than one tick).
+    pub jitter_s: f64,
+    /// Probability that a row is lost (a dropout), independently per row.
+    pub drop_rate: f64,
+    /// Write `schedule.power_offs` as the `power_off_s` metadata (a logger that knows when
+    /// the unit was off); otherwise only the gap in the rows shows them.
+    pub power_off_metadata: bool,
+}
+
+/// A flight-like recording: power-on at a cold start, fast warming and cooling both ways,
+/// a second power cycle, static attitudes all over the sphere held for tens of seconds,
+/// sampled at an MCU rate. The unit, sensor and effects are the configuration's.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Flight {
+    /// Samples per second (the MCU's rate; 10, 100, 1000 Hz ...).
+    pub rate_hz: f64,
+    /// Temperature of everything at power-on (the unit soaked there), C.
+    pub start_c: f64,
+    /// The environment's temperature profile after power-on, leg by leg.
+    pub legs: Vec<Leg>,
+    /// Time constant of the air around the unit following the environment, s.
+    pub tau_air_s: f64,
+    /// Time constant of the case following the air, s.
+    pub tau_case_s: f64,
+    /// Distinct static attitudes, spread over the sphere (a Fibonacci lattice), visited in
+    /// turn.
+    pub attitudes: usize,
+    /// Each attitude held, s.
+    pub hold_s: f64,
+    /// Motion between attitudes, s (rows with position `-`).
+    pub move_s: f64,
+    /// Spans `[start_s, duration_s]` the unit is powered off (nothing logged; every
+    /// in-flight machine starts again at power-on; written as `power_off_s`).
+    pub power_offs: Vec<[f64; 2]>,
+    /// The hysteresis state at the start (-1: cooled to the cold start).
+    pub initial_direction: f64,
+}
+
+/// One leg of a flight's temperature profile.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Leg {
+    /// Environment temperature at the end of the ramp, C.
+    pub to_c: f64,
+    /// Ramp rate, C/min.
+    pub c_per_min: f64,
+    /// Held at `to_c` after the ramp, s.
+    #[serde(default)]
+    pub hold_s: f64,
 }
 
 /// Chamber air and unit case: first-order lags.
@@ -339,6 +405,47 @@ impl Default for SimConfig {
             schedule: Schedule::default(),
             unit: Unit::default(),
             effects: Effects::default(),
+            logger: Logger::default(),
+            flight: None,
+        }
+    }
+}
+impl Default for Logger {
+    fn default() -> Self {
+        Logger {
+            rest_rate_hz: 0.0,
+            jitter_s: 0.0,
+            drop_rate: 0.0,
+            power_off_metadata: false,
+        }
+    }
+}
+impl Default for Flight {
+    /// About 73 minutes at 20 Hz: 5 min cold at -30 C, a power cycle (2 min off), 3 min
+    /// cold, warm to +45 C at 6 C/min, 20 min there, cool to +5 C at 5 C/min, 10 min,
+    /// warm to +25 C at 8 C/min, 10 min; 24 attitudes held 40 s each.
+    fn default() -> Self {
+        let leg = |to_c: f64, c_per_min: f64, hold_s: f64| Leg {
+            to_c,
+            c_per_min,
+            hold_s,
+        };
+        Flight {
+            rate_hz: 20.0,
+            start_c: -30.0,
+            legs: vec![
+                leg(-30.0, 1.0, 600.0),
+                leg(45.0, 6.0, 1200.0),
+                leg(5.0, 5.0, 600.0),
+                leg(25.0, 8.0, 600.0),
+            ],
+            tau_air_s: 30.0,
+            tau_case_s: 120.0,
+            attitudes: 24,
+            hold_s: 40.0,
+            move_s: 5.0,
+            power_offs: vec![[300.0, 120.0]],
+            initial_direction: -1.0,
         }
     }
 }

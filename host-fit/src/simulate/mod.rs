@@ -3,18 +3,26 @@
 //! recording-format v1. Independent of the fitting code (it shares only the forward
 //! model `U = K a + U0` of firmware-core).
 pub mod config;
+pub mod flight;
+mod readings;
+mod thermal;
 pub mod unit;
+mod writer;
 
 pub use config::{
-    parse_config, Bend, BiasStep, Chamber, Curvature, Effects, Fixture, Gradient, PerAxis,
-    Periodic, Schedule, Sensor, SimConfig, Stop, Unit, Warmup,
+    parse_config, Bend, BiasStep, Chamber, Curvature, Effects, Fixture, Flight, Gradient, Leg,
+    Logger, PerAxis, Periodic, Schedule, Sensor, SimConfig, Stop, Unit, Warmup,
 };
 pub use unit::{TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
+pub use writer::Simulation;
+
+use readings::{sample, within, Disturbance};
+use thermal::Thermal;
+use writer::RecordingWriter;
 
 use crate::data::positions::Positions;
 use crate::error::{HostError, Result};
 use crate::rng::Rng;
-use firmware_core::model::Coeffs;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Phase {
@@ -52,14 +60,6 @@ fn rotate(a: [f64; 3], angles: [f64; 2]) -> [f64; 3] {
     let e2 = cross(a, e1);
     let v: [f64; 3] = std::array::from_fn(|i| a[i] + angles[0] * e2[i] - angles[1] * e1[i]);
     norm(v)
-}
-
-/// The simulated recording as text, with the positions used.
-pub struct Simulation {
-    /// The recording (recording-format v1).
-    pub csv: String,
-    /// Number of sample rows.
-    pub rows: usize,
 }
 
 /// The built-in positions plus the schedule's extra ones.
@@ -124,193 +124,83 @@ fn plan(cfg: &SimConfig, positions: &Positions, rest: usize) -> Result<Vec<Segme
     Ok(segs)
 }
 
-/// Chamber air, case and sensing elements (first-order lags, a second pole where
-/// configured), the inner temperature of a gradient, and the hysteresis state: the
-/// direction of the last temperature change of more than 0.5 C, reached at once or, with
-/// a switching width, relaxing toward it over the temperature travelled.
-struct Thermal {
-    k_air: f64,
-    k_case: f64,
-    lag: Option<[f64; 3]>,
-    lag2: Option<[f64; 3]>,
-    k_inner: f64,
-    air: f64,
-    case: f64,
-    elem1: [f64; 3],
-    elem: [f64; 3],
-    inner: f64,
-    dir: f64,
-    dir_ref: f64,
-    width: Option<f64>,
-    state: f64,
-    turn: (f64, f64),
-}
-
-impl Thermal {
-    fn new(cfg: &SimConfig, dt: f64) -> Self {
-        let fall = |tau: f64| {
-            if tau > 0.0 {
-                1.0 - (-dt / tau).exp()
-            } else {
-                1.0
-            }
-        };
-        let start = cfg.chamber.start_c;
-        let e = &cfg.effects;
-        let initial = e.hysteresis_initial.unwrap_or(1.0);
-        Thermal {
-            k_air: fall(cfg.chamber.tau_air_s),
-            k_case: fall(cfg.chamber.tau_case_s),
-            lag: e.thermal_lag.map(|l| l.value.map(fall)),
-            lag2: e.thermal_lag2.map(|l| l.value.map(fall)),
-            k_inner: e.temp_gradient.map(|g| fall(g.tau_s)).unwrap_or(1.0),
-            air: start,
-            case: start,
-            elem1: [start; 3],
-            elem: [start; 3],
-            inner: start,
-            dir: initial,
-            dir_ref: start,
-            width: e.hysteresis_width_c,
-            state: initial,
-            turn: (start, initial),
-        }
-    }
-
-    /// One sample toward the set point; returns the case's rate, C/s.
-    fn step(&mut self, setp: f64, dt: f64) -> f64 {
-        self.air += (setp - self.air) * self.k_air;
-        let case_prev = self.case;
-        self.case += (self.air - self.case) * self.k_case;
-        self.inner += (self.case - self.inner) * self.k_inner;
-        for i in 0..3 {
-            self.elem1[i] = match self.lag {
-                Some(l) => self.elem1[i] + (self.case - self.elem1[i]) * l[i],
-                None => self.case,
-            };
-            self.elem[i] = match self.lag2 {
-                Some(l) => self.elem[i] + (self.elem1[i] - self.elem[i]) * l[i],
-                None => self.elem1[i],
-            };
-        }
-        let before = self.dir;
-        if self.case - self.dir_ref > 0.5 {
-            self.dir = 1.0;
-            self.dir_ref = self.case;
-        } else if self.dir_ref - self.case > 0.5 {
-            self.dir = -1.0;
-            self.dir_ref = self.case;
-        }
-        if (self.case - self.dir_ref) * self.dir > 0.0 {
-            self.dir_ref = self.case;
-        }
-        if self.dir != before {
-            self.turn = (self.case, self.state);
-        }
-        self.state = match self.width {
-            Some(w) => {
-                self.dir - (self.dir - self.turn.1) * (-(self.case - self.turn.0).abs() / w).exp()
-            }
-            None => self.dir,
-        };
-        (self.case - case_prev) / dt
-    }
-}
-
-/// Sample-to-sample state of the disturbances: the bias random walk, the voltmeter's
-/// correlated noise, the last power-on, and the random numbers behind all noise.
-struct Disturbance {
-    walk: [f64; 3],
-    noise: [f64; 3],
-    on_s: f64,
+/// The logger's decisions per tick ([`Logger`]): which ticks become rows and how late
+/// each is taken; its own random numbers, so the noise of the rows is the same draw
+/// whatever the logger does.
+struct Clock {
+    rest_every: u64,
+    jitter_s: f64,
+    drop_rate: f64,
     rng: Rng,
 }
 
-/// The voltmeter readings of the unit in orientation `a` at time `t`.
-fn readings(
-    cfg: &SimConfig,
-    unit: &TrueUnit,
-    th: &Thermal,
-    dist: &mut Disturbance,
-    a: [f64; 3],
-    rate: f64,
-    t: f64,
-) -> [f64; 3] {
-    let e = &cfg.effects;
-    let dt = 1.0 / cfg.schedule.rate_hz;
-    let since_on = t - dist.on_s;
-    let mut u = [0.0; 3];
-    for i in 0..3 {
-        let c = Coeffs::from_array(&unit.coeffs(th.elem[i]));
-        let mut ui = c.forward(a)[i];
-        if let Some(k2) = e.nonlinearity_k2 {
-            ui += k2.value[i] * a[i] * a[i];
+impl Clock {
+    fn new(cfg: &SimConfig, rate_hz: f64) -> Result<Self> {
+        let l = &cfg.logger;
+        if !(l.rest_rate_hz >= 0.0 && l.drop_rate >= 0.0 && l.drop_rate < 1.0) {
+            return Err(HostError::msg(
+                "logger needs rest_rate_hz >= 0 and 0 <= drop_rate < 1",
+            ));
         }
-        if let Some(sa) = e.scale_asymmetry {
-            ui += c.k[i][i] * sa.value[i] * a[i].abs();
+        if !(l.jitter_s >= 0.0 && l.jitter_s < 1.0 / rate_hz) {
+            return Err(HostError::msg(format!(
+                "logger.jitter_s must be >= 0 and less than one tick (1 / {rate_hz} Hz)"
+            )));
         }
-        if let Some(r) = e.temp_rate {
-            ui += r.value[i] * rate;
-        }
-        if let Some(g) = e.temp_gradient {
-            ui += g.value[i] * (th.case - th.inner);
-        }
-        if let Some(h) = e.hysteresis {
-            ui += th.state * h.value[i] / 2.0;
-        }
-        if let Some(h) = e.scale_hysteresis {
-            ui += c.k[i][i] * h.value[i] * th.state / 2.0 * a[i];
-        }
-        for w in [e.warmup_drift, e.warmup_drift2].into_iter().flatten() {
-            ui += w.d_v[i] * (-since_on / w.tau_s).exp();
-        }
-        if let Some(b) = e.bias_step {
-            ui += if t >= b.at_s { b.value[i] } else { 0.0 };
-        }
-        if let Some(w) = e.bias_walk {
-            dist.walk[i] += w.value[i] * dt.sqrt() * dist.rng.normal();
-            ui += dist.walk[i];
-        }
-        if let Some(k3) = e.nonlinearity_k3 {
-            ui += k3.value[i] * a[i] * a[i] * a[i];
-        }
-        if let Some(p) = e.periodic {
-            ui += p.value[i] * (std::f64::consts::TAU * t / p.period_s).sin();
-        }
-        if let Some(g) = e.scale_aging {
-            ui += c.k[i][i] * g.value[i] * t / 3600.0 * a[i];
-        }
-        ui += noise(cfg, &mut dist.noise[i], &mut dist.rng);
-        if cfg.unit.spike_rate > 0.0 && dist.rng.uniform() < cfg.unit.spike_rate {
-            ui += if dist.rng.uniform() < 0.5 { -1.0 } else { 1.0 } * cfg.unit.spike_v;
-        }
-        if cfg.unit.resolution_v > 0.0 {
-            ui = (ui / cfg.unit.resolution_v).round() * cfg.unit.resolution_v;
-        }
-        u[i] = ui;
+        let rest_every = if l.rest_rate_hz > 0.0 {
+            ((rate_hz / l.rest_rate_hz).round() as u64).max(1)
+        } else {
+            1
+        };
+        Ok(Clock {
+            rest_every,
+            jitter_s: l.jitter_s,
+            drop_rate: l.drop_rate,
+            rng: Rng::new(cfg.seed ^ 0xC10C),
+        })
     }
-    u
-}
 
-/// One sample of voltmeter noise: white, or first-order autoregressive with the same
-/// per-sample sigma.
-fn noise(cfg: &SimConfig, state: &mut f64, rng: &mut Rng) -> f64 {
-    let sigma = cfg.unit.noise_v;
-    if cfg.unit.noise_corr_s <= 0.0 {
-        return sigma * rng.normal();
+    /// Whether tick `k` becomes a row (`at_rest`: the unit rests through a ramp or soak).
+    fn writes(&mut self, k: u64, at_rest: bool) -> bool {
+        let kept = !at_rest || k.is_multiple_of(self.rest_every);
+        let lost = self.drop_rate > 0.0 && self.rng.uniform() < self.drop_rate;
+        kept && !lost
     }
-    let rho = (-1.0 / (cfg.schedule.rate_hz * cfg.unit.noise_corr_s)).exp();
-    *state = rho * *state + (1.0 - rho * rho).sqrt() * sigma * rng.normal();
-    *state
+
+    /// How long after its tick the row is taken, s.
+    fn delay(&mut self) -> f64 {
+        if self.jitter_s > 0.0 {
+            self.jitter_s * self.rng.uniform()
+        } else {
+            0.0
+        }
+    }
 }
 
-/// Whether `t` falls in one of the spans `[start, duration]`.
-fn within(spans: &[[f64; 2]], t: f64) -> bool {
-    spans.iter().any(|[s, d]| t >= *s && t < s + d)
+/// The orientation of a tilter phase at fraction `f` of it.
+fn phase_vector(phase: Phase, f: f64, rest: usize, vector: &dyn Fn(usize) -> [f64; 3]) -> [f64; 3] {
+    match phase {
+        Phase::Rest => vector(rest),
+        Phase::Dwell(p) => vector(p),
+        Phase::Move(p, q) => {
+            let (u, v) = (vector(p), vector(q));
+            let m: [f64; 3] = std::array::from_fn(|i| u[i] * (1.0 - f) + v[i] * f);
+            let nrm = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+            if nrm > 0.1 {
+                m.map(|x| x / nrm)
+            } else {
+                u
+            }
+        }
+    }
 }
 
-/// Run the simulation.
+/// Run the simulation: the production test, or the flight when the configuration has
+/// one.
 pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simulation> {
+    if let Some(f) = &cfg.flight {
+        return flight::simulate(cfg, f, progress);
+    }
     let unit = TrueUnit::new(cfg)?;
     let positions = positions(cfg)?;
     let sch = &cfg.schedule;
@@ -339,29 +229,26 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
         Some((fp, ang)) if fp == p => rotate(positions.vector(p), ang),
         _ => vector(p),
     };
-    let mut w = RecordingWriter::new(cfg)?;
-    let mut th = Thermal::new(cfg, dt);
+    let mut clock = Clock::new(cfg, sch.rate_hz)?;
+    let mut w = RecordingWriter::new(cfg, &sch.power_offs, clock.jitter_s > 0.0)?;
+    let mut th = Thermal::new(cfg);
     let mut dist = Disturbance {
         walk: [0.0; 3],
         noise: [0.0; 3],
         on_s: 0.0,
         rng: Rng::new(cfg.seed),
     };
-    let (mut t, mut last_report) = (0.0, 0.0);
+    let (mut t, mut last_report, mut tick) = (0.0, 0.0, 0u64);
     for seg in &segs {
         let n = (seg.duration_s * sch.rate_hz).round() as usize;
+        let set_at = |f: f64| seg.set_from + (seg.set_to - seg.set_from) * f;
         for k in 0..n {
-            let f = if n > 0 { k as f64 / n as f64 } else { 0.0 };
-            let rate = th.step(seg.set_from + (seg.set_to - seg.set_from) * f, dt);
-            let (name, a) = match seg.phase {
-                Phase::Rest => (positions.name(rest), vector(rest)),
-                Phase::Dwell(p) => (positions.name(p), vector(p)),
-                Phase::Move(p, q) => {
-                    let (u, v) = (vector(p), vector(q));
-                    let m: [f64; 3] = std::array::from_fn(|i| u[i] * (1.0 - f) + v[i] * f);
-                    let nrm = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
-                    ("-", if nrm > 0.1 { m.map(|x| x / nrm) } else { u })
-                }
+            let f = k as f64 / n as f64;
+            let (set0, set1) = (set_at(f), set_at((k + 1) as f64 / n as f64));
+            let name = match seg.phase {
+                Phase::Rest => positions.name(rest),
+                Phase::Dwell(p) => positions.name(p),
+                Phase::Move(..) => "-",
             };
             if let Some(end) = sch
                 .power_offs
@@ -372,17 +259,27 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
             {
                 dist.on_s = end;
             }
-            let u = readings(cfg, &unit, &th, &mut dist, a, rate, t);
-            let sensed = th.case + cfg.sensor.offset_c + cfg.sensor.gain_error * (th.case - 20.0);
-            let mut ts = sensed + cfg.sensor.noise_c * dist.rng.normal();
-            if cfg.sensor.quantum_c > 0.0 {
-                ts = (ts / cfg.sensor.quantum_c).round() * cfg.sensor.quantum_c;
-            }
-            if !within(&sch.dropouts, t) && !within(&sch.power_offs, t) {
+            // the row is taken `late` after the tick: the physics advanced to that time
+            let late = clock.delay();
+            let (u, ts, air) = if late > 0.0 {
+                let mut at = th.clone();
+                at.step(set0, set0 + (set1 - set0) * late / dt, late);
+                let a = phase_vector(seg.phase, f + late / dt / n as f64, rest, &vector);
+                let (u, ts) = sample(cfg, &unit, &at, &mut dist, a, t + late);
+                (u, ts, at.air)
+            } else {
+                let a = phase_vector(seg.phase, f, rest, &vector);
+                let (u, ts) = sample(cfg, &unit, &th, &mut dist, a, t);
+                (u, ts, th.air)
+            };
+            let logged = clock.writes(tick, seg.phase == Phase::Rest);
+            if logged && !within(&sch.dropouts, t) && !within(&sch.power_offs, t) {
                 let measuring = matches!(seg.phase, Phase::Dwell(_));
-                w.row(t, name, ts, th.air, u, measuring)?;
+                w.row(t + late, name, ts, air, u, measuring)?;
             }
+            th.step(set0, set1, dt);
             t += dt;
+            tick += 1;
             if t - last_report > 600.0 {
                 progress(t / total);
                 last_report = t;
@@ -391,111 +288,4 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
     }
     progress(1.0);
     w.finish()
-}
-
-/// The recording's metadata lines, then its rows through a CSV writer; with
-/// `dwell_means`, one row per tilter dwell (its mean) and nothing else.
-struct RecordingWriter {
-    head: String,
-    csv: csv::Writer<Vec<u8>>,
-    rows: usize,
-    dwell_means: bool,
-    /// The open dwell: its name, and the sums of t, temperature, air and outputs.
-    acc: Option<(String, usize, [f64; 6])>,
-}
-
-impl RecordingWriter {
-    fn new(cfg: &SimConfig) -> Result<Self> {
-        let head = format!(
-            "# format=at-recording/1\n# unit={}\n# t0_c={}\n# g_local=9.80665\n# simulated by host-fit simulate, seed {}\n",
-            cfg.unit.serial, cfg.t0_c, cfg.seed
-        );
-        let mut csv = csv::Writer::from_writer(Vec::new());
-        csv.write_record([
-            "t_s",
-            "position",
-            "temp_c",
-            "chamber_c",
-            "ux_v",
-            "uy_v",
-            "uz_v",
-        ])
-        .map_err(Self::err)?;
-        Ok(RecordingWriter {
-            head,
-            csv,
-            rows: 0,
-            dwell_means: cfg.schedule.dwell_means,
-            acc: None,
-        })
-    }
-
-    fn err(e: csv::Error) -> HostError {
-        HostError::msg(format!("cannot write the recording: {e}"))
-    }
-
-    fn write(&mut self, t: f64, name: &str, ts: f64, air: f64, u: [f64; 3]) -> Result<()> {
-        self.rows += 1;
-        self.csv
-            .write_record([
-                format!("{t:.2}"),
-                name.to_string(),
-                format!("{ts:.4}"),
-                format!("{air:.3}"),
-                format!("{:.8}", u[0]),
-                format!("{:.8}", u[1]),
-                format!("{:.8}", u[2]),
-            ])
-            .map_err(Self::err)
-    }
-
-    /// Write the open dwell's mean.
-    fn flush(&mut self) -> Result<()> {
-        if let Some((name, n, s)) = self.acc.take() {
-            let m = s.map(|v| v / n as f64);
-            self.write(m[0], &name, m[1], m[2], [m[3], m[4], m[5]])?;
-        }
-        Ok(())
-    }
-
-    fn row(
-        &mut self,
-        t: f64,
-        name: &str,
-        ts: f64,
-        air: f64,
-        u: [f64; 3],
-        measuring: bool,
-    ) -> Result<()> {
-        if !self.dwell_means {
-            return self.write(t, name, ts, air, u);
-        }
-        let same = self.acc.as_ref().is_some_and(|(n, _, _)| n == name) && measuring;
-        if !same {
-            self.flush()?;
-        }
-        if measuring {
-            let (_, n, s) = self
-                .acc
-                .get_or_insert_with(|| (name.to_string(), 0, [0.0; 6]));
-            *n += 1;
-            for (a, v) in s.iter_mut().zip([t, ts, air, u[0], u[1], u[2]]) {
-                *a += v;
-            }
-        }
-        Ok(())
-    }
-
-    fn finish(mut self) -> Result<Simulation> {
-        self.flush()?;
-        let body = self
-            .csv
-            .into_inner()
-            .map_err(|e| HostError::msg(format!("cannot write the recording: {e}")))?;
-        let body = String::from_utf8(body).map_err(|e| HostError::msg(e.to_string()))?;
-        Ok(Simulation {
-            csv: self.head + &body,
-            rows: self.rows,
-        })
-    }
 }

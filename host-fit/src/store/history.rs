@@ -125,6 +125,9 @@ pub struct Entry {
     pub blob_bytes: Option<usize>,
     /// Its CRC-32, `0x` and 8 hex digits.
     pub blob_crc: Option<String>,
+    /// The run id the blob carries (format 4 on): this record's for a blob it made, the
+    /// maker's for a blob it verified.
+    pub blob_run_id: Option<String>,
     /// Whether this is the unit's latest calibration (the newest record that made a
     /// blob: the blob the unit should carry).
     pub latest: bool,
@@ -157,6 +160,11 @@ pub fn history(store: &Store, serial: &str) -> Result<History> {
             .map(|r| Entry {
                 blob_bytes: r.blob.as_ref().map(Vec::len),
                 blob_crc: r.blob_crc().map(|c| format!("{c:#010x}")),
+                blob_run_id: r
+                    .blob
+                    .as_deref()
+                    .and_then(super::record::blob_run_id)
+                    .map(|id| id.to_string()),
                 latest: Some(r.id) == latest,
                 record: r,
             })
@@ -202,7 +210,15 @@ impl History {
                 opt(r.input_sha256.as_deref()),
                 opt(r.model.as_deref()),
                 match (e.blob_bytes, &e.blob_crc) {
-                    (Some(n), Some(c)) => format!(", blob {n} bytes, CRC {c}"),
+                    (Some(n), Some(c)) => format!(
+                        ", blob {n} bytes, CRC {c}{}",
+                        match &e.blob_run_id {
+                            Some(id) if *id == r.run_id.to_string() =>
+                                " (carries this run's id)".to_string(),
+                            Some(id) => format!(" (made by run {id})"),
+                            None => " (no run id in it)".to_string(),
+                        }
+                    ),
                     _ => String::new(),
                 }
             ));

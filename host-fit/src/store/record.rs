@@ -157,6 +157,26 @@ pub fn blob_crc(blob: &[u8]) -> Option<u32> {
     (n >= 4).then(|| u32::from_le_bytes([blob[n - 4], blob[n - 3], blob[n - 2], blob[n - 1]]))
 }
 
+/// `blob` (encoded) with its `run_id` set to `run` (decoded, stamped, encoded again: its
+/// CRC follows), so that a unit in the field leads back to its record.
+pub fn stamp(blob: &[u8], run: RunId) -> Result<Vec<u8>> {
+    use firmware_core::blob::{Blob, MAX_BLOB_LEN};
+    let err = |e: firmware_core::error::Error| {
+        HostError::msg(format!("cannot stamp the blob with its run id: {e}"))
+    };
+    let mut b = Blob::decode(blob).map_err(err)?;
+    b.run_id = firmware_core::blob::RunId(run.0);
+    let mut buf = [0u8; MAX_BLOB_LEN];
+    let n = b.encode(&mut buf).map_err(err)?;
+    Ok(buf[..n].to_vec())
+}
+
+/// The run id a blob carries (format 4 on; None for none or an older blob).
+pub fn blob_run_id(blob: &[u8]) -> Option<RunId> {
+    let id = firmware_core::blob::BlobView::new(blob).ok()?.run_id();
+    (!id.is_none()).then_some(RunId(id.0))
+}
+
 /// The 12 coefficients at T0 (in the recording's output unit per g and in it), with
 /// their 1-sigma where the run knows them.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -135,7 +135,7 @@ pub fn coverage() -> (Vec<(String, usize, usize, usize)>, String) {
         // no cache step: the firmware then evaluates the model at every sample's
         // temperature, and the comparison is of the model alone
         let cal = oc.fit.calibration(0.0, false);
-        let (blob, _, _) = host_fit::blob::build_blob("T", &cal).unwrap();
+        let (blob, _, _) = host_fit::blob::build_blob("T", &rec.output_unit, &cal).unwrap();
         let check = |p: usize| rec.positions.has_role(p, Role::Verification);
         let v = host_fit::verify::verify(&rec, &blob, Method::CorrectConstants, &check).unwrap();
         let (mut n, mut one, mut two) = (0, 0, 0);

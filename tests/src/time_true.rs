@@ -1,0 +1,162 @@
+//! The twins and the figures of the time-true tests (issue 22): a unit's production test
+//! on an uneven logger clock and its flight, a diagnosed blob verified on both, through
+//! the CLI. Shared by `tests/tests/time_true.rs` and the README's `time-true` figure.
+use crate::{cli, cli_json};
+use host_fit::simulate::{
+    simulate, Curvature, Fixture, Flight, Logger, PerAxis, SimConfig, Warmup,
+};
+use std::path::{Path, PathBuf};
+
+/// The catalogue's effects, each concealed alone at its nominal size, and a clean unit.
+pub const EFFECTS: [&str; 9] = [
+    "clean",
+    "thermal_lag",
+    "temp_rate",
+    "hysteresis",
+    "nonlinearity_k2",
+    "scale_asymmetry",
+    "fixture_error",
+    "warmup_drift",
+    "temp_curvature",
+];
+
+/// The production test of a unit with `effect`, on an uneven logger clock.
+pub fn production(effect: &str, seed: u64) -> SimConfig {
+    let mut c = SimConfig {
+        seed,
+        ..SimConfig::default()
+    };
+    c.unit.serial = format!("TT-{effect}");
+    c.logger = Logger {
+        rest_rate_hz: 0.1,
+        jitter_s: 0.3,
+        drop_rate: 0.01,
+        power_off_metadata: true,
+    };
+    // the unit is switched off for 10 minutes in the soak at -10 C
+    c.schedule.power_offs = vec![[8400.0, 600.0]];
+    let e = &mut c.effects;
+    let axes = |v: [f64; 3]| Some(PerAxis { value: v });
+    match effect {
+        "thermal_lag" => e.thermal_lag = axes([600.0; 3]),
+        "temp_rate" => e.temp_rate = axes([0.02, 0.0, -0.012]),
+        "hysteresis" => e.hysteresis = axes([1e-4, -0.8e-4, 0.0]),
+        "nonlinearity_k2" => e.nonlinearity_k2 = axes([1e-4, 0.0, -1.2e-4]),
+        "scale_asymmetry" => e.scale_asymmetry = axes([2e-4, 0.0, 0.0]),
+        "fixture_error" => {
+            e.fixture_error = Some(Fixture {
+                position: "TP3".into(),
+                angles_rad: [4e-4, 1e-4],
+            })
+        }
+        "warmup_drift" => {
+            e.warmup_drift = Some(Warmup {
+                d_v: [2e-4, 0.0, -1.5e-4],
+                tau_s: 1200.0,
+            })
+        }
+        "temp_curvature" => {
+            e.temp_curvature = Some(Curvature {
+                u0_v: [1e-4, 0.0, -0.8e-4],
+                k_rel: [0.0; 3],
+                period_c: 25.0,
+            })
+        }
+        _ => {}
+    }
+    c
+}
+
+/// The same unit in flight (the default flight: 73 minutes at 20 Hz).
+pub fn in_flight(mut c: SimConfig) -> SimConfig {
+    c.flight = Some(Flight::default());
+    c
+}
+
+/// A path as the CLI takes it.
+pub fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Write the twin's recording (and its positions file, for a flight) into `dir`.
+pub fn write(dir: &Path, name: &str, cfg: &SimConfig) -> (PathBuf, Option<PathBuf>) {
+    let sim = simulate(cfg, |_| {}).unwrap();
+    let p = dir.join(format!("{name}.csv"));
+    std::fs::write(&p, &sim.csv).unwrap();
+    let pos = sim.positions_csv.map(|text| {
+        let q = dir.join(format!("{name}-positions.csv"));
+        std::fs::write(&q, text).unwrap();
+        q
+    });
+    (p, pos)
+}
+
+/// `verify --json` of `rec` with `blob`: the worst |dg| of its dwells, mg, and the
+/// dwells' |dg| in order.
+pub fn verify(rec: &Path, pos: Option<&Path>, blob: &Path) -> (f64, Vec<f64>) {
+    let mut args = vec!["verify", s(rec), "--blob", s(blob), "--json"];
+    if let Some(p) = pos {
+        args.extend(["--positions", s(p)]);
+    }
+    let (code, out, err) = cli(&args);
+    assert!(
+        code == 0 || code == 3,
+        "verify exit {code}: {}",
+        err.lines()
+            .filter(|l| !l.starts_with("note") && !l.starts_with("warning"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let dg: Vec<f64> = j["dwells"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["dg_mg"].as_f64().unwrap().abs())
+        .collect();
+    (dg.iter().copied().fold(0.0, f64::max), dg)
+}
+
+/// Per effect: the diagnosis's own final max |dg|, the diagnosed blob's worst verification
+/// |dg| on the same recording, then on the flight recording the diagnosed blob's and the
+/// plain `fit` blob's worst |dg| (mg).
+pub fn figures(effect: &str, dir: &Path) -> [f64; 4] {
+    let cfg = production(effect, 11);
+    let (rec, _) = write(dir, effect, &cfg);
+    let diagnosed = dir.join(format!("{effect}-diagnosed.blob"));
+    let plain = dir.join(format!("{effect}-plain.blob"));
+    let d = cli_json(&[
+        "diagnose",
+        s(&rec),
+        "--out",
+        s(&diagnosed),
+        "--json",
+        "--force",
+    ]);
+    let own = d["final"]["max_abs_dg_mg"].as_f64().unwrap();
+    cli_json(&["fit", s(&rec), "--out", s(&plain), "--json", "--force"]);
+    let (fw, _) = verify(&rec, None, &diagnosed);
+    let (flight, pos) = write(dir, &format!("{effect}-flight"), &in_flight(cfg));
+    let (fl_diag, _) = verify(&flight, pos.as_deref(), &diagnosed);
+    let (fl_plain, _) = verify(&flight, pos.as_deref(), &plain);
+    [own, fw, fl_diag, fl_plain]
+}
+
+/// The per-effect table (the README's `time-true` figure): every catalogue effect's
+/// figures ([`figures`]), and the table as text.
+pub fn table() -> (Vec<(&'static str, [f64; 4])>, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rows = Vec::new();
+    let mut text = String::from(
+        "worst |dg|, mg     diagnosis  blob, production (uneven clock)  blob in flight  fit blob in flight\n",
+    );
+    for effect in EFFECTS {
+        let f = figures(effect, dir.path());
+        text.push_str(&format!(
+            "{effect:<18} {:9.4} {:32.4} {:15.4} {:19.4}\n",
+            f[0], f[1], f[2], f[3]
+        ));
+        rows.push((effect, f));
+    }
+    (rows, text)
+}

@@ -238,7 +238,8 @@ pub fn judge(v: &Verification, spec: &Spec, t0: f64, range: (f64, f64)) -> Accep
         .map(|b| b.text(spec, range))
         .collect::<Vec<_>>()
         .join(" and ");
-    let (acceptance, reason) = if let (true, Some((ratio, name, temp, g))) = (t.failed > 0, t.worst) {
+    let (acceptance, reason) = if let (true, Some((ratio, name, temp, g))) = (t.failed > 0, t.worst)
+    {
         let mut r = format!(
             "{} of {} verification dwells over the limit; worst {name} at {temp:.1} C: |dg| {g:.4} mg, {ratio:.1}x its limit",
             t.failed, t.judged
@@ -370,7 +371,12 @@ mod tests {
         assert_eq!(a.acceptance, Verdict::Pass, "{a:?}");
         assert!(a.reason.ends_with("reported apart"), "{}", a.reason);
         // a failure inside the range is a failure whatever the option
-        let a = judge(&v(&[(80.0, 0.1), (20.0, 0.4), (-30.0, 0.2)]), &report, 20.0, (-40.0, 70.0));
+        let a = judge(
+            &v(&[(80.0, 0.1), (20.0, 0.4), (-30.0, 0.2)]),
+            &report,
+            20.0,
+            (-40.0, 70.0),
+        );
         assert_eq!(a.acceptance, Verdict::Fail);
         assert!(Spec::new(0.0, 1.0).is_err() && Spec::new(0.3, f64::NAN).is_err());
     }
@@ -384,12 +390,18 @@ mod tests {
         assert_eq!(a.acceptance, Verdict::NotJudged, "{a:?}");
         assert_eq!(a.bands_not_judged, vec![Band::NearT0]);
         assert!(
-            a.reason.starts_with("no verification dwell judged within +-5 C of T0"),
+            a.reason
+                .starts_with("no verification dwell judged within +-5 C of T0"),
             "{}",
             a.reason
         );
         // by default the dwell at 24.7 C outside the range fails it
-        let a = judge(&v(&[(-29.5, 0.01), (24.7, 9.8)]), &Spec::default(), 25.0, one_stop);
+        let a = judge(
+            &v(&[(-29.5, 0.01), (24.7, 9.8)]),
+            &Spec::default(),
+            25.0,
+            one_stop,
+        );
         assert_eq!(a.acceptance, Verdict::Fail);
         // a range beyond the band near T0 with dwells only near T0: the range not judged
         let a = judge(&v(&[(20.0, 0.01)]), &spec, 20.0, (-40.0, 70.0));

@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 pub mod figures;
+pub mod four_stops;
 pub mod lab;
 pub mod readme;
 pub mod run;

@@ -30,10 +30,7 @@ impl Missing {
         let (role, effect) = if self.verification {
             ("verification", "it is not judged there")
         } else {
-            (
-                "calibration",
-                "the fit there rests on the other positions",
-            )
+            ("calibration", "the fit there rests on the other positions")
         };
         format!(
             "{role} position {} has no static dwell at the {} C stop{} (it has at {} C): {effect}",
@@ -79,8 +76,10 @@ pub fn missing(rec: &Recording) -> Vec<Missing> {
     regular
         .iter()
         .filter_map(|p| {
-            let (has, lacks): (Vec<&(f64, BTreeSet<usize>)>, Vec<_>) =
-                at_stops.iter().copied().partition(|(_, set)| set.contains(p));
+            let (has, lacks): (Vec<&(f64, BTreeSet<usize>)>, Vec<_>) = at_stops
+                .iter()
+                .copied()
+                .partition(|(_, set)| set.contains(p));
             (!lacks.is_empty()).then(|| Missing {
                 position: rec.positions.name(*p).to_string(),
                 verification: rec

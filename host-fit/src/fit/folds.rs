@@ -70,7 +70,13 @@ impl Kept<'_> {
     /// The row of observation `o`, as (column, value) of its nonzero entries.
     fn row(&self, o: &Obs, t0: f64) -> Vec<(usize, f64)> {
         let dense = match self.basis {
-            Some(b) => design_row(o, &b.eval(t0, o.temp_c), &self.keep, self.axis, self.with_k2),
+            Some(b) => design_row(
+                o,
+                &b.eval(t0, o.temp_c),
+                &self.keep,
+                self.axis,
+                self.with_k2,
+            ),
             None => vec![o.a[0], o.a[1], o.a[2], 1.0],
         };
         dense
@@ -113,7 +119,12 @@ fn clusters(obs: &[Obs]) -> (Vec<usize>, usize) {
 
 /// The designs the full data determine: each temperature's `[a, 1]` where its positions
 /// determine it, and every candidate of `fits` per axis.
-fn kept<'b>(obs: &[Obs], fits: &'b [(Basis, ModelFit)], setting: &Setting, k: usize) -> Vec<Kept<'b>> {
+fn kept<'b>(
+    obs: &[Obs],
+    fits: &'b [(Basis, ModelFit)],
+    setting: &Setting,
+    k: usize,
+) -> Vec<Kept<'b>> {
     let all: Vec<usize> = (0..obs.len()).collect();
     let mut out = Vec::new();
     let (of, n_clusters) = clusters(obs);

@@ -384,7 +384,10 @@ fn fit_axis(
         let p = keep.len() * nb + usize::from(with_k2);
         let mut a = DMatrix::zeros(obs.len(), p);
         for (r, (o, phi)) in obs.iter().zip(phis).enumerate() {
-            for (c, v) in design_row(o, phi, &keep, axis, with_k2).into_iter().enumerate() {
+            for (c, v) in design_row(o, phi, &keep, axis, with_k2)
+                .into_iter()
+                .enumerate()
+            {
                 a[(r, c)] = v;
             }
         }

@@ -66,6 +66,16 @@ fn one_missing_dwell_is_named_and_does_not_cost_the_data_chosen_model_its_accura
     // nothing missing in the full recording
     let (_, err_full) = fit(&full, &dir.join("f.blob"), &[]);
     assert!(!err_full.contains("has no static dwell"), "{err_full}");
+    // a verification position missing at the 60 C stop: named, and not judged there
+    let pp = dir.join("pp.csv");
+    without_dwell(&full, "PP3", 3, &pp);
+    let (_, err_pp) = fit(&pp, &dir.join("pp.blob"), &[]);
+    assert!(
+        err_pp.lines().any(|l| l
+            .starts_with("warning: verification position PP3 has no static dwell at the 59.")
+            && l.ends_with("C stop (it has at -29.9, 4.9, 24.9 C): it is not judged there")),
+        "{err_pp}"
+    );
 
     // every candidate scored, on the same held-out dwells; the dwell that keeps the 5 C
     // stop's design determined (TP2, opposite the missing TP4) never held out

@@ -211,3 +211,111 @@ pub fn design(obs: &[Obs], fits: &[(Basis, ModelFit)], setting: &Setting, k: usi
     }
     FoldDesign { k, fold }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::noise::Noise;
+    use crate::fit::select::candidates;
+    use crate::fit::temperature::{fit_joint, Frame};
+    use std::path::Path;
+
+    /// Six positions (+-x, +-y, +-z) at four temperatures, a unit with linear thermal
+    /// slopes; `drop` is left out (position, temperature index).
+    fn obs(drop: Option<(usize, usize)>) -> Vec<Obs> {
+        let dirs = [
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+        ];
+        let mut out = Vec::new();
+        for (ti, t) in [-30.0, 5.0, 25.0, 60.0].into_iter().enumerate() {
+            for (p, a) in dirs.iter().enumerate() {
+                if drop == Some((p, ti)) {
+                    continue;
+                }
+                let dt: f64 = t - 25.0;
+                let u = std::array::from_fn(|i| {
+                    a[i] * (1.0 + 1e-4 * dt) + 1e-3 * (i as f64 + 1.0) + 1e-7 * dt * dt
+                });
+                out.push(Obs {
+                    position: p,
+                    a: *a,
+                    temp_c: t,
+                    u,
+                    n: 60,
+                    dwell: out.len(),
+                    t_s: out.len() as f64 * 70.0,
+                    estimated: false,
+                });
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn with_a_dwell_missing_every_training_fold_determines_every_candidate() {
+        let noise = Noise {
+            sigma: [2e-5; 3],
+            dof: 1000,
+        };
+        let setting = Setting {
+            noise: &noise,
+            t0_c: 25.0,
+            frame: Frame::Given,
+            path: Path::new(""),
+        };
+        // +y missing at 5 C: -y there is all that determines the y column at 5 C
+        let o = obs(Some((2, 1)));
+        let temps: Vec<f64> = o.iter().map(|x| x.temp_c).collect();
+        let fits: Vec<(Basis, ModelFit)> = candidates(&temps)
+            .into_iter()
+            .filter_map(|b| fit_joint(&o, &b, &setting).ok().map(|f| (b, f)))
+            .collect();
+        // the pwl through all four temperatures and the cubic among them
+        assert_eq!(fits.len(), candidates(&temps).len());
+        let folds = design(&o, &fits, &setting, 5);
+        let minus_y_at_5 = o
+            .iter()
+            .find(|x| x.position == 3 && x.temp_c == 5.0)
+            .map(|x| x.dwell);
+        // it, and (the folds dealt greedily) at most one more, are never held out
+        let never = folds.never_held_out();
+        assert!(
+            minus_y_at_5.is_some_and(|d| never.contains(&d)) && never.len() <= 2,
+            "{never:?}"
+        );
+        assert_eq!(folds.held_out() + never.len(), o.len());
+        // every candidate is fitted in every training fold (a design by rank alone holds
+        // out -y at 5 C in some fold, and the pwl there has no y column at 5 C)
+        for f in 0..folds.k {
+            let train: Vec<Obs> = o
+                .iter()
+                .filter(|x| folds.fold_of(x.dwell) != Some(f))
+                .cloned()
+                .collect();
+            assert!(train.len() < o.len(), "fold {f} holds out nothing");
+            for (b, _) in &fits {
+                assert!(
+                    fit_joint(&train, b, &setting).is_ok(),
+                    "fold {f}: {} undetermined",
+                    b.describe()
+                );
+            }
+        }
+        // with nothing missing, every dwell is held out once
+        let full = obs(None);
+        let fits: Vec<(Basis, ModelFit)> = candidates(&temps)
+            .into_iter()
+            .filter_map(|b| fit_joint(&full, &b, &setting).ok().map(|f| (b, f)))
+            .collect();
+        let folds = design(&full, &fits, &setting, 5);
+        assert_eq!(
+            (folds.held_out(), folds.never_held_out().len()),
+            (full.len(), 0)
+        );
+    }
+}

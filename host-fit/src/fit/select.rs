@@ -245,7 +245,7 @@ pub fn choose_among(
     let path = setting.path;
     let temps: Vec<f64> = obs.iter().map(|o| o.temp_c).collect();
     let all = candidates(&temps);
-    if !all.iter().any(|b| keep(b)) {
+    if !all.iter().any(keep) {
         return Err(HostError::in_file(
             path,
             format!(

@@ -37,13 +37,13 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
     w(
         out,
         format!(
-            "{} units in {:.1} s: {} pass, {} fail, {} not judged, {} error ({}); summary {}",
+            "{} units in {:.1} s: {} pass, {} fail, {} error, {} not judged ({}); summary {}",
             res.units.len(),
             t.elapsed().as_secs_f64(),
             count(UnitStatus::Pass),
             count(UnitStatus::Fail),
-            count(UnitStatus::NotJudged),
             count(UnitStatus::Error),
+            count(UnitStatus::NotJudged),
             o.spec.text(),
             a.out.join("summary.csv").display()
         ),

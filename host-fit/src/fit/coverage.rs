@@ -91,3 +91,55 @@ pub fn missing(rec: &Recording) -> Vec<Missing> {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::positions::Positions;
+    use std::fmt::Write;
+
+    /// Every TP and PP position for 30 samples at each of three stops, `skip` (position,
+    /// stop) left out.
+    fn rec(skip: &[(&str, f64)]) -> Recording {
+        let mut s = String::from("t_s,position,temp_c,ux_v,uy_v,uz_v\n");
+        let mut t = 0.0;
+        let pos = Positions::default();
+        for stop in [-30.0, 20.0, 60.0] {
+            for p in pos
+                .list
+                .iter()
+                .filter(|p| !skip.contains(&(p.name.as_str(), stop)))
+            {
+                for _ in 0..30 {
+                    let _ = writeln!(
+                        s,
+                        "{t},{},{stop:.1},{},{},{}",
+                        p.name, p.a[0], p.a[1], p.a[2]
+                    );
+                    t += 1.0;
+                }
+            }
+        }
+        Recording::from_reader(std::path::Path::new("r.csv"), s.as_bytes(), pos).unwrap()
+    }
+
+    #[test]
+    fn a_position_missing_at_a_stop_is_named_with_the_stop_and_its_role() {
+        assert_eq!(missing(&rec(&[])), Vec::new());
+        let m = missing(&rec(&[
+            ("TP4", 20.0),
+            ("PP3", 60.0),
+            ("PP5", -30.0),
+            ("PP5", 60.0),
+        ]));
+        let texts: Vec<String> = m.iter().map(Missing::text).collect();
+        // PP5, at one stop only, is not one of the schedule's regular positions
+        assert_eq!(
+            texts,
+            [
+                "calibration position TP4 has no static dwell at the 20.0 C stop (it has at -30.0, 60.0 C): the fit there rests on the other positions",
+                "verification position PP3 has no static dwell at the 60.0 C stop (it has at -30.0, 20.0 C): it is not judged there",
+            ]
+        );
+    }
+}

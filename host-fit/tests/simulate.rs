@@ -161,6 +161,7 @@ fn the_logger_writes_an_uneven_clock() {
         jitter_s: 0.3,
         drop_rate: 0.01,
         power_off_metadata: true,
+        ..Default::default()
     };
     let sim = simulate(&cfg, |_| {}).unwrap();
     assert!(sim.csv.contains("# power_off_s=2000-2300\n"));

@@ -8,6 +8,7 @@ pub mod figures;
 pub mod lab;
 pub mod readme;
 pub mod run;
+pub mod sweep;
 pub mod synthetic;
 pub mod time_true;
 pub mod twins;

@@ -80,6 +80,9 @@ pub enum RouteArg {
     Joint,
     /// The paper's: formula (10) per stop, then a fit across stops.
     PerStop,
+    /// Every window through temperature changes, jointly with the unit's thermal lag and
+    /// rate where held-out blocks of time support them (chosen by itself for a sweep).
+    Dynamic,
 }
 
 impl From<RouteArg> for Route {
@@ -88,6 +91,7 @@ impl From<RouteArg> for Route {
             RouteArg::Static => Route::Static,
             RouteArg::Joint => Route::Joint,
             RouteArg::PerStop => Route::PerStop,
+            RouteArg::Dynamic => Route::Dynamic,
         }
     }
 }
@@ -212,7 +216,10 @@ pub struct FitArgs {
     #[command(flatten)]
     pub model: ModelArgs,
     /// Identification route: static (the dwells in thermal equilibrium), joint (every
-    /// dwell, ramps included), per-stop (the paper's).
+    /// dwell, ramps included), per-stop (the paper's), dynamic (every window, jointly
+    /// with the thermal lag and rate the held-out blocks support). A recording whose
+    /// dwells mostly move in temperature (a sweep) takes the dynamic route unless
+    /// `--model` or another route is given.
     #[arg(long, value_enum, default_value = "static")]
     pub route: RouteArg,
     /// The serial written into the blob (default: the recording's `unit`).
@@ -374,6 +381,11 @@ pub struct SimulateArgs {
     /// Also write the truth (all parameters) as JSON here.
     #[arg(long)]
     pub truth: Option<PathBuf>,
+    /// A chamber and tilter program to run instead of the configuration's stops (CSV
+    /// `time_s,setpoint_c,position`, docs/chamber-program.md; `host-fit plan` writes
+    /// one): a plan tried on the twin before a chamber is booked.
+    #[arg(long)]
+    pub plan: Option<PathBuf>,
     /// Where to write the positions file the recording needs (a `[flight]`
     /// configuration's attitudes; required with one).
     #[arg(long)]

@@ -118,6 +118,19 @@ pub(super) fn simulate(a: SimulateArgs, out: &mut dyn Write) -> Result<()> {
     if let Some(s) = a.seed {
         cfg.seed = s;
     }
+    if let Some(p) = &a.plan {
+        let text = std::fs::read_to_string(p).map_err(|e| HostError::io(p, &e))?;
+        let steps = crate::simulate::program::parse_program(p, &text)?;
+        if cfg.flight.is_some() {
+            return Err(HostError::msg(
+                "--plan runs a chamber program; the configuration is a [flight]",
+            ));
+        }
+        // the unit starts soaked at the program's first set point
+        cfg.chamber.start_c = steps[0].setpoint_c;
+        cfg.schedule.sweep = None;
+        cfg.schedule.program = steps;
+    }
     if let Some(p) = &a.positions_out {
         check_writable(p, a.force)?;
     }

@@ -181,7 +181,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
 /// most general static model leaves (the baseline with every static catalogue term the
 /// positions determine: what none of the candidates could explain is the floor).
 /// Whether the floor was measured.
-fn weigh(data: &mut Data, floor: &Floor) -> bool {
+pub(crate) fn weigh(data: &mut Data, floor: &Floor) -> bool {
     let measured = floor.axes.iter().all(|a| !a.scales.is_empty());
     if measured {
         data.w = data

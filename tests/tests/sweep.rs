@@ -15,8 +15,20 @@ const LAG_REL: f64 = 0.05;
 fn a_two_hour_sweep_calibrates_lagging_units_as_well_as_the_six_hour_test() {
     let dir = tempfile::tempdir().unwrap();
     let mut failed = Vec::new();
+    let mut text = String::from(
+        "worst verification |dg|, mg      sweep  lag fitted, s   6-h static   6-h dynamic\n",
+    );
     for (lag_s, seed) in [(0.0, 31), (300.0, 32), (1200.0, 33)] {
         let ([sw, long, long_dyn], hours) = three_ways(dir.path(), lag_s, seed);
+        let verdict = |j: &tests::sweep::Judged| if j.pass { "" } else { " (fail)" };
+        text.push_str(&format!(
+            "element lag {:>2.0} min, sweep {hours:.2} h  {:>7.4}  {:>13}  {:>11}  {:>12}\n",
+            lag_s / 60.0,
+            sw.worst_mg,
+            sw.lag_s.map_or("none".to_string(), |t| format!("{t:.1}")),
+            format!("{:.4}{}", long.worst_mg, verdict(&long)),
+            format!("{:.4}{}", long_dyn.worst_mg, verdict(&long_dyn)),
+        ));
         println!(
             "lag {:.0} min: sweep ({hours:.2} h) {:.4} mg (pass {}, lag {:?} s); 6-h static {:.4} mg (pass {}); 6-h dynamic {:.4} mg (pass {}, lag {:?} s)",
             lag_s / 60.0,
@@ -57,5 +69,7 @@ fn a_two_hour_sweep_calibrates_lagging_units_as_well_as_the_six_hour_test() {
             }
         }
     }
+    println!("{text}");
+    tests::readme::same("sweep", &text);
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }

@@ -43,6 +43,7 @@ pub mod store;
 
 pub mod batch;
 pub mod demo;
+pub mod plan;
 pub mod report;
 
 pub mod cli;

@@ -395,6 +395,57 @@ pub struct SimulateArgs {
     pub force: bool,
 }
 
+/// `plan`.
+#[derive(Args, Debug)]
+pub struct PlanArgs {
+    /// The chamber's range, C: `LO,HI`.
+    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [-40.0, 70.0])]
+    pub range_c: Vec<f64>,
+    /// The chamber's fastest ramp, C/min.
+    #[arg(long, default_value_t = 3.0)]
+    pub max_ramp_c_per_min: f64,
+    /// The tilter's positions, in the order visited.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "TP1,TP2,TP3,TP4,TP5,TP6,PP1,PP2,PP3,PP4,PP5,PP6"
+    )]
+    pub positions: Vec<String>,
+    /// Dwell per position, s.
+    #[arg(long, default_value_t = 50.0)]
+    pub dwell_s: f64,
+    /// Move between positions, s.
+    #[arg(long, default_value_t = 10.0)]
+    pub move_s: f64,
+    /// Samples per second.
+    #[arg(long, default_value_t = 1.0)]
+    pub rate_hz: f64,
+    /// The unit type's output noise, 1 sigma per sample (output units).
+    #[arg(long, default_value_t = 2e-5)]
+    pub noise: f64,
+    /// The unit type's thermal time constant (its element behind its sensor), s.
+    #[arg(long, default_value_t = 0.0)]
+    pub tau_s: f64,
+    /// Target: the shortest plan predicted within this worst verification |dg|, mg.
+    #[arg(long, conflicts_with = "hours")]
+    pub target_mg: Option<f64>,
+    /// Target: the most accurate plan within this many chamber hours.
+    #[arg(long)]
+    pub hours: Option<f64>,
+    /// Seed of the twin the candidates are tried on.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// The program to write (CSV time_s,setpoint_c,position; docs/chamber-program.md).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Overwrite an existing program.
+    #[arg(long)]
+    pub force: bool,
+    /// JSON output.
+    #[arg(long)]
+    pub json: bool,
+}
+
 /// `demo`.
 #[derive(Args, Debug)]
 pub struct DemoArgs {
@@ -523,6 +574,10 @@ pub enum Command {
     Blind(BlindArgs),
     /// Simulate a unit's production temperature test (the digital twin).
     Simulate(SimulateArgs),
+    /// Design a chamber and tilter program for a target accuracy or a number of hours:
+    /// candidate plans tried on the twin, their predicted accuracy against chamber
+    /// hours, the chosen program written with an equilibrium verification block.
+    Plan(PlanArgs),
     /// The main job: simulate the paper's experiment, fit, compensate, summarise, report.
     Demo(DemoArgs),
     /// Firmware test vectors: write an input table, or print the expected f32 results

@@ -9,9 +9,9 @@
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::diagnose::design::static_at;
+use crate::diagnose::dynamic::fit_dynamic;
 use crate::diagnose::metrics::dispersion;
 use crate::error::{HostError, Result};
-use crate::fit::dynamic::fit_dynamic;
 use crate::simulate::program::Step;
 use crate::simulate::{simulate, PerAxis, SimConfig};
 use serde::Serialize;

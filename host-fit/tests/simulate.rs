@@ -438,7 +438,7 @@ fn the_paper_unit_passes_through_the_papers_tables() {
 /// duration is the legs', and the temperature turns at the hot end.
 #[test]
 fn a_sweep_turns_the_tilter_while_the_chamber_ramps() {
-    use host_fit::fit::dynamic::Shape;
+    use host_fit::diagnose::dynamic::Shape;
     use host_fit::simulate::{Leg, Sweep};
     let mut cfg = SimConfig::default();
     cfg.chamber.start_c = 0.0;

@@ -168,7 +168,7 @@ pub(super) fn fit(
 /// with their 1-sigma, the blob. Returns the blob to write (as recorded).
 pub(super) fn fit_dynamic(
     run: Run<'_>,
-    d: &crate::fit::dynamic::DynamicFit<'_>,
+    d: &crate::diagnose::dynamic::DynamicFit<'_>,
     cal: &Calibration<f64>,
     blob: Vec<u8>,
 ) -> Result<Vec<u8>> {

@@ -1,7 +1,6 @@
 //! The fit layer: from a recording's dwells to the 12 coefficients and their temperature
 //! models, with one least-squares solver.
 pub mod describe;
-pub mod dynamic;
 pub mod equilibrium;
 pub mod identify;
 pub mod lsq;

@@ -39,7 +39,7 @@ pub enum Route {
     /// The paper's route: formula (10) per stop, then a fit across stops.
     PerStop,
     /// Every window through temperature changes, fitted jointly with the unit's thermal
-    /// lag and rate where the held-out blocks support them ([`crate::fit::dynamic`]).
+    /// lag and rate where the held-out blocks support them (the diagnosis's `dynamic` module).
     Dynamic,
 }
 
@@ -332,7 +332,7 @@ pub fn fit_recording(rec: &Recording, choice: &ModelChoice, route: Route) -> Res
         Route::PerStop => fit_per_stop(rec, choice),
         Route::Static | Route::Joint => fit_windows(rec, choice, route),
         Route::Dynamic => Err(HostError::msg(
-            "the dynamic route chooses its own model (crate::fit::dynamic); --model does not apply to it",
+            "the dynamic route chooses its own model on held-out blocks of time; --model does not apply to it",
         )),
     }
 }

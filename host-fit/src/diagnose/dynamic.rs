@@ -111,11 +111,12 @@ impl DynamicFit<'_> {
 
 fn describe(f: &Fit) -> String {
     let mut s = f.spec.basis.describe();
+    // only the in-flight terms this route fits (the lag and the rate) are in its specs
     for e in &f.spec.extras {
-        match e {
-            Extra::Lag { taus } => s.push_str(&format!(" + thermal_lag {:.0} s", taus[0][0])),
-            Extra::Rate { tau_s } => s.push_str(&format!(" + temp_rate (estimator {tau_s:.0} s)")),
-            _ => {}
+        if let Extra::Lag { taus } = e {
+            s.push_str(&format!(" + thermal_lag {:.0} s", taus[0][0]));
+        } else if let Extra::Rate { tau_s } = e {
+            s.push_str(&format!(" + temp_rate (estimator {tau_s:.0} s)"));
         }
     }
     s
@@ -269,10 +270,10 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
     };
     let (mut lag_tau_s, mut rate) = (None, None);
     for (e, x) in f.spec.extras.iter().enumerate() {
-        match x {
-            Extra::Lag { taus } => lag_tau_s = Some(taus[0][0]),
-            Extra::Rate { tau_s } => rate = Some((term(&f, e), *tau_s)),
-            _ => {}
+        if let Extra::Lag { taus } = x {
+            lag_tau_s = Some(taus[0][0]);
+        } else if let Extra::Rate { tau_s } = x {
+            rate = Some((term(&f, e), *tau_s));
         }
     }
     Ok(DynamicFit {

@@ -15,7 +15,7 @@
 //! | 2 | `fit`, `simulate` | identification, one least-squares solver, temperature models, the pipeline; the digital twin |
 //! | 3 | `blob`, `verify`, `vectors`, `acceptance` | blobs built and read, formula (13) through firmware-core, firmware test vectors, pass/fail against a specification |
 //! | 4 | `diagnose` | locate, explain, model what the paper's model leaves out |
-//! | 5 | `analysis`, `blind`, `store` | the demo's comparison (pure), the blind tests of the diagnosis, the record store (SQLite: records, history, trends) |
+//! | 5 | `analysis`, `blind`, `plan`, `store` | the demo's comparison (pure), the blind tests of the diagnosis, chamber programs designed for a target accuracy, the record store (SQLite: records, history, trends) |
 //! | 6 | `report`, `batch`, `demo` | HTML reports, production batches, the main job's files |
 //! | 7 | `cli` | the command line |
 #![forbid(unsafe_code)]
@@ -39,6 +39,7 @@ pub mod diagnose;
 
 pub mod analysis;
 pub mod blind;
+pub mod plan;
 pub mod store;
 
 pub mod batch;

@@ -161,6 +161,7 @@ fn the_logger_writes_an_uneven_clock() {
         jitter_s: 0.3,
         drop_rate: 0.01,
         power_off_metadata: true,
+        ..Default::default()
     };
     let sim = simulate(&cfg, |_| {}).unwrap();
     assert!(sim.csv.contains("# power_off_s=2000-2300\n"));
@@ -430,4 +431,118 @@ fn the_paper_unit_passes_through_the_papers_tables() {
             assert!((c[k] - v[k + 1]).abs() < 1e-12, "{} C coeff {k}", v[0]);
         }
     }
+}
+
+/// A sweep: the tilter turns through the positions the whole time while the set point
+/// ramps up and back (no soaks), so most dwells move in temperature, the profile's
+/// duration is the legs', and the temperature turns at the hot end.
+#[test]
+fn a_sweep_turns_the_tilter_while_the_chamber_ramps() {
+    use host_fit::diagnose::dynamic::Shape;
+    use host_fit::simulate::{Leg, Sweep};
+    let mut cfg = SimConfig::default();
+    cfg.chamber.start_c = 0.0;
+    cfg.schedule.dwell_s = 50.0;
+    cfg.schedule.move_s = 10.0;
+    cfg.schedule.sweep = Some(Sweep {
+        legs: vec![
+            Leg {
+                to_c: 60.0,
+                c_per_min: 4.0,
+                hold_s: 120.0,
+            },
+            Leg {
+                to_c: 0.0,
+                c_per_min: 4.0,
+                hold_s: 0.0,
+            },
+        ],
+    });
+    let rec = run(&cfg);
+    let last = rec.rows.last().unwrap().t_s;
+    // 900 s up, 120 s held, 900 s down: 32 whole move+dwell cycles of 60 s, then the
+    // move back to rest
+    assert!(last > 1915.0 && last < 1930.0, "{last}");
+    let shape = Shape::of(&rec);
+    assert!(shape.is_sweep(), "{shape:?}");
+    let (hot_i, hot) = rec
+        .rows
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.temp_c.total_cmp(&b.1.temp_c))
+        .unwrap();
+    // the case lags the air (10 min): it turns short of the set point
+    assert!(hot.temp_c > 30.0 && hot.temp_c < 60.5, "{}", hot.temp_c);
+    assert!(hot_i > rec.rows.len() / 3 && hot_i < rec.rows.len() * 5 / 6);
+    assert!(rec.rows.last().unwrap().temp_c < hot.temp_c - 5.0);
+    let names: std::collections::BTreeSet<usize> = rec.dwells.iter().map(|d| d.position).collect();
+    assert_eq!(names.len(), 12, "every position visited");
+    // a stop-and-soak test is not a sweep
+    assert!(!Shape::of(&run(&base())).is_sweep());
+}
+
+/// A chamber program (`simulate --plan`): the set point runs linearly from row to row,
+/// the tilter holds each row's position (or moves, `-`), the unit starts soaked at the
+/// first set point; a bad program is refused naming the line and the field.
+#[test]
+fn a_program_drives_the_chamber_and_the_tilter() {
+    use host_fit::simulate::program::{parse_program, to_csv};
+    let text = "time_s,setpoint_c,position\n0,10,TP1\n300,10,-\n310,10,TP3\n400,40,TP3\n1000,40,PP2\n1100,40,PP2\n";
+    let p = Path::new("plan.csv");
+    let steps = parse_program(p, text).unwrap();
+    assert_eq!(to_csv(&steps), text);
+    let mut cfg = SimConfig::default();
+    cfg.chamber.start_c = 10.0;
+    cfg.schedule.program = steps;
+    let rec = run(&cfg);
+    let pos = |n: &str| rec.positions.index(n).unwrap();
+    let at = |t: f64| rec.rows.iter().find(|r| r.t_s >= t).unwrap();
+    assert_eq!(rec.rows.last().unwrap().t_s, 1099.0);
+    let d: Vec<(usize, usize)> = rec
+        .dwells
+        .iter()
+        .map(|d| (d.position, d.end - d.start))
+        .collect();
+    assert_eq!(
+        d,
+        vec![(pos("TP1"), 300), (pos("TP3"), 690), (pos("PP2"), 100)]
+    );
+    // soaked at 10 C until the ramp starts at 310 s; 40 C set from 400 s, the case lags
+    assert!((at(300.0).temp_c - 10.0).abs() < 0.15);
+    let (t700, t1090) = (at(700.0).temp_c, at(1090.0).temp_c);
+    assert!(
+        t700 > 15.0 && t700 < t1090 && t1090 < 40.0,
+        "{t700} {t1090}"
+    );
+    for (bad, line, field) in [
+        (
+            "time_s,setpoint_c,position\n0,10,TP1\n0,20,TP2\n",
+            3,
+            "time_s",
+        ),
+        (
+            "time_s,setpoint_c,position\n0,10,TP1\n5,hot,TP2\n",
+            3,
+            "setpoint_c",
+        ),
+        (
+            "time,setpoint_c,position\n0,10,TP1\n5,10,TP2\n",
+            1,
+            "header",
+        ),
+    ] {
+        let e = parse_program(p, bad).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("plan.csv:{line}")) && e.contains(field),
+            "{e}"
+        );
+    }
+    let mut bad = SimConfig::default();
+    bad.schedule.program = parse_program(
+        p,
+        "time_s,setpoint_c,position\n0,10,TP1\n5,10,XX9\n9,10,TP1\n",
+    )
+    .unwrap();
+    let e = simulate(&bad, |_| {}).err().unwrap().to_string();
+    assert!(e.contains("XX9"), "{e}");
 }

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 const MAX_FN_LINES: usize = 120;
 
 /// The layers of lib.rs's table: a module may use modules of its own rank or below.
-const LAYERS: [(&str, u8); 22] = [
+const LAYERS: [(&str, u8); 23] = [
     ("error", 0),
     ("rng", 0),
     ("output", 0),
@@ -26,6 +26,7 @@ const LAYERS: [(&str, u8); 22] = [
     ("diagnose", 4),
     ("analysis", 5),
     ("blind", 5),
+    ("plan", 5),
     ("store", 5),
     ("report", 6),
     ("batch", 6),

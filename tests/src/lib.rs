@@ -9,6 +9,7 @@ pub mod four_stops;
 pub mod lab;
 pub mod readme;
 pub mod run;
+pub mod sweep;
 pub mod synthetic;
 pub mod time_true;
 pub mod twins;

@@ -7,7 +7,7 @@
 use crate::repo;
 
 /// Every figure of the README and the test file that checks it (`tests/tests/FILE`).
-pub const FIGURES: [(&str, &str); 11] = [
+pub const FIGURES: [(&str, &str); 12] = [
     ("demo", "readme.rs"),
     ("coverage", "production.rs"),
     ("model-choice", "production.rs"),
@@ -19,6 +19,7 @@ pub const FIGURES: [(&str, &str); 11] = [
     ("real-recordings", "readme.rs"),
     ("cats-tag", "readme.rs"),
     ("golden", "golden_paper.rs"),
+    ("sweep", "sweep.rs"),
 ];
 
 /// The fenced block right after the marker `<!-- figure: id -->`.

@@ -32,6 +32,7 @@ pub fn production(effect: &str, seed: u64) -> SimConfig {
         jitter_s: 0.3,
         drop_rate: 0.01,
         power_off_metadata: true,
+        ..Default::default()
     };
     // the unit is switched off for 10 minutes in the soak at -10 C
     c.schedule.power_offs = vec![[8400.0, 600.0]];

@@ -80,6 +80,9 @@ pub enum RouteArg {
     Joint,
     /// The paper's: formula (10) per stop, then a fit across stops.
     PerStop,
+    /// Every window through temperature changes, jointly with the unit's thermal lag and
+    /// rate where held-out blocks of time support them (chosen by itself for a sweep).
+    Dynamic,
 }
 
 impl From<RouteArg> for Route {
@@ -88,6 +91,7 @@ impl From<RouteArg> for Route {
             RouteArg::Static => Route::Static,
             RouteArg::Joint => Route::Joint,
             RouteArg::PerStop => Route::PerStop,
+            RouteArg::Dynamic => Route::Dynamic,
         }
     }
 }
@@ -245,7 +249,10 @@ pub struct FitArgs {
     #[command(flatten)]
     pub model: ModelArgs,
     /// Identification route: static (the dwells in thermal equilibrium), joint (every
-    /// dwell, ramps included), per-stop (the paper's).
+    /// dwell, ramps included), per-stop (the paper's), dynamic (every window, jointly
+    /// with the thermal lag and rate the held-out blocks support). A recording whose
+    /// dwells mostly move in temperature (a sweep) takes the dynamic route unless
+    /// `--model` or another route is given.
     #[arg(long, value_enum, default_value = "static")]
     pub route: RouteArg,
     /// The serial written into the blob (default: the recording's `unit`).
@@ -407,6 +414,11 @@ pub struct SimulateArgs {
     /// Also write the truth (all parameters) as JSON here.
     #[arg(long)]
     pub truth: Option<PathBuf>,
+    /// A chamber and tilter program to run instead of the configuration's stops (CSV
+    /// `time_s,setpoint_c,position`, docs/chamber-program.md; `host-fit plan` writes
+    /// one): a plan tried on the twin before a chamber is booked.
+    #[arg(long)]
+    pub plan: Option<PathBuf>,
     /// Where to write the positions file the recording needs (a `[flight]`
     /// configuration's attitudes; required with one).
     #[arg(long)]
@@ -414,6 +426,57 @@ pub struct SimulateArgs {
     /// Overwrite existing outputs.
     #[arg(long)]
     pub force: bool,
+}
+
+/// `plan`.
+#[derive(Args, Debug)]
+pub struct PlanArgs {
+    /// The chamber's range, C: `LO,HI`.
+    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [-40.0, 70.0])]
+    pub range_c: Vec<f64>,
+    /// The chamber's fastest ramp, C/min.
+    #[arg(long, default_value_t = 3.0)]
+    pub max_ramp_c_per_min: f64,
+    /// The tilter's positions, in the order visited.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "TP1,TP2,TP3,TP4,TP5,TP6,PP1,PP2,PP3,PP4,PP5,PP6"
+    )]
+    pub positions: Vec<String>,
+    /// Dwell per position, s.
+    #[arg(long, default_value_t = 50.0)]
+    pub dwell_s: f64,
+    /// Move between positions, s.
+    #[arg(long, default_value_t = 10.0)]
+    pub move_s: f64,
+    /// Samples per second.
+    #[arg(long, default_value_t = 1.0)]
+    pub rate_hz: f64,
+    /// The unit type's output noise, 1 sigma per sample (output units).
+    #[arg(long, default_value_t = 2e-5)]
+    pub noise: f64,
+    /// The unit type's thermal time constant (its element behind its sensor), s.
+    #[arg(long, default_value_t = 0.0)]
+    pub tau_s: f64,
+    /// Target: the shortest plan predicted within this worst verification |dg|, mg.
+    #[arg(long, conflicts_with = "hours")]
+    pub target_mg: Option<f64>,
+    /// Target: the most accurate plan within this many chamber hours.
+    #[arg(long)]
+    pub hours: Option<f64>,
+    /// Seed of the twin the candidates are tried on.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// The program to write (CSV time_s,setpoint_c,position; docs/chamber-program.md).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Overwrite an existing program.
+    #[arg(long)]
+    pub force: bool,
+    /// JSON output.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `demo`.
@@ -544,6 +607,10 @@ pub enum Command {
     Blind(BlindArgs),
     /// Simulate a unit's production temperature test (the digital twin).
     Simulate(SimulateArgs),
+    /// Design a chamber and tilter program for a target accuracy or a number of hours:
+    /// candidate plans tried on the twin, their predicted accuracy against chamber
+    /// hours, the chosen program written with an equilibrium verification block.
+    Plan(PlanArgs),
     /// The main job: simulate the paper's experiment, fit, compensate, summarise, report.
     Demo(DemoArgs),
     /// Firmware test vectors: write an input table, or print the expected f32 results

@@ -3,6 +3,7 @@ use super::args::{FitArgs, IdentifyArgs, TempFitArgs};
 use super::common::{load_to_fit, oriented, serial, w};
 use crate::blob::{build_blob, Cache, F32_BOUND_G};
 use crate::data::table::{read_table, to_csv, TableRow};
+use crate::diagnose::dynamic::{fit_dynamic, Candidate, Shape};
 use crate::error::{HostError, Result};
 use crate::fit::describe::ModelDescription;
 use crate::fit::equilibrium::Excluded;
@@ -334,7 +335,18 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     let req = ModelRequest::from(&a.model);
     req.check()?;
     let rec = load_to_fit(&a.input, err)?;
-    let oc = match (req.kind, Route::from(a.route)) {
+    let shape = Shape::of(&rec);
+    let route = Route::from(a.route);
+    if route == Route::Dynamic || (route == Route::Static && req.kind.is_none() && shape.is_sweep())
+    {
+        if req.kind.is_some() {
+            return Err(HostError::msg(
+                "the dynamic route chooses its model on held-out blocks of time; --model does not apply to it",
+            ));
+        }
+        return fit_dynamic_cli(&a, &rec, out, err);
+    }
+    let oc = match (req.kind, route) {
         (_, Route::Static) => fit_chosen(&rec, &req)?,
         (None, route) => {
             return Err(HostError::msg(format!(
@@ -384,6 +396,116 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
             blob.serial
         ),
     )
+}
+
+/// `fit --json` on the dynamic route.
+#[derive(Serialize)]
+struct FittedDynamic<'a> {
+    unit: &'a str,
+    route: &'static str,
+    model: String,
+    /// The recording's dwells: how many move in temperature.
+    shape: Shape,
+    /// The thermal lag the blob carries, s (absent: none was supported).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    thermal_lag_tau_s: Option<f64>,
+    /// The temperature-rate term per axis (output units per C/s) and the estimator's
+    /// time constant, s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    temp_rate: Option<([f64; 3], f64)>,
+    /// Held-out blocks of time the models were compared on.
+    heldout_blocks: usize,
+    /// Every model compared.
+    candidates: &'a [Candidate],
+    t0_c: f64,
+    t_min_c: f64,
+    t_max_c: f64,
+    cache_step_c: f64,
+    f32_departure_g: f64,
+    f32_bound_g: f64,
+    blob: String,
+    blob_bytes: usize,
+    warnings: &'a [String],
+}
+
+fn fit_dynamic_cli(
+    a: &FitArgs,
+    rec: &crate::data::recording::Recording,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<()> {
+    let d = fit_dynamic(rec)?;
+    let mut cal = d.calibration()?;
+    cal.clamp = a.clamp;
+    if let Some(step) = a.update_step {
+        cal.update_step_c = step;
+    }
+    let serial_name = a.serial.as_deref().unwrap_or(serial(rec));
+    let (blob, bytes, dep) = build_blob(serial_name, &rec.output_unit, &cal)?;
+    let run = super::records::Run {
+        args: &a.record,
+        serial: serial_name,
+        rec,
+        err,
+    };
+    let bytes = super::records::fit_dynamic(run, &d, &cal, bytes)?;
+    write_atomic(&a.out, &bytes, a.force)?;
+    let j = FittedDynamic {
+        unit: serial_name,
+        route: Route::Dynamic.name(),
+        model: d.describe(),
+        shape: d.shape,
+        thermal_lag_tau_s: d.lag_tau_s,
+        temp_rate: d.rate,
+        heldout_blocks: d.blocks,
+        candidates: &d.candidates,
+        t0_c: cal.t0_c,
+        t_min_c: cal.t_min_c,
+        t_max_c: cal.t_max_c,
+        cache_step_c: cal.update_step_c,
+        f32_departure_g: dep,
+        f32_bound_g: F32_BOUND_G,
+        blob: a.out.display().to_string(),
+        blob_bytes: bytes.len(),
+        warnings: &rec.warnings,
+    };
+    if a.json {
+        return w(out, json(&j)?);
+    }
+    let mut s = format!(
+        "unit {}: dynamic route ({} of {} dwells move in temperature, {:.0}%), model {}, T0 {} C, valid {:.2}..{:.2} C\nmodels compared on {} held-out blocks of time (held-out chi-square, floor units):\n",
+        j.unit,
+        j.shape.moving_dwells,
+        j.shape.moving_dwells + j.shape.static_dwells,
+        100.0 * j.shape.moving_share,
+        j.model,
+        j.t0_c,
+        j.t_min_c,
+        j.t_max_c,
+        j.heldout_blocks
+    );
+    for c in j.candidates {
+        s.push_str(&format!(
+            "  {} {:<48} {:.1}\n",
+            if c.chosen { "*" } else { " " },
+            c.model,
+            c.heldout_chi2
+        ));
+    }
+    s.push_str(&match j.thermal_lag_tau_s {
+        Some(t) => format!(
+            "the blob carries the thermal lag ({t:.1} s = {:.2} min): the unit compensates with it on its own clock\n",
+            t / 60.0
+        ),
+        None => "no thermal lag supported by the held-out blocks: none in the blob\n".into(),
+    });
+    s.push_str(&format!(
+        "wrote {} ({} bytes, serial {})",
+        a.out.display(),
+        bytes.len(),
+        blob.serial
+    ));
+    w(out, s)
 }
 
 fn fit_text(j: &Fitted<'_>) -> String {

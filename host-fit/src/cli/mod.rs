@@ -65,6 +65,7 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<Ou
         Command::Blind(a) => done(study::blind(a, out, err)),
         Command::Batch(a) => production::batch(a, out, err),
         Command::Simulate(a) => done(production::simulate(a, out)),
+        Command::Plan(a) => done(production::plan(a, out)),
         Command::Demo(a) => done(production::demo(a, out)),
         Command::History(a) => done(records::history(a, out)),
         Command::Trend(a) => done(records::trend(a, out)),

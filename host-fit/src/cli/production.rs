@@ -1,5 +1,5 @@
 //! `batch`, `simulate` and `demo`: many units, the twin, and the main job.
-use super::args::{BatchArgs, DemoArgs, SimulateArgs};
+use super::args::{BatchArgs, DemoArgs, PlanArgs, SimulateArgs};
 use super::common::w;
 use super::common::Outcome;
 use crate::acceptance::Verdict;
@@ -119,6 +119,19 @@ pub(super) fn simulate(a: SimulateArgs, out: &mut dyn Write) -> Result<()> {
     if let Some(s) = a.seed {
         cfg.seed = s;
     }
+    if let Some(p) = &a.plan {
+        let text = std::fs::read_to_string(p).map_err(|e| HostError::io(p, &e))?;
+        let steps = crate::simulate::program::parse_program(p, &text)?;
+        if cfg.flight.is_some() {
+            return Err(HostError::msg(
+                "--plan runs a chamber program; the configuration is a [flight]",
+            ));
+        }
+        // the unit starts soaked at the program's first set point
+        cfg.chamber.start_c = steps[0].setpoint_c;
+        cfg.schedule.sweep = None;
+        cfg.schedule.program = steps;
+    }
     if let Some(p) = &a.positions_out {
         check_writable(p, a.force)?;
     }
@@ -142,6 +155,79 @@ pub(super) fn simulate(a: SimulateArgs, out: &mut dyn Write) -> Result<()> {
             a.out.display(),
             sim.rows,
             cfg.seed
+        ),
+    )
+}
+
+/// `plan --json`.
+#[derive(Serialize)]
+struct Planned<'a> {
+    limits: &'a crate::plan::Limits,
+    verification_temps_c: [f64; 3],
+    candidates: &'a [crate::plan::Candidate],
+    chosen: &'a crate::plan::Candidate,
+    program: String,
+    program_rows: usize,
+}
+
+pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
+    use crate::plan::{
+        candidates, choose, program, table, verification, verification_temps, Limits, Target,
+    };
+    check_writable(&a.out, a.force)?;
+    let target = match (a.target_mg, a.hours) {
+        (Some(mg), None) => Target::AccuracyMg(mg),
+        (None, Some(h)) => Target::Hours(h),
+        _ => return Err(HostError::msg("give a target: --target-mg MG or --hours H")),
+    };
+    let l = Limits {
+        lo_c: a.range_c.first().copied().unwrap_or(f64::NAN),
+        hi_c: a.range_c.get(1).copied().unwrap_or(f64::NAN),
+        max_ramp_c_per_min: a.max_ramp_c_per_min,
+        positions: a.positions.clone(),
+        dwell_s: a.dwell_s,
+        move_s: a.move_s,
+        rate_hz: a.rate_hz,
+        noise_v: a.noise,
+        tau_s: a.tau_s,
+    };
+    let c = candidates(&l, a.seed)?;
+    let chosen = choose(&c, target);
+    let text = table(&c, chosen);
+    let Some(i) = chosen else {
+        return Err(HostError::msg(format!(
+            "no candidate meets the target:\n{text}"
+        )));
+    };
+    let (mut steps, end) = program(c[i].kind, &l);
+    let last = steps.pop().map(|s| s.setpoint_c).unwrap_or(l.lo_c);
+    steps.extend(verification(&l, end, last));
+    let csv = crate::simulate::program::to_csv(&steps);
+    write_atomic(&a.out, csv.as_bytes(), a.force)?;
+    if a.json {
+        return w(
+            out,
+            crate::output::json(&Planned {
+                limits: &l,
+                verification_temps_c: verification_temps(&l),
+                candidates: &c,
+                chosen: &c[i],
+                program: a.out.display().to_string(),
+                program_rows: steps.len(),
+            })?,
+        );
+    }
+    w(
+        out,
+        format!(
+            "{text}chosen: {} ({:.2} chamber hours, predicted worst |dg| {:.4} mg); verification block at {:?} C\nwrote {} ({} rows; run it on the twin with `host-fit simulate --plan {}`)",
+            c[i].kind.describe(),
+            c[i].hours,
+            c[i].predicted_mg,
+            verification_temps(&l),
+            a.out.display(),
+            steps.len(),
+            a.out.display()
         ),
     )
 }

@@ -164,6 +164,29 @@ pub(super) fn fit(
     Ok(saved.and_then(|r| r.blob).unwrap_or(blob))
 }
 
+/// `fit --db` on the dynamic route: the model with its dynamics, its coefficients at T0
+/// with their 1-sigma, the blob. Returns the blob to write (as recorded).
+pub(super) fn fit_dynamic(
+    run: Run<'_>,
+    d: &crate::diagnose::dynamic::DynamicFit<'_>,
+    cal: &Calibration<f64>,
+    blob: Vec<u8>,
+) -> Result<Vec<u8>> {
+    let sigma = crate::diagnose::metrics::coefficient_sigma(&d.data, &d.flashed.fit, cal.t0_c);
+    let model = d.describe();
+    let saved = run.save(Recorded::Fit, |r| {
+        r.model = Some(model);
+        r.at_t0 = Some(AtT0 {
+            t0_c: cal.t0_c,
+            values: cal.at_t0(),
+            sigma: Some(sigma),
+        });
+        r.blob = Some(stamp(&blob, r.run_id)?);
+        Ok(())
+    })?;
+    Ok(saved.and_then(|r| r.blob).unwrap_or(blob))
+}
+
 /// The worst compensated |dg| of a verification, mg.
 pub(super) fn worst_dg(v: &Verification) -> Option<f64> {
     v.max_by_temperature

@@ -12,12 +12,14 @@
 //! explains the data where it acts. Findings ([`findings`]) take their parameters from
 //! the final joint fit; [`location`] says where a residual sits, [`quality`] what the
 //! data themselves show, [`firmware`] the model in the blob's form, [`contract`] the JSON
-//! contract. With a logger at debug level (`HOSTFIT_DEBUG=1` for the command), every
+//! contract; [`dynamic`] is `fit`'s dynamic route for sweeps (the temperature models
+//! jointly with the lag and rate the held-out blocks support, on these same data). With a logger at debug level (`HOSTFIT_DEBUG=1` for the command), every
 //! candidate's judgement is logged.
 pub mod baseline;
 pub mod contract;
 pub mod data;
 pub mod design;
+pub mod dynamic;
 pub mod effects;
 pub mod findings;
 pub mod firmware;
@@ -181,7 +183,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
 /// most general static model leaves (the baseline with every static catalogue term the
 /// positions determine: what none of the candidates could explain is the floor).
 /// Whether the floor was measured.
-fn weigh(data: &mut Data, floor: &Floor) -> bool {
+pub(crate) fn weigh(data: &mut Data, floor: &Floor) -> bool {
     let measured = floor.axes.iter().all(|a| !a.scales.is_empty());
     if measured {
         data.w = data

@@ -38,6 +38,9 @@ pub enum Route {
     Joint,
     /// The paper's route: formula (10) per stop, then a fit across stops.
     PerStop,
+    /// Every window through temperature changes, fitted jointly with the unit's thermal
+    /// lag and rate where the held-out blocks support them (the diagnosis's `dynamic` module).
+    Dynamic,
 }
 
 impl Route {
@@ -47,6 +50,7 @@ impl Route {
             Route::Static => "static",
             Route::Joint => "joint",
             Route::PerStop => "per-stop",
+            Route::Dynamic => "dynamic",
         }
     }
 }
@@ -327,6 +331,9 @@ pub fn fit_recording(rec: &Recording, choice: &ModelChoice, route: Route) -> Res
     match route {
         Route::PerStop => fit_per_stop(rec, choice),
         Route::Static | Route::Joint => fit_windows(rec, choice, route),
+        Route::Dynamic => Err(HostError::msg(
+            "the dynamic route chooses its own model on held-out blocks of time; --model does not apply to it",
+        )),
     }
 }
 
@@ -340,7 +347,7 @@ fn fit_windows(rec: &Recording, choice: &ModelChoice, route: Route) -> Result<Fi
             let cal = |p: usize| r.positions.has_role(p, Role::Calibration);
             (observations(r, &cal, WINDOW_SPAN_C), Excluded::default())
         }
-        Route::Static | Route::PerStop => static_calibration(r),
+        Route::Static | Route::PerStop | Route::Dynamic => static_calibration(r),
     };
     require_known(r, &obs)?;
     if obs.is_empty() {

@@ -44,6 +44,10 @@ pub struct Logger {
     /// Write `schedule.power_offs` as the `power_off_s` metadata (a logger that knows when
     /// the unit was off); otherwise only the gap in the rows shows them.
     pub power_off_metadata: bool,
+    /// Write the rows at rest (ramps and soaks) with position `-`, as a logger that
+    /// names only the tilter's dwells: the firmware still sees the whole temperature
+    /// history, and only the dwells in equilibrium are judged (a verification block).
+    pub rest_unnamed: bool,
 }
 
 /// A flight-like recording: power-on at a cold start, fast warming and cooling both ways,
@@ -164,6 +168,21 @@ pub struct Schedule {
     pub power_offs: Vec<[f64; 2]>,
     /// Write one row per dwell (its mean), as a voltmeter that averages each position.
     pub dwell_means: bool,
+    /// A continuous sweep instead of the stops: the chamber follows these legs from
+    /// `chamber.start_c` while the tilter keeps turning through `positions` (`move_s`,
+    /// `dwell_s` each) the whole time, no soaks (none by default).
+    pub sweep: Option<Sweep>,
+    /// A chamber and tilter program instead of the stops (`simulate --plan PLAN.csv`;
+    /// see [`crate::simulate::program`]); empty by default.
+    pub program: Vec<crate::simulate::program::Step>,
+}
+
+/// A continuous sweep: the set point ramps (and holds) leg by leg while the tilter turns.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Sweep {
+    /// The set point's legs (to, rate, hold at the end).
+    pub legs: Vec<Leg>,
 }
 
 /// How the coefficients depend on temperature.
@@ -376,6 +395,8 @@ impl Default for Schedule {
             dropouts: Vec::new(),
             power_offs: Vec::new(),
             dwell_means: false,
+            sweep: None,
+            program: Vec::new(),
         }
     }
 }
@@ -417,6 +438,7 @@ impl Default for Logger {
             jitter_s: 0.0,
             drop_rate: 0.0,
             power_off_metadata: false,
+            rest_unnamed: false,
         }
     }
 }

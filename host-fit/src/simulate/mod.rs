@@ -4,6 +4,7 @@
 //! model `U = K a + U0` of firmware-core).
 pub mod config;
 pub mod flight;
+pub mod program;
 mod readings;
 mod thermal;
 pub mod unit;
@@ -11,7 +12,7 @@ mod writer;
 
 pub use config::{
     parse_config, Bend, BiasStep, Chamber, Curvature, Effects, Fixture, Flight, Gradient, Leg,
-    Logger, PerAxis, Periodic, Schedule, Sensor, SimConfig, Stop, Unit, Warmup,
+    Logger, PerAxis, Periodic, Schedule, Sensor, SimConfig, Stop, Sweep, Unit, Warmup,
 };
 pub use unit::{TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
 pub use writer::Simulation;
@@ -124,6 +125,120 @@ fn plan(cfg: &SimConfig, positions: &Positions, rest: usize) -> Result<Vec<Segme
     Ok(segs)
 }
 
+/// A sweep as segments: the set point follows the legs (a piecewise-linear profile from
+/// `chamber.start_c`) while the tilter turns through the positions in turn, move then
+/// dwell, until the profile ends; each segment's set point runs linearly between the
+/// profile's values at its ends (a leg's corner inside a dwell is rounded off over that
+/// dwell, far shorter than the chamber air's own lag).
+fn sweep_plan(
+    cfg: &SimConfig,
+    sweep: &Sweep,
+    positions: &Positions,
+    rest: usize,
+) -> Result<Vec<Segment>> {
+    let sch = &cfg.schedule;
+    let mut knots = vec![(0.0, cfg.chamber.start_c)];
+    for (i, leg) in sweep.legs.iter().enumerate() {
+        if !(leg.c_per_min > 0.0 && leg.hold_s >= 0.0 && leg.to_c.is_finite()) {
+            return Err(HostError::msg(format!(
+                "schedule.sweep.legs[{i}]: needs c_per_min > 0, hold_s >= 0 and a finite to_c"
+            )));
+        }
+        let (t, from) = knots[knots.len() - 1];
+        let t1 = t + (leg.to_c - from).abs() / leg.c_per_min * 60.0;
+        knots.push((t1, leg.to_c));
+        knots.push((t1 + leg.hold_s, leg.to_c));
+    }
+    let end = knots[knots.len() - 1].0;
+    let durations_ok = sch.dwell_s > 0.0 && sch.move_s >= 0.0;
+    if sch.positions.is_empty() || !durations_ok || end <= 0.0 {
+        return Err(HostError::msg(
+            "schedule.sweep needs legs of some duration, positions, dwell_s > 0 and move_s >= 0",
+        ));
+    }
+    let set_at = |t: f64| {
+        knots
+            .windows(2)
+            .find(|w| t <= w[1].0)
+            .map(|w| {
+                let span = w[1].0 - w[0].0;
+                if span > 0.0 {
+                    w[0].1 + (w[1].1 - w[0].1) * (t - w[0].0) / span
+                } else {
+                    w[1].1
+                }
+            })
+            .unwrap_or(knots[knots.len() - 1].1)
+    };
+    let names: Vec<usize> = sch
+        .positions
+        .iter()
+        .map(|n| position_index(positions, n))
+        .collect::<Result<_>>()?;
+    let (mut segs, mut t, mut prev) = (Vec::new(), 0.0, rest);
+    let push = |segs: &mut Vec<Segment>, t: &mut f64, d: f64, phase: Phase| {
+        segs.push(Segment {
+            duration_s: d,
+            set_from: set_at(*t),
+            set_to: set_at(*t + d),
+            phase,
+        });
+        *t += d;
+    };
+    'turning: loop {
+        for &p in &names {
+            if t + sch.move_s + sch.dwell_s > end {
+                break 'turning;
+            }
+            push(&mut segs, &mut t, sch.move_s, Phase::Move(prev, p));
+            push(&mut segs, &mut t, sch.dwell_s, Phase::Dwell(p));
+            prev = p;
+        }
+    }
+    push(&mut segs, &mut t, sch.move_s, Phase::Move(prev, rest));
+    Ok(segs)
+}
+
+/// A program as segments (see [`program`]): row by row, the set point from the row's
+/// value to the next row's, the tilter dwelling at the row's position or moving (`-`)
+/// from the last named position to the next.
+fn program_plan(
+    steps: &[program::Step],
+    positions: &Positions,
+    rest: usize,
+) -> Result<Vec<Segment>> {
+    let named = |i: usize| -> Result<Option<usize>> {
+        match steps.get(i).map(|s| s.position.as_str()) {
+            None | Some("-") => Ok(None),
+            Some(n) => position_index(positions, n).map(Some),
+        }
+    };
+    let mut segs = Vec::new();
+    let mut prev = rest;
+    for i in 0..steps.len().saturating_sub(1) {
+        let (a, b) = (&steps[i], &steps[i + 1]);
+        let phase = match named(i)? {
+            Some(p) => {
+                prev = p;
+                Phase::Dwell(p)
+            }
+            None => {
+                let next = (i + 1..steps.len())
+                    .find_map(|j| named(j).ok().flatten())
+                    .unwrap_or(rest);
+                Phase::Move(prev, next)
+            }
+        };
+        segs.push(Segment {
+            duration_s: b.time_s - a.time_s,
+            set_from: a.setpoint_c,
+            set_to: b.setpoint_c,
+            phase,
+        });
+    }
+    Ok(segs)
+}
+
 /// The logger's decisions per tick ([`Logger`]): which ticks become rows and how late
 /// each is taken; its own random numbers, so the noise of the rows is the same draw
 /// whatever the logger does.
@@ -204,13 +319,20 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
     let unit = TrueUnit::new(cfg)?;
     let positions = positions(cfg)?;
     let sch = &cfg.schedule;
-    if sch.rate_hz.is_nan() || sch.rate_hz <= 0.0 || sch.stops.is_empty() {
+    if sch.rate_hz.is_nan()
+        || sch.rate_hz <= 0.0
+        || (sch.stops.is_empty() && sch.sweep.is_none() && sch.program.is_empty())
+    {
         return Err(HostError::msg(
-            "schedule needs rate_hz > 0 and at least one stop",
+            "schedule needs rate_hz > 0 and at least one stop (or a sweep)",
         ));
     }
     let rest = position_index(&positions, &sch.rest_position)?;
-    let segs = plan(cfg, &positions, rest)?;
+    let segs = match (&sch.sweep, sch.program.is_empty()) {
+        (_, false) => program_plan(&sch.program, &positions, rest)?,
+        (Some(sw), true) => sweep_plan(cfg, sw, &positions, rest)?,
+        (None, true) => plan(cfg, &positions, rest)?,
+    };
     let total: f64 = segs.iter().map(|s| s.duration_s).sum();
     let dt = 1.0 / sch.rate_hz;
     let fixture = match &cfg.effects.fixture_error {
@@ -246,6 +368,7 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
             let f = k as f64 / n as f64;
             let (set0, set1) = (set_at(f), set_at((k + 1) as f64 / n as f64));
             let name = match seg.phase {
+                Phase::Rest if cfg.logger.rest_unnamed => "-",
                 Phase::Rest => positions.name(rest),
                 Phase::Dwell(p) => positions.name(p),
                 Phase::Move(..) => "-",

@@ -1,0 +1,290 @@
+//! The dynamic route: a recording through temperature changes (a continuous sweep, the
+//! tilter turning while the chamber heats and cools) fitted as the 12 temperature models
+//! jointly with the unit's thermal lag (one pole in seconds on the recording's own
+//! `t_s`, through firmware-core's lag state machine, as the blob will run it) and a
+//! temperature-rate term where the data carry it. It reuses the diagnosis's machinery
+//! (floor-weighted windows of every dwell, contiguous held-out blocks of time, profiled
+//! time constants) restricted to the terms the firmware compensates in flight: each term
+//! is kept only when the held-out blocks and every acceptance rule of the diagnosis
+//! support it, so a unit without dynamics keeps none, and the temperature model's order
+//! is chosen on the same held-out blocks.
+use crate::data::recording::{Recording, MAX_DWELL_DRIFT_C};
+use crate::diagnose::baseline;
+use crate::diagnose::data::Data;
+use crate::diagnose::design::Spec;
+use crate::diagnose::effects::Extra;
+use crate::diagnose::firmware::Flashed;
+use crate::diagnose::fit::{Depth, Fit};
+use crate::diagnose::floor;
+use crate::diagnose::metrics::{self, judge};
+use crate::diagnose::profile::{self, time_constant, Grid};
+use crate::diagnose::Rules;
+use crate::error::{HostError, Result};
+use crate::fit::temperature::Basis;
+use firmware_core::temperature::Calibration;
+use serde::Serialize;
+
+/// A recording is a sweep when at least this share of its dwells drift more than
+/// [`MAX_DWELL_DRIFT_C`] (the static route keeps none of them). Counted in dwells, not
+/// samples: a stop-and-soak test's few long rests through its ramps hold most of its
+/// samples, its tilter's dwells are static.
+pub const SWEEP_MOVING_SHARE: f64 = 0.5;
+
+/// How much of a recording's dwells move in temperature.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct Shape {
+    /// Dwells within [`MAX_DWELL_DRIFT_C`] (the static route's data).
+    pub static_dwells: usize,
+    /// Dwells drifting more.
+    pub moving_dwells: usize,
+    /// Share of the dwells that move.
+    pub moving_share: f64,
+}
+
+impl Shape {
+    /// The dwells of `rec`.
+    pub fn of(rec: &Recording) -> Shape {
+        let m = rec
+            .dwells
+            .iter()
+            .filter(|d| d.temp_span_c > MAX_DWELL_DRIFT_C)
+            .count();
+        let n = rec.dwells.len();
+        Shape {
+            static_dwells: n - m,
+            moving_dwells: m,
+            moving_share: m as f64 / n.max(1) as f64,
+        }
+    }
+
+    /// Most dwells move in temperature: a sweep, for the dynamic route.
+    pub fn is_sweep(&self) -> bool {
+        self.moving_share >= SWEEP_MOVING_SHARE
+    }
+}
+
+/// One candidate model and what the held-out blocks said of it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Candidate {
+    /// What it is (`poly3`, `poly3 + thermal_lag 1200 s`, ...).
+    pub model: String,
+    /// Held-out chi-square over the blocks of time (floor units).
+    pub heldout_chi2: f64,
+    /// Kept.
+    pub chosen: bool,
+}
+
+/// The dynamic fit of a recording.
+pub struct DynamicFit<'a> {
+    /// The windows, weights and held-out blocks.
+    pub data: Data<'a>,
+    /// The chosen model.
+    pub fit: Fit,
+    /// It in the firmware's form.
+    pub flashed: Flashed,
+    /// The thermal lag kept, s.
+    pub lag_tau_s: Option<f64>,
+    /// The rate term kept: per axis (output units per C/s) and the estimator's time
+    /// constant, s.
+    pub rate: Option<([f64; 3], f64)>,
+    /// Every model compared, in order.
+    pub candidates: Vec<Candidate>,
+    /// The dwells' shape.
+    pub shape: Shape,
+    /// Held-out blocks of time.
+    pub blocks: usize,
+    /// The floor of a window mean (output units, RMS).
+    pub noise_rms: f64,
+}
+
+impl DynamicFit<'_> {
+    /// The blob's calibration (temperature model and in-flight physics).
+    pub fn calibration(&self) -> Result<Calibration<f64>> {
+        self.flashed.calibration(self.data.t0)
+    }
+
+    /// The chosen model's description.
+    pub fn describe(&self) -> String {
+        describe(&self.fit)
+    }
+}
+
+fn describe(f: &Fit) -> String {
+    let mut s = f.spec.basis.describe();
+    // only the in-flight terms this route fits (the lag and the rate) are in its specs
+    for e in &f.spec.extras {
+        if let Extra::Lag { taus } = e {
+            s.push_str(&format!(" + thermal_lag {:.0} s", taus[0][0]));
+        } else if let Extra::Rate { tau_s } = e {
+            s.push_str(&format!(" + temp_rate (estimator {tau_s:.0} s)"));
+        }
+    }
+    s
+}
+
+fn candidate(f: &Fit, chosen: bool) -> Candidate {
+    Candidate {
+        model: describe(f),
+        heldout_chi2: f.heldout,
+        chosen,
+    }
+}
+
+fn lag(t: f64) -> Extra {
+    Extra::Lag {
+        taus: [[t, 0.0]; 3],
+    }
+}
+
+/// The thermal lag of `spec`, one pole for all axes (the firmware's form), profiled on
+/// `grid`, then fitted in full.
+fn with_lag(data: &Data, spec: &Spec, base: &Fit, grid: Grid) -> Option<Fit> {
+    let (tau, _) = time_constant(
+        &|t| data.fit(&spec.with(lag(t)), Some(base), Depth::Profile),
+        grid,
+    )?;
+    data.fit(&spec.with(lag(tau)), Some(base), Depth::Full)
+}
+
+/// `f`'s lag profiled again around its value (its other terms as they are): the
+/// temperature model's order, chosen after the lag was first profiled, moves it.
+fn refine_lag(data: &Data, f: &Fit) -> Fit {
+    let Some(i) = f
+        .spec
+        .extras
+        .iter()
+        .position(|e| matches!(e, Extra::Lag { .. }))
+    else {
+        return f.clone();
+    };
+    let Extra::Lag { taus } = f.spec.extras[i] else {
+        return f.clone();
+    };
+    let make = |t: f64| data.fit(&f.spec.replaced(i, lag(t)), None, Depth::Profile);
+    time_constant(&make, Grid::around(data, taus[0][0], 2, 5))
+        .and_then(|(t, _)| data.fit(&f.spec.replaced(i, lag(t)), None, Depth::Full))
+        .filter(|g| g.chi2 <= f.chi2)
+        .unwrap_or_else(|| f.clone())
+}
+
+/// `larger` (the last extra added to `smaller`) passes every acceptance rule of the
+/// diagnosis, the held-out blocks among them.
+fn kept(data: &Data, smaller: &Fit, larger: &Fit) -> bool {
+    let e = larger.spec.extras.len().saturating_sub(1);
+    judge(data, smaller, larger, e).accepted(data)
+}
+
+/// The polynomial order chosen on the held-out blocks with `f`'s extras.
+fn order_by_heldout(data: &Data, f: &Fit, cands: &mut Vec<Candidate>) -> Fit {
+    let fits: Vec<Fit> = (0..=baseline::max_order(data))
+        .filter_map(|order| {
+            let mut spec = f.spec.clone();
+            spec.basis = Basis::Poly { order };
+            if spec.basis == f.spec.basis {
+                return Some(f.clone());
+            }
+            data.fit(&spec, None, Depth::Full)
+        })
+        .collect();
+    let best = fits
+        .iter()
+        .min_by(|a, b| a.heldout.total_cmp(&b.heldout))
+        .cloned()
+        .unwrap_or_else(|| f.clone());
+    for g in &fits {
+        cands.push(candidate(g, g.spec == best.spec));
+    }
+    best
+}
+
+/// Fit `rec` on the dynamic route (see the module doc).
+pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
+    let rules = Rules::default();
+    let fl = floor::floor(rec, &rules);
+    let mut data = Data::new(rec, &fl, rules);
+    if data.obs.len() < rules.min_windows {
+        return Err(HostError::in_file(
+            &rec.path,
+            format!(
+                "{} windows of known positions: too few for the dynamic route (need {})",
+                data.obs.len(),
+                rules.min_windows
+            ),
+        ));
+    }
+    if !crate::diagnose::weigh(&mut data, &fl) {
+        return Err(HostError::in_file(
+            &rec.path,
+            "the noise floor cannot be measured inside the dwells (too few samples per dwell): the dynamic route weighs every window by it",
+        ));
+    }
+    let (base, _) = baseline::baseline(&data).ok_or_else(|| {
+        HostError::in_file(
+            &rec.path,
+            "the positions present do not determine even the per-axis offset and scale (need each axis both along and across gravity)",
+        )
+    })?;
+    // the lag profiled with the richest temperature model the data support, so that
+    // the model's own bending cannot stand in for it, then judged against that model
+    let top = Spec {
+        basis: Basis::Poly {
+            order: baseline::max_order(&data),
+        },
+        ..base.spec.clone()
+    };
+    let mut f = data.fit(&top, None, Depth::Full).unwrap_or(base);
+    let mut cands = vec![];
+    if let Some(lagged) = with_lag(&data, &f.spec, &f, Grid::new(&data, 20.0, 14)) {
+        let keep = kept(&data, &f, &lagged);
+        cands.push(candidate(&f, !keep));
+        cands.push(candidate(&lagged, keep));
+        if keep {
+            f = lagged;
+        }
+    }
+    if let Some(rated) =
+        profile::rate(&data, &f.spec, &f).and_then(|r| data.fit(&r.spec, Some(&f), Depth::Full))
+    {
+        let keep = kept(&data, &f, &rated);
+        cands.push(candidate(&rated, keep));
+        if keep {
+            f = rated;
+        }
+    }
+    let f = refine_lag(&data, &order_by_heldout(&data, &f, &mut cands));
+    let noise_rms = metrics::floor_rms(&data);
+    let term = |f: &Fit, e: usize| -> [f64; 3] {
+        std::array::from_fn(|axis| {
+            f.labels
+                .iter()
+                .position(|l| {
+                    *l == crate::diagnose::params::Param::Effect {
+                        term: crate::diagnose::params::Term::Rate,
+                        axis,
+                        extra: e,
+                    }
+                })
+                .map(|j| f.x[j])
+                .unwrap_or(0.0)
+        })
+    };
+    let (mut lag_tau_s, mut rate) = (None, None);
+    for (e, x) in f.spec.extras.iter().enumerate() {
+        if let Extra::Lag { taus } = x {
+            lag_tau_s = Some(taus[0][0]);
+        } else if let Extra::Rate { tau_s } = x {
+            rate = Some((term(&f, e), *tau_s));
+        }
+    }
+    Ok(DynamicFit {
+        flashed: Flashed::of(&data, &f, noise_rms),
+        blocks: data.n_chunks(),
+        shape: Shape::of(rec),
+        data,
+        fit: f,
+        lag_tau_s,
+        rate,
+        candidates: cands,
+        noise_rms,
+    })
+}

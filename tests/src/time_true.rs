@@ -100,8 +100,10 @@ pub fn verify(rec: &Path, pos: Option<&Path>, blob: &Path) -> (f64, Vec<f64>) {
         args.extend(["--positions", s(p)]);
     }
     let (code, out, err) = cli(&args);
+    // the figures are the |dg| themselves; the verdict (pass 0, fail 3, or 4: a short
+    // flight may hold no attitude near T0, so that band is not judged) is not measured here
     assert!(
-        code == 0 || code == 3,
+        matches!(code, 0 | 3 | 4),
         "verify exit {code}: {}",
         err.lines()
             .filter(|l| !l.starts_with("note") && !l.starts_with("warning"))

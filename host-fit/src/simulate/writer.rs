@@ -85,7 +85,8 @@ impl RecordingWriter {
         // counts as read are integers; a dwell's mean of them is not
         let out = |v: f64| {
             if self.counts && !self.dwell_means {
-                format!("{v:.0}")
+                // + 0.0: a rounded -0.4 is the count 0, not "-0"
+                format!("{:.0}", v.round() + 0.0)
             } else {
                 format!("{v:.8}")
             }

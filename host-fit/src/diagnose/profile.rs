@@ -278,7 +278,7 @@ pub fn determined(data: &Data, f: &Fit, e: usize, phi: f64) -> bool {
         | Extra::Hysteresis { .. }
         | Extra::K2
         | Extra::Asymmetry
-        | Extra::Fixture(_) => return true,
+        | Extra::Fixture(..) => return true,
     };
     let curv = (up + down - 2.0 * f.chi2) / (h * h);
     curv > 0.0 && (2.0 * phi / curv).sqrt() <= limit

@@ -69,6 +69,9 @@ pub struct Rules {
     // --- the baseline and its candidates ---
     /// The baseline's polynomial order never exceeds this (the firmware's highest).
     pub max_order: usize,
+    /// A fixture error that changes between two stops is looked for in recordings of at
+    /// most this many stops (each stop a candidate; more is a sweep, not a tilter test).
+    pub max_fixture_stops: usize,
     /// Time constants are profiled on a log grid of this ratio: fine enough that the
     /// golden-section refinement around the best point starts inside the right valley.
     pub grid_ratio: f64,
@@ -177,6 +180,7 @@ impl Default for Rules {
             gap_factor: 10.0,
             gap_min_s: 60.0,
             max_order: MAX_POLY_ORDER,
+            max_fixture_stops: 12,
             grid_ratio: 1.7,
             warmup_max_fraction: 0.5,
             curvature_step_c: 4.0,

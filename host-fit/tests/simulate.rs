@@ -442,7 +442,11 @@ fn every_option() -> SimConfig {
         Bend, BiasStep, Chamber, FixtureChange, Flight, Gradient, Leg, Logger, Output, Periodic,
         Schedule, Sensor, Unit,
     };
-    let p = |v: f64| Some(PerAxis { value: [v, 0.0, 0.0] });
+    let p = |v: f64| {
+        Some(PerAxis {
+            value: [v, 0.0, 0.0],
+        })
+    };
     let fixture = |name: &str| Fixture {
         position: name.into(),
         angles_rad: [1e-3, 0.0],

@@ -64,3 +64,49 @@ fn a_fixture_reclamped_between_two_stops_is_named_with_its_stop() {
         c.text()
     );
 }
+
+/// Slow disturbances with no power-on behind them (the bias ageing over the whole test, a
+/// random walk, a bias shift taking ten minutes mid-test) are not named warm-up: a
+/// warm-up decays from an event (the start, a stated power-on), settles within what the
+/// recording shows, with one sign per axis. A real warm-up from the start still is.
+#[test]
+fn slow_disturbances_without_a_power_on_are_not_called_warm_up() {
+    use host_fit::simulate::{BiasStep, PerAxis, Warmup};
+    let x = |v: f64| PerAxis {
+        value: [v, 0.0, 0.0],
+    };
+    let mut cases: Vec<(&str, SimConfig)> = Vec::new();
+    let mut ageing = twin(31);
+    ageing.effects.bias_aging = Some(x(6e-5));
+    cases.push(("bias ageing", ageing));
+    let mut walk = twin(32);
+    walk.effects.bias_walk = Some(x(4e-6));
+    cases.push(("bias random walk", walk));
+    let mut step = twin(33);
+    step.effects.bias_step = Some(BiasStep {
+        at_s: 0.55 * stop_spans(&step).unwrap().last().unwrap()[1],
+        value: [3e-4, 0.0, 0.0],
+        rise_s: 600.0,
+    });
+    cases.push(("bias step, no power-on", step));
+    for (name, cfg) in &cases {
+        let rec = recording(cfg);
+        let d = diagnose(&rec).unwrap();
+        let c = d.contract();
+        assert!(
+            c.findings.iter().all(|f| f.effect != EffectId::WarmupDrift),
+            "{name}: {}",
+            c.text()
+        );
+    }
+    let mut warm = twin(34);
+    warm.effects.warmup_drift = Some(Warmup {
+        d_v: [5e-4, 0.0, 0.0],
+        tau_s: 1200.0,
+    });
+    let rec = recording(&warm);
+    let d = diagnose(&rec).unwrap();
+    let c = d.contract();
+    let found: Vec<EffectId> = c.findings.iter().map(|f| f.effect).collect();
+    assert_eq!(found, [EffectId::WarmupDrift], "{}", c.text());
+}

@@ -138,5 +138,8 @@ fn a_few_counts_per_g_is_diagnosed_on_the_quantisations_floor() {
     let rec = write(dir, "two.csv", &two);
     let (code, _, err) = cli(&["diagnose", s(&rec), "--json"]);
     assert_eq!(code, 1);
-    assert!(err.contains("the positions present do not determine"), "{err}");
+    assert!(
+        err.contains("the positions present do not determine"),
+        "{err}"
+    );
 }

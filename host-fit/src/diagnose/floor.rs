@@ -238,7 +238,9 @@ pub fn floor(rec: &Recording, rules: &Rules) -> Floor {
         };
         if let Some(q) = quantum(rec, axis) {
             // the noise below half a step: the samples repeat, the step is the floor
-            if f.measured_var_of_mean(1.0).is_some_and(|v| v.sqrt() < 0.5 * q) {
+            if f.measured_var_of_mean(1.0)
+                .is_some_and(|v| v.sqrt() < 0.5 * q)
+            {
                 f.quantum = Some(q);
             }
         }

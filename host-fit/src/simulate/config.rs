@@ -68,9 +68,15 @@ impl Output {
                 )))
             }
         };
-        let per_v = if self.per_v == 0.0 { default } else { self.per_v };
+        let per_v = if self.per_v == 0.0 {
+            default
+        } else {
+            self.per_v
+        };
         if !(per_v.is_finite() && per_v > 0.0) {
-            return Err(HostError::msg("output.per_v must be > 0 (0: the unit's default)"));
+            return Err(HostError::msg(
+                "output.per_v must be > 0 (0: the unit's default)",
+            ));
         }
         let step = match (&self.unit, self.quantum) {
             (OutputUnit::Counts, q) if q == 0.0 => 1.0,

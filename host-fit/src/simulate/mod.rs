@@ -136,7 +136,11 @@ pub fn stop_spans(cfg: &SimConfig) -> Result<Vec<[f64; 2]>> {
     let mut spans = Vec::new();
     let (mut t, mut k) = (0.0, 0);
     for stop in &cfg.schedule.stops {
-        let n = 3 + 2 * stop.positions.as_ref().unwrap_or(&cfg.schedule.positions).len();
+        let n = 3 + 2 * stop
+            .positions
+            .as_ref()
+            .unwrap_or(&cfg.schedule.positions)
+            .len();
         let d: f64 = segs[k..k + n].iter().map(|s| s.duration_s).sum();
         spans.push([t, t + d]);
         t += d;
@@ -257,7 +261,11 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
     // a re-clamped position: its own angles before the change and after it
     let vector_at = |p: usize, t: f64| match &change {
         Some((fp, f)) if *fp == p => {
-            let ang = if t >= f.at_s { f.angles_rad } else { f.before_rad };
+            let ang = if t >= f.at_s {
+                f.angles_rad
+            } else {
+                f.before_rad
+            };
             rotate(vector(p), ang)
         }
         _ => vector(p),

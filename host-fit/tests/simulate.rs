@@ -438,23 +438,7 @@ fn the_paper_unit_passes_through_the_papers_tables() {
 /// example documents it.
 fn every_option() -> SimConfig {
     use host_fit::data::output_unit::OutputUnit;
-    use host_fit::simulate::{
-        Bend, BiasStep, Chamber, FixtureChange, Flight, Gradient, Leg, Logger, Output, Periodic,
-        Schedule, Sensor, Unit,
-    };
-    let p = |v: f64| {
-        Some(PerAxis {
-            value: [v, 0.0, 0.0],
-        })
-    };
-    let fixture = |name: &str| Fixture {
-        position: name.into(),
-        angles_rad: [1e-3, 0.0],
-    };
-    let warmup = Warmup {
-        d_v: [1e-4, 0.0, 0.0],
-        tau_s: 900.0,
-    };
+    use host_fit::simulate::{Chamber, Flight, Leg, Logger, Output, Schedule, Sensor, Unit};
     SimConfig {
         seed: 1,
         t0_c: 20.0,
@@ -498,55 +482,7 @@ fn every_option() -> SimConfig {
             spike_rate: 1e-4,
             spike_v: 1e-3,
         },
-        effects: Effects {
-            temp_curvature: Some(Curvature {
-                u0_v: [1e-4, 0.0, 0.0],
-                k_rel: [0.0; 3],
-                period_c: 60.0,
-            }),
-            thermal_lag: p(600.0),
-            temp_rate: p(0.01),
-            hysteresis: p(1e-4),
-            nonlinearity_k2: p(1e-4),
-            scale_asymmetry: p(1e-4),
-            fixture_error: Some(fixture("TP3")),
-            warmup_drift: Some(warmup),
-            thermal_lag2: p(300.0),
-            temp_gradient: Some(Gradient {
-                value: [1e-4, 0.0, 0.0],
-                tau_s: 400.0,
-            }),
-            hysteresis_initial: Some(-1.0),
-            hysteresis_width_c: Some(5.0),
-            scale_hysteresis: p(1e-4),
-            warmup_drift2: Some(warmup),
-            temp_bend: Some(Bend {
-                knot_c: 35.0,
-                u0_v_per_c: [1e-5, 0.0, 0.0],
-                k_rel_per_c: [0.0; 3],
-            }),
-            fixture_error2: Some(fixture("PP2")),
-            bias_step: Some(BiasStep {
-                at_s: 100.0,
-                value: [1e-4, 0.0, 0.0],
-                rise_s: 10.0,
-            }),
-            bias_walk: p(1e-6),
-            nonlinearity_k3: p(1e-4),
-            periodic: Some(Periodic {
-                period_s: 100.0,
-                value: [1e-4, 0.0, 0.0],
-                phase_rad: 0.5,
-            }),
-            scale_aging: p(1e-4),
-            fixture_change: Some(FixtureChange {
-                position: "TP5".into(),
-                before_rad: [0.0; 2],
-                angles_rad: [1e-3, 0.0],
-                at_s: 100.0,
-            }),
-            bias_aging: p(1e-5),
-        },
+        effects: every_effect(),
         logger: Logger {
             rest_rate_hz: 0.1,
             jitter_s: 0.1,
@@ -566,6 +502,73 @@ fn every_option() -> SimConfig {
             per_v: 7.0,
             quantum: 1.0,
         },
+    }
+}
+
+/// Every effect of [`every_option`] set (a literal without `..`, for the same reason).
+fn every_effect() -> Effects {
+    use host_fit::simulate::{Bend, BiasStep, FixtureChange, Gradient, Periodic};
+    let p = |v: f64| {
+        Some(PerAxis {
+            value: [v, 0.0, 0.0],
+        })
+    };
+    let fixture = |name: &str| Fixture {
+        position: name.into(),
+        angles_rad: [1e-3, 0.0],
+    };
+    let warmup = Warmup {
+        d_v: [1e-4, 0.0, 0.0],
+        tau_s: 900.0,
+    };
+    Effects {
+        temp_curvature: Some(Curvature {
+            u0_v: [1e-4, 0.0, 0.0],
+            k_rel: [0.0; 3],
+            period_c: 60.0,
+        }),
+        thermal_lag: p(600.0),
+        temp_rate: p(0.01),
+        hysteresis: p(1e-4),
+        nonlinearity_k2: p(1e-4),
+        scale_asymmetry: p(1e-4),
+        fixture_error: Some(fixture("TP3")),
+        warmup_drift: Some(warmup),
+        thermal_lag2: p(300.0),
+        temp_gradient: Some(Gradient {
+            value: [1e-4, 0.0, 0.0],
+            tau_s: 400.0,
+        }),
+        hysteresis_initial: Some(-1.0),
+        hysteresis_width_c: Some(5.0),
+        scale_hysteresis: p(1e-4),
+        warmup_drift2: Some(warmup),
+        temp_bend: Some(Bend {
+            knot_c: 35.0,
+            u0_v_per_c: [1e-5, 0.0, 0.0],
+            k_rel_per_c: [0.0; 3],
+        }),
+        fixture_error2: Some(fixture("PP2")),
+        bias_step: Some(BiasStep {
+            at_s: 100.0,
+            value: [1e-4, 0.0, 0.0],
+            rise_s: 10.0,
+        }),
+        bias_walk: p(1e-6),
+        nonlinearity_k3: p(1e-4),
+        periodic: Some(Periodic {
+            period_s: 100.0,
+            value: [1e-4, 0.0, 0.0],
+            phase_rad: 0.5,
+        }),
+        scale_aging: p(1e-4),
+        fixture_change: Some(FixtureChange {
+            position: "TP5".into(),
+            before_rad: [0.0; 2],
+            angles_rad: [1e-3, 0.0],
+            at_s: 100.0,
+        }),
+        bias_aging: p(1e-5),
     }
 }
 

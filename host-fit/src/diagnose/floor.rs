@@ -65,7 +65,7 @@ impl AxisFloor {
     /// none: a quantised axis whose samples repeat).
     fn measured_var_of_mean(&self, n: f64) -> Option<f64> {
         let s = self.consistent();
-        if s.iter().any(|(_, v)| !(*v > 0.0)) {
+        if s.iter().any(|(_, v)| v.is_nan() || *v <= 0.0) {
             return (!s.is_empty()).then_some(0.0);
         }
         let (m0, v0) = *s.first()?;

@@ -219,7 +219,7 @@ pub fn warmup(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
         })
         .filter(|(tau, _)| *tau < max_s / data.rules.grid_ratio)
         .map(|(_, f)| f)
-        .filter(|f| one_sign_per_axis(f))
+        .filter(one_sign_per_axis)
         .collect()
 }
 

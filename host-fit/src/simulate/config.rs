@@ -79,7 +79,7 @@ impl Output {
             ));
         }
         let step = match (&self.unit, self.quantum) {
-            (OutputUnit::Counts, q) if q == 0.0 => 1.0,
+            (OutputUnit::Counts, 0.0) => 1.0,
             (OutputUnit::Counts, q) if q >= 1.0 && q.fract() == 0.0 => q,
             (OutputUnit::Counts, q) => {
                 return Err(HostError::msg(format!(

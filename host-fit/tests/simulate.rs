@@ -546,3 +546,230 @@ fn a_program_drives_the_chamber_and_the_tilter() {
     let e = simulate(&bad, |_| {}).err().unwrap().to_string();
     assert!(e.contains("XX9"), "{e}");
 }
+
+/// A configuration with every option set (every `Option` `Some`, every list non-empty),
+/// written without `..Default::default()`: a new field does not compile until it is
+/// added here, and then [`all_effects_toml_documents_every_option`] fails until the
+/// example documents it.
+fn every_option() -> SimConfig {
+    use host_fit::data::output_unit::OutputUnit;
+    use host_fit::simulate::{Chamber, Flight, Leg, Logger, Output, Schedule, Sensor, Unit};
+    SimConfig {
+        seed: 1,
+        t0_c: 20.0,
+        chamber: Chamber {
+            start_c: 20.0,
+            tau_air_s: 120.0,
+            tau_case_s: 600.0,
+        },
+        sensor: Sensor {
+            noise_c: 0.02,
+            quantum_c: 0.0625,
+            offset_c: 0.1,
+            gain_error: 1e-3,
+        },
+        schedule: Schedule {
+            rate_hz: 1.0,
+            dwell_s: 60.0,
+            move_s: 10.0,
+            rest_position: "TP1".into(),
+            positions: vec!["TP1".into()],
+            stops: vec![Stop {
+                temp_c: 20.0,
+                soak_s: 600.0,
+                ramp_c_per_min: 1.0,
+                positions: Some(vec!["TP1".into()]),
+            }],
+            extra_positions: vec![("W1".into(), [1.0, 0.0, 0.0])],
+            dropouts: vec![[10.0, 1.0]],
+            power_offs: vec![[20.0, 1.0]],
+            dwell_means: true,
+            sweep: Some(host_fit::simulate::Sweep {
+                legs: vec![Leg {
+                    to_c: 30.0,
+                    c_per_min: 2.0,
+                    hold_s: 60.0,
+                }],
+            }),
+            program: vec![host_fit::simulate::program::Step {
+                time_s: 0.0,
+                setpoint_c: 20.0,
+                position: "TP1".into(),
+            }],
+        },
+        unit: Unit {
+            serial: "S".into(),
+            model: "table".into(),
+            temps_c: vec![20.0],
+            coeffs: vec![[0.0; 12]],
+            interp: "pwl".into(),
+            noise_v: 2e-5,
+            resolution_v: 1e-7,
+            noise_corr_s: 1.0,
+            spike_rate: 1e-4,
+            spike_v: 1e-3,
+        },
+        effects: every_effect(),
+        logger: Logger {
+            rest_rate_hz: 0.1,
+            jitter_s: 0.1,
+            drop_rate: 0.01,
+            power_off_metadata: true,
+            rest_unnamed: true,
+        },
+        flight: Some(Flight {
+            legs: vec![Leg {
+                to_c: 20.0,
+                c_per_min: 1.0,
+                hold_s: 60.0,
+            }],
+            ..Flight::default()
+        }),
+        output: Output {
+            unit: OutputUnit::Counts,
+            per_v: 7.0,
+            quantum: 1.0,
+        },
+    }
+}
+
+/// Every effect of [`every_option`] set (a literal without `..`, for the same reason).
+fn every_effect() -> Effects {
+    use host_fit::simulate::{Bend, BiasStep, FixtureChange, Gradient, Periodic};
+    let p = |v: f64| {
+        Some(PerAxis {
+            value: [v, 0.0, 0.0],
+        })
+    };
+    let fixture = |name: &str| Fixture {
+        position: name.into(),
+        angles_rad: [1e-3, 0.0],
+    };
+    let warmup = Warmup {
+        d_v: [1e-4, 0.0, 0.0],
+        tau_s: 900.0,
+    };
+    Effects {
+        temp_curvature: Some(Curvature {
+            u0_v: [1e-4, 0.0, 0.0],
+            k_rel: [0.0; 3],
+            period_c: 60.0,
+        }),
+        thermal_lag: p(600.0),
+        temp_rate: p(0.01),
+        hysteresis: p(1e-4),
+        nonlinearity_k2: p(1e-4),
+        scale_asymmetry: p(1e-4),
+        fixture_error: Some(fixture("TP3")),
+        warmup_drift: Some(warmup),
+        thermal_lag2: p(300.0),
+        temp_gradient: Some(Gradient {
+            value: [1e-4, 0.0, 0.0],
+            tau_s: 400.0,
+        }),
+        hysteresis_initial: Some(-1.0),
+        hysteresis_width_c: Some(5.0),
+        scale_hysteresis: p(1e-4),
+        warmup_drift2: Some(warmup),
+        temp_bend: Some(Bend {
+            knot_c: 35.0,
+            u0_v_per_c: [1e-5, 0.0, 0.0],
+            k_rel_per_c: [0.0; 3],
+        }),
+        fixture_error2: Some(fixture("PP2")),
+        bias_step: Some(BiasStep {
+            at_s: 100.0,
+            value: [1e-4, 0.0, 0.0],
+            rise_s: 10.0,
+        }),
+        bias_walk: p(1e-6),
+        nonlinearity_k3: p(1e-4),
+        periodic: Some(Periodic {
+            period_s: 100.0,
+            value: [1e-4, 0.0, 0.0],
+            phase_rad: 0.5,
+        }),
+        scale_aging: p(1e-4),
+        fixture_change: Some(FixtureChange {
+            position: "TP5".into(),
+            before_rad: [0.0; 2],
+            angles_rad: [1e-3, 0.0],
+            at_s: 100.0,
+        }),
+        bias_aging: p(1e-5),
+    }
+}
+
+/// The key paths of a TOML value (`schedule.stops[].temp_c`): tables and arrays of tables
+/// are walked, anything else is a leaf.
+fn key_paths(v: &toml::Value, at: &str, out: &mut std::collections::BTreeSet<String>) {
+    let join = |k: &str| {
+        if at.is_empty() {
+            k.to_string()
+        } else {
+            format!("{at}.{k}")
+        }
+    };
+    match v {
+        toml::Value::Table(t) => {
+            for (k, x) in t {
+                out.insert(join(k));
+                key_paths(x, &join(k), out);
+            }
+        }
+        toml::Value::Array(a) if a.iter().all(|x| x.is_table()) => {
+            for x in a {
+                key_paths(x, &format!("{at}[]"), out);
+            }
+        }
+        _ => {}
+    }
+}
+
+/// `examples/sim/all-effects.toml` documents every option of the configuration: each key
+/// path of a configuration with every option set (derived from the configuration's own
+/// types by serialising it) is a key of the example, active or in one of its commented
+/// alternative blocks (a `# [section]` line and the comment lines after it), and each of
+/// those blocks is itself a valid configuration.
+#[test]
+fn all_effects_toml_documents_every_option() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/sim/all-effects.toml"
+    ))
+    .unwrap();
+    let mut documented = std::collections::BTreeSet::new();
+    let mut docs = vec![text.clone()];
+    let lines: Vec<&str> = text.lines().collect();
+    let mut k = 0;
+    while k < lines.len() {
+        if lines[k].starts_with("# [") {
+            let mut block = Vec::new();
+            while k < lines.len() && lines[k].starts_with('#') {
+                let l = lines[k];
+                block.push(l.strip_prefix("# ").unwrap_or(&l[1..]));
+                k += 1;
+            }
+            docs.push(block.join("\n"));
+        } else {
+            k += 1;
+        }
+    }
+    assert!(docs.len() >= 5, "the alternative blocks: {}", docs.len());
+    for d in &docs {
+        parse_config(Path::new("all-effects.toml"), d).unwrap_or_else(|e| panic!("{e}\n{d}"));
+        key_paths(&toml::from_str(d).unwrap(), "", &mut documented);
+    }
+    let mut options = std::collections::BTreeSet::new();
+    key_paths(
+        &toml::Value::try_from(every_option()).unwrap(),
+        "",
+        &mut options,
+    );
+    assert!(options.len() > 100, "{options:?}");
+    let missing: Vec<&String> = options.difference(&documented).collect();
+    assert!(
+        missing.is_empty(),
+        "all-effects.toml does not document {missing:?}"
+    );
+}

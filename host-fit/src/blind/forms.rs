@@ -303,6 +303,7 @@ impl Outside {
                 e.bias_step = Some(crate::simulate::BiasStep {
                     at_s: rng.range(6000.0, 12000.0),
                     value: main_axis(rng, 2e-4 * s),
+                    rise_s: 0.0,
                 })
             }
             Outside::BiasWander => {
@@ -319,6 +320,7 @@ impl Outside {
                 e.periodic = Some(crate::simulate::Periodic {
                     period_s: rng.range(1800.0, 3600.0),
                     value: main_axis(rng, 1e-4 * s),
+                    phase_rad: 0.0,
                 })
             }
             Outside::ScaleAgeing => {

@@ -251,7 +251,16 @@ impl Recording {
             }
             "t0_c" => self.t0_c = parse_temp(&self.path, line, "t0_c", &v)?,
             "unit" => self.unit = v.clone(),
-            "output_unit" => self.output_unit = v.clone(),
+            "output_unit" => {
+                let u = crate::data::output_unit::OutputUnit::parse(&v);
+                if !u.is_known() {
+                    self.warnings.push(format!(
+                        "{}:{line}: output_unit `{v}` is not one of the format's (V, mV, m/s2, g, mg, counts): kept as the label of the outputs",
+                        self.path.display()
+                    ));
+                }
+                self.output_unit = v.clone();
+            }
             "power_off_s" => self.power_off = power_off_spans(&self.path, line, &v)?,
             _ => {}
         }

@@ -131,6 +131,9 @@ pub struct AxisFloorFigures {
     pub window_samples: f64,
     /// How much more that mean scatters than white noise predicts (1 = white).
     pub colour: f64,
+    /// The step of the outputs when their noise is below it (the floor is then the
+    /// step's, `step / sqrt(12)`); null otherwise.
+    pub quantum: Option<f64>,
 }
 
 /// Dispersions.
@@ -226,6 +229,7 @@ impl Diagnosis<'_> {
                         window_sigma: f.var_of_mean(n).map(f64::sqrt).unwrap_or(f64::NAN),
                         window_samples: n,
                         colour: f.colour(n).unwrap_or(f64::NAN),
+                        quantum: f.quantum,
                     }
                 })
                 .collect(),

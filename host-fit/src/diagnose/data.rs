@@ -26,6 +26,10 @@ pub struct Data<'a> {
     pub t0: f64,
     /// Gaps and handling.
     pub events: Events,
+    /// When each stop of the tilter test begins (its first static dwell), s, in time
+    /// order: the stops of [`crate::fit::identify::stops`], dwells within 3 C of the
+    /// first of their stop, ramps between them.
+    pub stop_starts: Vec<f64>,
     /// Each observation's temperature rate (the firmware's estimate, over
     /// [`Rules::rate_tau_s`]), C/s: where the temperature moves (for locating and for the
     /// static dg).
@@ -55,9 +59,23 @@ impl<'a> Data<'a> {
             spikes,
             t0: rec.t0_c,
             events: regressors::events(rec, &rules),
+            stop_starts: stop_starts(rec),
             rate,
             dir,
         }
+    }
+
+    /// When stop `n` (1-based) begins, s (infinity for a stop the recording lacks).
+    pub fn stop_start_s(&self, n: usize) -> f64 {
+        n.checked_sub(1)
+            .and_then(|k| self.stop_starts.get(k))
+            .copied()
+            .unwrap_or(f64::INFINITY)
+    }
+
+    /// The stop (1-based) an observation at `t_s` belongs to (0 before the first).
+    pub fn stop_of(&self, t_s: f64) -> usize {
+        self.stop_starts.iter().filter(|s| **s <= t_s).count()
     }
 
     /// Residual rows.
@@ -83,4 +101,15 @@ impl<'a> Data<'a> {
                 (a.min(o.temp_c), b.max(o.temp_c))
             })
     }
+}
+
+/// The start time of every stop of `rec` (see [`Data::stop_starts`]).
+fn stop_starts(rec: &Recording) -> Vec<f64> {
+    crate::fit::identify::stops(rec, &|_| true, 3.0)
+        .iter()
+        .filter_map(|s| s.dwells.first())
+        .filter_map(|&d| rec.dwells.get(d))
+        .filter_map(|d| rec.rows.get(d.start))
+        .map(|r| r.t_s)
+        .collect()
 }

@@ -221,23 +221,36 @@ impl Data<'_> {
                 ));
                 self.per_axis(d, Term::Warmup, e, &|r, _| m[r]);
             }
-            Extra::Fixture(p) => {
+            Extra::Fixture(p, from) => {
                 if let Some(k) = base_k {
-                    self.fixture_columns(e, *p, k, d);
+                    self.fixture_columns(e, *p, *from, k, d);
                 }
             }
         }
     }
 
-    /// A fixture error of position `p`: its two rotation angles, linearised around the
-    /// K(T) `base_k` of every observation.
-    fn fixture_columns(&self, e: usize, p: usize, base_k: &[[[f64; 3]; 3]], d: &mut Design) {
+    /// A fixture error of position `p` (from stop `from` on, else throughout): its two
+    /// rotation angles, linearised around the K(T) `base_k` of every observation.
+    fn fixture_columns(
+        &self,
+        e: usize,
+        p: usize,
+        from: Option<usize>,
+        base_k: &[[[f64; 3]; 3]],
+        d: &mut Design,
+    ) {
+        let since = from.map_or(f64::NEG_INFINITY, |n| self.stop_start_s(n));
         for (n, dirv) in fixture_directions(self.rec.positions.vector(p))
             .iter()
             .enumerate()
         {
             let mut col = Vec::new();
-            for (r, _) in self.obs.iter().enumerate().filter(|(_, o)| o.position == p) {
+            for (r, _) in self
+                .obs
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| o.position == p && o.t_s >= since)
+            {
                 for (i, row) in base_k[r].iter().enumerate() {
                     col.push((
                         3 * r + i,

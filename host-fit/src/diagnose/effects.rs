@@ -52,8 +52,9 @@ pub enum Extra {
     K2,
     /// `scale_asymmetry`: U_i += c_i |a_i| (c_i = K_ii delta_i).
     Asymmetry,
-    /// `fixture_error`: position p rotated by two small angles.
-    Fixture(usize),
+    /// `fixture_error`: position p rotated by two small angles; with `Some(n)`, only
+    /// from stop n on (1-based, n >= 2: the position re-clamped between two stops).
+    Fixture(usize, Option<usize>),
     /// `warmup_drift`: U0_i += d_i exp(-t_since_restart / tau).
     Warmup {
         /// Time constant, s.
@@ -164,7 +165,7 @@ impl Extra {
             Extra::K2 => EffectId::NonlinearityK2,
             Extra::Asymmetry => EffectId::ScaleAsymmetry,
             Extra::Warmup { .. } => EffectId::WarmupDrift,
-            Extra::Fixture(_) => EffectId::FixtureError,
+            Extra::Fixture(..) => EffectId::FixtureError,
         }
     }
 
@@ -173,7 +174,9 @@ impl Extra {
     pub fn structural(&self) -> usize {
         match self {
             Extra::Curvature(_) | Extra::K2 | Extra::Asymmetry => 0,
-            Extra::Bend { .. } | Extra::Rate { .. } | Extra::Fixture(_) => 1,
+            Extra::Bend { .. } | Extra::Rate { .. } | Extra::Fixture(_, None) => 1,
+            // the position and the stop it changed at
+            Extra::Fixture(_, Some(_)) => 2,
             Extra::Lag { taus } => {
                 let distinct = |k: usize| {
                     let mut v: Vec<f64> = taus.iter().map(|t| t[k]).collect();
@@ -224,7 +227,10 @@ impl Extra {
                 if *initial > 0.0 { "heated" } else { "cooled" }
             ),
             Extra::K2 | Extra::Asymmetry => "per axis".into(),
-            Extra::Fixture(_) => "two small rotations of one position".into(),
+            Extra::Fixture(_, None) => "two small rotations of one position".into(),
+            Extra::Fixture(_, Some(n)) => {
+                format!("two small rotations of one position from stop {n} on")
+            }
             Extra::Warmup { tau_s, restart } => format!(
                 "settles with {tau_s:.0} s after {}",
                 match restart {

@@ -186,7 +186,8 @@ fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<(St
             sigma(knot_c, &|k| Extra::Bend { knot_c: k }),
         )],
         Extra::Curvature(b) => vec![("breakpoints".into(), b.len() as f64, 0.0)],
-        Extra::K2 | Extra::Asymmetry | Extra::Fixture(_) => Vec::new(),
+        Extra::Fixture(_, Some(n)) => vec![("from_stop".into(), n as f64, f64::NAN)],
+        Extra::K2 | Extra::Asymmetry | Extra::Fixture(_, None) => Vec::new(),
     }
 }
 
@@ -241,7 +242,7 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
         residual_rms_after: residual_rms(full),
         max_abs_dg_mg_after: max_dg(data, full),
         evidence: evidence(data, full, reduced, extra),
-        position: if let Extra::Fixture(p) = extra {
+        position: if let Extra::Fixture(p, _) = extra {
             Some(data.rec.positions.name(*p).to_string())
         } else {
             None
@@ -324,7 +325,8 @@ fn evidence(data: &Data, full: &Fit, reduced: &Fit, extra: &Extra) -> String {
         Extra::Hysteresis { .. } => "the same temperature reached by heating and by cooling gives different coefficients",
         Extra::K2 => "the mid-point of the +1 g and -1 g readings differs from the 0 g readings and grows as a_i^2 in tilted positions",
         Extra::Asymmetry => "the mid-point of the +1 g and -1 g readings differs from the 0 g readings and grows as |a_i| in tilted positions",
-        Extra::Fixture(_) => "one position disagrees with all others at every temperature",
+        Extra::Fixture(_, None) => "one position disagrees with all others at every temperature",
+        Extra::Fixture(_, Some(_)) => "one position agrees with the others up to a stop and disagrees from it on, at every temperature after (re-clamped or slipped between two stops)",
         Extra::Warmup { .. } => "the offset residual decays with time since power-on (or a restart), independent of temperature",
         Extra::Curvature(_) | Extra::Bend { .. } => "the coefficients bend between the temperatures more than the best polynomial the data support",
     };

@@ -105,7 +105,7 @@ impl Flashed {
         for (e, x) in self.fit.spec.extras.iter().enumerate() {
             any |= !matches!(
                 x,
-                Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(_)
+                Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(..)
             );
             match x {
                 Extra::Lag { taus } => {
@@ -142,7 +142,7 @@ impl Flashed {
                     ph.warmup = self.term(e, Term::Warmup);
                     ph.warmup_tau_s = *tau_s;
                 }
-                Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(_) => {}
+                Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(..) => {}
             }
         }
         Ok(any.then_some(ph))
@@ -249,7 +249,7 @@ fn firmware_forms(data: &Data, f: &Fit) -> Fit {
             | Extra::Rate { .. }
             | Extra::K2
             | Extra::Asymmetry
-            | Extra::Fixture(_)
+            | Extra::Fixture(..)
             | Extra::Warmup { .. } => {}
         }
     }

@@ -66,9 +66,9 @@ impl Data<'_> {
         let own_base;
         let base = match base {
             Some(b) => Some(b),
-            None if spec.extras.iter().any(|e| matches!(e, Extra::Fixture(_))) => {
+            None if spec.extras.iter().any(|e| matches!(e, Extra::Fixture(..))) => {
                 let mut s = spec.clone();
-                s.extras.retain(|e| !matches!(e, Extra::Fixture(_)));
+                s.extras.retain(|e| !matches!(e, Extra::Fixture(..)));
                 own_base = self.fit(&s, None, Depth::Profile)?;
                 Some(&own_base)
             }

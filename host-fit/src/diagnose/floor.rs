@@ -2,6 +2,8 @@
 //! measured inside the dwells at every time scale (so time-correlated noise counts), with
 //! robust statistics (so spikes do not inflate it) and second differences of block means
 //! (so a slow drift through the dwell, a settling temperature, does not count as noise).
+//! Quantised outputs (a digital sensor's counts, a coarse logger) whose noise is below one
+//! step do not average down: their floor is the step's own, `q^2 / 12` for any mean.
 use crate::data::recording::Recording;
 use crate::diagnose::rules::Rules;
 
@@ -14,6 +16,11 @@ pub struct AxisFloor {
     /// `(m, support, variance of the mean of m consecutive samples)`, m = 1, 2, 4, ...:
     /// the support is the number of second differences behind the estimate.
     pub scales: Vec<(f64, f64, f64)>,
+    /// The step of the axis's values when the noise is below it (half a step, sigma):
+    /// the quantisation error then repeats sample after sample instead of averaging,
+    /// and no mean is known better than `q / sqrt(12)` (the variance of a uniform error
+    /// over one step).
+    pub quantum: Option<f64>,
 }
 
 /// The floor of the three axes, and the spikes found on the way.
@@ -45,8 +52,22 @@ impl AxisFloor {
     /// the (consistent) measured scales; beyond the longest one, continued with the last
     /// slope (between white, -1, and flat, 0). `None` when no scale was measurable (one
     /// sample per dwell).
+    /// With a [`AxisFloor::quantum`], never below `q^2 / 12`.
     pub fn var_of_mean(&self, n: f64) -> Option<f64> {
+        let v = self.measured_var_of_mean(n)?;
+        Some(match self.quantum {
+            Some(q) => v.max(q * q / 12.0),
+            None => v,
+        })
+    }
+
+    /// [`AxisFloor::var_of_mean`] from the measured scales alone (0 where they measured
+    /// none: a quantised axis whose samples repeat).
+    fn measured_var_of_mean(&self, n: f64) -> Option<f64> {
         let s = self.consistent();
+        if s.iter().any(|(_, v)| v.is_nan() || *v <= 0.0) {
+            return (!s.is_empty()).then_some(0.0);
+        }
         let (m0, v0) = *s.first()?;
         let n = n.max(1.0);
         if n <= m0 {
@@ -158,6 +179,32 @@ fn triples(
     sq
 }
 
+/// The step of `axis`'s values in the dwells, when they all sit on one grid (integer
+/// counts, a logger's fixed decimals); `None` when they do not, or take one value.
+/// The grid is the smallest gap between distinct values; a value more than 1e-3 of a
+/// step off it means no grid.
+fn quantum(rec: &Recording, axis: usize) -> Option<f64> {
+    let mut v: Vec<f64> = rec
+        .dwells
+        .iter()
+        .flat_map(|d| rec.dwell_rows(d).iter().map(move |r| r.u[axis]))
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v.dedup();
+    let q = v
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
+        .min_by(f64::total_cmp)?;
+    let v0 = v[0];
+    v.iter()
+        .all(|x| {
+            let k = (x - v0) / q;
+            (k - k.round()).abs() < 1e-3
+        })
+        .then_some(q)
+}
+
 /// Measure the floor of `rec`: pieces of [`Rules::floor_piece`] samples keep the three
 /// blocks of a second difference far apart; recordings without such steady spans fall
 /// back to adjacent blocks (white noise assumed between neighbours).
@@ -185,7 +232,19 @@ pub fn floor(rec: &Recording, rules: &Rules) -> Floor {
             }
             m *= 2;
         }
-        AxisFloor { scales }
+        let mut f = AxisFloor {
+            scales,
+            quantum: None,
+        };
+        if let Some(q) = quantum(rec, axis) {
+            // the noise below half a step: the samples repeat, the step is the floor
+            if f.measured_var_of_mean(1.0)
+                .is_some_and(|v| v.sqrt() < 0.5 * q)
+            {
+                f.quantum = Some(q);
+            }
+        }
+        f
     });
     Floor { axes, spikes }
 }
@@ -198,11 +257,17 @@ mod tests {
     fn white_noise_scales_as_one_over_n() {
         let f = AxisFloor {
             scales: vec![(1.0, 100.0, 4.0), (2.0, 50.0, 2.0), (4.0, 25.0, 1.0)],
+            quantum: None,
         };
         assert!((f.var_of_mean(3.0).unwrap() - 4.0 / 3.0).abs() < 1e-12);
         assert!((f.var_of_mean(16.0).unwrap() - 0.25).abs() < 1e-12);
         assert!((f.colour(16.0).unwrap() - 1.0).abs() < 1e-12);
-        assert!(AxisFloor { scales: vec![] }.var_of_mean(4.0).is_none());
+        assert!(AxisFloor {
+            scales: vec![],
+            quantum: None
+        }
+        .var_of_mean(4.0)
+        .is_none());
     }
 
     #[test]
@@ -210,6 +275,7 @@ mod tests {
         // flat up to 8 samples, then 1/m: colour 8 at 64 samples
         let f = AxisFloor {
             scales: vec![(1.0, 50.0, 1.0), (8.0, 50.0, 1.2), (64.0, 50.0, 0.125)],
+            quantum: None,
         };
         assert!(
             (f.var_of_mean(8.0).unwrap() - 1.0).abs() < 1e-12,
@@ -219,7 +285,27 @@ mod tests {
         // never below white noise's 1/m from the scale before
         let g = AxisFloor {
             scales: vec![(1.0, 50.0, 1.0), (2.0, 50.0, 0.1)],
+            quantum: None,
         };
         assert!((g.var_of_mean(2.0).unwrap() - 0.5).abs() < 1e-12);
+    }
+
+    /// Sub-step noise: samples that repeat measure no scatter, and the step's own
+    /// `q^2 / 12` is the floor of every mean, however many samples it has.
+    #[test]
+    fn a_quantised_axis_below_its_step_has_the_steps_floor() {
+        let f = AxisFloor {
+            scales: vec![(1.0, 100.0, 0.0), (2.0, 50.0, 0.0)],
+            quantum: Some(2.0),
+        };
+        for n in [1.0, 10.0, 1000.0] {
+            assert!((f.var_of_mean(n).unwrap() - 4.0 / 12.0).abs() < 1e-12);
+        }
+        // measured noise above the step's floor stands
+        let g = AxisFloor {
+            scales: vec![(1.0, 100.0, 1.0)],
+            quantum: Some(1.0),
+        };
+        assert!((g.var_of_mean(1.0).unwrap() - 1.0).abs() < 1e-12);
     }
 }

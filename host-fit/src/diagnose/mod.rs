@@ -125,10 +125,14 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
     let temps: Vec<f64> = data.obs.iter().map(|o| o.temp_c).collect();
     let n_temps = temperature_clusters(&temps).len();
     let (baseline, mut not_identifiable) = baseline::baseline(&data).ok_or_else(|| {
-        HostError::in_file(
-            &rec.path,
-            "the positions present do not determine even the per-axis offset and scale (need each axis both along and across gravity)",
-        )
+        // the reason stated is the one that holds: the positions are counted, not
+        // inferred from the failed fit
+        let reason = if positions_determine(&data) {
+            "the baseline fit is singular although the positions present determine the per-axis offset and scale (each axis both along and across gravity): the outputs do not vary with the positions"
+        } else {
+            "the positions present do not determine even the per-axis offset and scale (need each axis both along and across gravity)"
+        };
+        HostError::in_file(&rec.path, reason)
     })?;
     let scope = scope(&data, measured, n_temps, &mut not_identifiable);
     let z = metrics::z(&data, &baseline);
@@ -184,13 +188,30 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
 /// positions determine: what none of the candidates could explain is the floor).
 /// Whether the floor was measured.
 pub(crate) fn weigh(data: &mut Data, floor: &Floor) -> bool {
-    let measured = floor.axes.iter().all(|a| !a.scales.is_empty());
+    // a floor of zero (samples that repeat exactly, no grid found) weighs nothing
+    let measured = floor
+        .axes
+        .iter()
+        .all(|a| a.var_of_mean(1.0).is_some_and(|v| v > 0.0 && v.is_finite()));
     if measured {
+        // a quantised axis below its step repeats one rounding error wherever the
+        // position reads the same level: its windows of one position are one piece of
+        // information, not many (else that error, fixed per position, looks like a
+        // fixture error)
+        let mut per_position = std::collections::HashMap::new();
+        for o in &data.obs {
+            *per_position.entry(o.position).or_insert(0usize) += 1;
+        }
         data.w = data
             .obs
             .iter()
             .flat_map(|o| {
-                (0..3).map(move |i| 1.0 / floor.axes[i].var_of_mean(o.n as f64).unwrap_or(1.0))
+                let shared = per_position[&o.position] as f64;
+                (0..3).map(move |i| {
+                    let a = &floor.axes[i];
+                    let v = a.var_of_mean(o.n as f64).unwrap_or(1.0);
+                    1.0 / if a.quantum.is_some() { v * shared } else { v }
+                })
             })
             .collect();
         return true;
@@ -218,6 +239,14 @@ pub(crate) fn weigh(data: &mut Data, floor: &Floor) -> bool {
         data.w = (0..data.n_rows()).map(|r| 1.0 / per_axis[r % 3]).collect();
     }
     false
+}
+
+/// Whether the positions present hold each axis both along gravity (|f_i| > 1/2) and
+/// across it (|f_i| < 1/2): what the per-axis offset and scale need, whatever the noise.
+fn positions_determine(data: &Data) -> bool {
+    (0..3).all(|i| {
+        data.obs.iter().any(|o| o.a[i].abs() > 0.5) && data.obs.iter().any(|o| o.a[i].abs() < 0.5)
+    })
 }
 
 /// What this recording can judge.

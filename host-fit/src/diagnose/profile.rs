@@ -5,6 +5,7 @@ use crate::diagnose::data::Data;
 use crate::diagnose::design::Spec;
 use crate::diagnose::effects::{Extra, Restart};
 use crate::diagnose::fit::{Depth, Fit};
+use crate::diagnose::params::{Param, Term};
 
 /// The best (lowest chi-square) of several fits.
 fn best(fits: impl IntoIterator<Item = Option<Fit>>) -> Option<Fit> {
@@ -174,13 +175,27 @@ pub fn hysteresis(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
     [form(false), form(true)].into_iter().flatten().collect()
 }
 
-/// warmup_drift: the time constant for each way the clock may restart; never longer than
-/// [`crate::diagnose::rules::Rules::warmup_max_fraction`] of the recording (a settling
-/// must be seen settling: beyond, it is a drift).
+/// warmup_drift: the time constant for each way the clock may restart, under the
+/// signature a warm-up must show (issue 18): it decays from an event (the start of the
+/// recording and its stated power-ons, or the gaps or handling it shows), so a second
+/// warm-up needs other events than the first's (once per event); it settles within what
+/// the recording shows, so its time constant is at most
+/// [`crate::diagnose::rules::Rules::warmup_max_fraction`] of the recording and its
+/// profile has its minimum inside that range, not at the edge (a form that wants a
+/// longer one is a drift); and it has one sign per axis, so two warm-ups of opposite
+/// signs on one axis (a pair imitating a slow excursion) are not a warm-up.
 pub fn warmup(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
     let rows = &data.rec.rows;
     let span =
         rows.last().map(|r| r.t_s).unwrap_or(0.0) - rows.first().map(|r| r.t_s).unwrap_or(0.0);
+    let taken: Vec<Restart> = spec
+        .extras
+        .iter()
+        .filter_map(|e| match e {
+            Extra::Warmup { restart, .. } => Some(*restart),
+            _ => None,
+        })
+        .collect();
     let mut restarts = vec![Restart::Start];
     if !data.events.gaps.is_empty() {
         restarts.push(Restart::Gaps);
@@ -188,20 +203,44 @@ pub fn warmup(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
     if !data.events.handling.is_empty() {
         restarts.push(Restart::Handling);
     }
+    let max_s = span * data.rules.warmup_max_fraction;
     restarts
         .into_iter()
+        .filter(|r| !taken.contains(r))
         .filter_map(|restart| {
             let grid = Grid {
-                max_s: span * data.rules.warmup_max_fraction,
+                max_s,
                 ..Grid::new(data, 20.0, 16)
             };
             time_constant(
                 &|t| try_fit(data, spec, Extra::Warmup { tau_s: t, restart }, base),
                 grid,
             )
-            .map(|(_, f)| f)
         })
+        .filter(|(tau, _)| *tau < max_s / data.rules.grid_ratio)
+        .map(|(_, f)| f)
+        .filter(one_sign_per_axis)
         .collect()
+}
+
+/// Whether the warm-ups of `f` have one sign per axis (a single warm-up always has).
+fn one_sign_per_axis(f: &Fit) -> bool {
+    (0..3).all(|i| {
+        let d: Vec<f64> = f
+            .labels
+            .iter()
+            .zip(f.x.iter())
+            .filter_map(|(l, x)| match l {
+                Param::Effect {
+                    term: Term::Warmup,
+                    axis,
+                    ..
+                } if *axis == i => Some(*x),
+                _ => None,
+            })
+            .collect();
+        d.iter().all(|x| *x >= 0.0) || d.iter().all(|x| *x <= 0.0)
+    })
 }
 
 /// temp_curvature: a fine piecewise-linear offset basis (broad curvature), and one bend
@@ -278,7 +317,7 @@ pub fn determined(data: &Data, f: &Fit, e: usize, phi: f64) -> bool {
         | Extra::Hysteresis { .. }
         | Extra::K2
         | Extra::Asymmetry
-        | Extra::Fixture(_) => return true,
+        | Extra::Fixture(..) => return true,
     };
     let curv = (up + down - 2.0 * f.chi2) / (h * h);
     curv > 0.0 && (2.0 * phi / curv).sqrt() <= limit

@@ -25,6 +25,8 @@ pub enum NoteKind {
     OneSamplePerDwell,
     /// All data at one temperature.
     OneTemperature,
+    /// Outputs quantised coarser than their noise: the step is the floor.
+    Quantised,
 }
 
 impl NoteKind {
@@ -37,6 +39,7 @@ impl NoteKind {
             NoteKind::SensorVsChamber => "sensor_vs_chamber",
             NoteKind::OneSamplePerDwell => "one_sample_per_dwell",
             NoteKind::OneTemperature => "one_temperature",
+            NoteKind::Quantised => "quantised",
         }
     }
 }
@@ -119,7 +122,25 @@ pub fn notes(inputs: &Inputs) -> Vec<QualityNote> {
     let mut ns: Vec<f64> = obs.iter().map(|o| o.n as f64).collect();
     ns.sort_by(f64::total_cmp);
     let n_mid = ns.get(ns.len() / 2).copied().unwrap_or(1.0);
+    let quantised: Vec<String> = (0..3)
+        .filter_map(|i| {
+            floor.axes[i]
+                .quantum
+                .map(|q| format!("{} {q} {}", AXES[i], rec.output_unit))
+        })
+        .collect();
+    if !quantised.is_empty() {
+        out.push(QualityNote {
+            kind: NoteKind::Quantised,
+            text: format!(
+                "the outputs are quantised coarser than their noise (step {}): the samples of a dwell repeat instead of averaging, so the floor of every window is the step's own, step / sqrt(12)",
+                quantised.join(", ")
+            ),
+        });
+    }
+    // a quantised axis's repeated error is its floor, not time-correlated noise
     let coloured: Vec<String> = (0..3)
+        .filter(|&i| floor.axes[i].quantum.is_none())
         .filter_map(|i| {
             floor.axes[i]
                 .colour(n_mid)

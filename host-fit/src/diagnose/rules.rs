@@ -69,11 +69,14 @@ pub struct Rules {
     // --- the baseline and its candidates ---
     /// The baseline's polynomial order never exceeds this (the firmware's highest).
     pub max_order: usize,
+    /// A fixture error that changes between two stops is looked for in recordings of at
+    /// most this many stops (each stop a candidate; more is a sweep, not a tilter test).
+    pub max_fixture_stops: usize,
     /// Time constants are profiled on a log grid of this ratio: fine enough that the
     /// golden-section refinement around the best point starts inside the right valley.
     pub grid_ratio: f64,
     /// A warm-up is never longer than this fraction of the recording: a settling must be
-    /// seen settling; beyond, it is a drift.
+    /// seen settling (three time constants: 95 % of it); beyond, it is a drift.
     pub warmup_max_fraction: f64,
     /// Broad temperature curvature: one offset breakpoint per this many C (the stops of a
     /// production test are 25-30 C apart; ramps fill in between).
@@ -177,8 +180,9 @@ impl Default for Rules {
             gap_factor: 10.0,
             gap_min_s: 60.0,
             max_order: MAX_POLY_ORDER,
+            max_fixture_stops: 12,
             grid_ratio: 1.7,
-            warmup_max_fraction: 0.5,
+            warmup_max_fraction: 1.0 / 3.0,
             curvature_step_c: 4.0,
             max_breakpoints: MAX_BREAKPOINTS,
             table_step_c: 2.0,

@@ -155,19 +155,30 @@ impl Forward<'_, '_> {
             let mut positions: Vec<usize> = data.obs.iter().map(|o| o.position).collect();
             positions.sort_unstable();
             positions.dedup();
-            let taken: Vec<usize> = spec
-                .extras
-                .iter()
-                .filter_map(|e| {
-                    if let Extra::Fixture(p) = e {
-                        Some(*p)
-                    } else {
-                        None
-                    }
-                })
-                .collect();
-            for p in positions.into_iter().filter(|p| !taken.contains(p)) {
-                out.extend(single(Extra::Fixture(p)));
+            let taken = |changed: bool| -> Vec<usize> {
+                spec.extras
+                    .iter()
+                    .filter_map(|e| match e {
+                        Extra::Fixture(p, from) if from.is_some() == changed => Some(*p),
+                        _ => None,
+                    })
+                    .collect()
+            };
+            let (whole, changed) = (taken(false), taken(true));
+            // a position re-clamped between two stops: the stop it changed at is profiled
+            // (every stop but the first; none in a recording of many stops, a sweep)
+            let stops = data.stop_starts.len();
+            for p in positions {
+                if !whole.contains(&p) {
+                    out.extend(single(Extra::Fixture(p, None)));
+                }
+                if !changed.contains(&p) && (2..=data.rules.max_fixture_stops).contains(&stops) {
+                    out.extend(
+                        (2..=stops)
+                            .filter_map(|n| single(Extra::Fixture(p, Some(n))))
+                            .min_by(|a, b| a.chi2.total_cmp(&b.chi2)),
+                    );
+                }
             }
         }
         out

@@ -1,5 +1,6 @@
 //! The twin's configuration, as read from TOML (`examples/sim/all-effects.toml`
 //! documents every option); every section optional, unknown keys refused.
+use crate::data::output_unit::OutputUnit;
 use crate::error::{HostError, Result};
 use serde::{Deserialize, Serialize};
 
@@ -26,6 +27,70 @@ pub struct SimConfig {
     /// A flight-like recording of the same unit instead of the production test (none by
     /// default).
     pub flight: Option<Flight>,
+    /// The unit the output columns are written in (volts by default; m/s2, counts ...).
+    pub output: Output,
+}
+
+/// The output columns as written: the twin's volts (the default), or the same signal in
+/// another unit of recording-format.md, scaled and quantised as a digital sensor or a
+/// logger that converts writes it (`# output_unit=` is written when it is not V).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Output {
+    /// The written unit: `V`, `mV`, `m/s2`, `g`, `mg` or `counts`.
+    pub unit: OutputUnit,
+    /// Written units per volt of the twin's outputs (0: the unit's nominal factor, from
+    /// the paper unit's scale of about 0.55 V per g: V 1, mV 1000, g 1/0.55, mg 1000/0.55,
+    /// m/s2 9.80665/0.55, counts 1000/0.55, i.e. about 1000 counts per g).
+    pub per_v: f64,
+    /// Step of the written values, in the written unit (0: none beyond the voltmeter's
+    /// `resolution_v`). Counts are integers, a multiple of this (default 1); a step larger
+    /// than the noise (`noise_v * per_v`) writes data quantised coarser than its noise.
+    pub quantum: f64,
+}
+
+/// The paper unit's scale, V per g, for the output units' default factors.
+pub const NOMINAL_V_PER_G: f64 = 0.55;
+
+impl Output {
+    /// Written units per volt ([`Output::per_v`], or the unit's default), and the step of
+    /// the written values (0: none); an error for a factor or step that cannot be used.
+    pub fn scale_and_step(&self) -> Result<(f64, f64)> {
+        let default = match &self.unit {
+            OutputUnit::Volt => 1.0,
+            OutputUnit::Millivolt => 1000.0,
+            OutputUnit::G => 1.0 / NOMINAL_V_PER_G,
+            OutputUnit::MilliG | OutputUnit::Counts => 1000.0 / NOMINAL_V_PER_G,
+            OutputUnit::MetresPerS2 => 9.80665 / NOMINAL_V_PER_G,
+            OutputUnit::Other(u) => {
+                return Err(HostError::msg(format!(
+                    "output.unit `{u}`: expected V, mV, m/s2, g, mg or counts"
+                )))
+            }
+        };
+        let per_v = if self.per_v == 0.0 {
+            default
+        } else {
+            self.per_v
+        };
+        if !(per_v.is_finite() && per_v > 0.0) {
+            return Err(HostError::msg(
+                "output.per_v must be > 0 (0: the unit's default)",
+            ));
+        }
+        let step = match (&self.unit, self.quantum) {
+            (OutputUnit::Counts, 0.0) => 1.0,
+            (OutputUnit::Counts, q) if q >= 1.0 && q.fract() == 0.0 => q,
+            (OutputUnit::Counts, q) => {
+                return Err(HostError::msg(format!(
+                    "output.quantum {q}: counts step by a whole number of counts (>= 1)"
+                )))
+            }
+            (_, q) if q.is_finite() && q >= 0.0 => q,
+            (_, q) => return Err(HostError::msg(format!("output.quantum {q} must be >= 0"))),
+        };
+        Ok((per_v, step))
+    }
 }
 
 /// The logger's clock: which ticks of the twin become rows, and when they are taken.
@@ -263,6 +328,28 @@ pub struct Effects {
     pub periodic: Option<Periodic>,
     /// Outside the catalogue: scale factors age, relative per hour.
     pub scale_aging: Option<PerAxis>,
+    /// `fixture_error` that changes during the test: a position re-clamped (or slipped)
+    /// at a time, e.g. between two stops.
+    pub fixture_change: Option<FixtureChange>,
+    /// Outside the catalogue: the bias ages, V per hour since the start (no power-on
+    /// behind it: a slow drift of the whole test).
+    pub bias_aging: Option<PerAxis>,
+}
+
+/// A tilter position whose orientation changes at one moment of the test.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FixtureChange {
+    /// The position.
+    pub position: String,
+    /// Its two rotation angles before the change, rad (default: at its nominal
+    /// orientation).
+    #[serde(default)]
+    pub before_rad: [f64; 2],
+    /// Its two rotation angles from `at_s` on, rad.
+    pub angles_rad: [f64; 2],
+    /// When it was re-clamped, s.
+    pub at_s: f64,
 }
 
 /// A thermal gradient across the sensor.
@@ -292,10 +379,13 @@ pub struct Bend {
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BiasStep {
-    /// When, s.
+    /// When, s (the middle of the shift when it takes `rise_s`).
     pub at_s: f64,
     /// Shift per axis, V.
     pub value: [f64; 3],
+    /// The shift takes this long, s (a raised cosine; 0: sudden).
+    #[serde(default)]
+    pub rise_s: f64,
 }
 
 /// A periodic bias disturbance.
@@ -306,6 +396,9 @@ pub struct Periodic {
     pub period_s: f64,
     /// Amplitude per axis, V.
     pub value: [f64; 3],
+    /// Phase at the start of the recording, rad: `value sin(2 pi t / period + phase)`.
+    #[serde(default)]
+    pub phase_rad: f64,
 }
 
 /// Three per-axis values.
@@ -428,6 +521,16 @@ impl Default for SimConfig {
             effects: Effects::default(),
             logger: Logger::default(),
             flight: None,
+            output: Output::default(),
+        }
+    }
+}
+impl Default for Output {
+    fn default() -> Self {
+        Output {
+            unit: OutputUnit::Volt,
+            per_v: 0.0,
+            quantum: 0.0,
         }
     }
 }

@@ -11,8 +11,9 @@ pub mod unit;
 mod writer;
 
 pub use config::{
-    parse_config, Bend, BiasStep, Chamber, Curvature, Effects, Fixture, Flight, Gradient, Leg,
-    Logger, PerAxis, Periodic, Schedule, Sensor, SimConfig, Stop, Sweep, Unit, Warmup,
+    parse_config, Bend, BiasStep, Chamber, Curvature, Effects, Fixture, FixtureChange, Flight,
+    Gradient, Leg, Logger, Output, PerAxis, Periodic, Schedule, Sensor, SimConfig, Stop, Sweep,
+    Unit, Warmup,
 };
 pub use unit::{TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
 pub use writer::Simulation;
@@ -239,6 +240,30 @@ fn program_plan(
     Ok(segs)
 }
 
+/// Each stop's span `[start, end]` on the twin's clock, s: from the start of its ramp to
+/// the end of its last move back to rest (a blind case places a fixture change between
+/// two stops by it).
+pub fn stop_spans(cfg: &SimConfig) -> Result<Vec<[f64; 2]>> {
+    let positions = positions(cfg)?;
+    let rest = position_index(&positions, &cfg.schedule.rest_position)?;
+    let segs = plan(cfg, &positions, rest)?;
+    // per stop: a ramp, a soak, then a move and a dwell per position, and a move to rest
+    let mut spans = Vec::new();
+    let (mut t, mut k) = (0.0, 0);
+    for stop in &cfg.schedule.stops {
+        let n = 3 + 2 * stop
+            .positions
+            .as_ref()
+            .unwrap_or(&cfg.schedule.positions)
+            .len();
+        let d: f64 = segs[k..k + n].iter().map(|s| s.duration_s).sum();
+        spans.push([t, t + d]);
+        t += d;
+        k += n;
+    }
+    Ok(spans)
+}
+
 /// The logger's decisions per tick ([`Logger`]): which ticks become rows and how late
 /// each is taken; its own random numbers, so the noise of the rows is the same draw
 /// whatever the logger does.
@@ -351,6 +376,22 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
         Some((fp, ang)) if fp == p => rotate(positions.vector(p), ang),
         _ => vector(p),
     };
+    let change = match &cfg.effects.fixture_change {
+        Some(f) => Some((position_index(&positions, &f.position)?, f.clone())),
+        None => None,
+    };
+    // a re-clamped position: its own angles before the change and after it
+    let vector_at = |p: usize, t: f64| match &change {
+        Some((fp, f)) if *fp == p => {
+            let ang = if t >= f.at_s {
+                f.angles_rad
+            } else {
+                f.before_rad
+            };
+            rotate(vector(p), ang)
+        }
+        _ => vector(p),
+    };
     let mut clock = Clock::new(cfg, sch.rate_hz)?;
     let mut w = RecordingWriter::new(cfg, &sch.power_offs, clock.jitter_s > 0.0)?;
     let mut th = Thermal::new(cfg);
@@ -387,11 +428,13 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
             let (u, ts, air) = if late > 0.0 {
                 let mut at = th.clone();
                 at.step(set0, set0 + (set1 - set0) * late / dt, late);
-                let a = phase_vector(seg.phase, f + late / dt / n as f64, rest, &vector);
+                let a = phase_vector(seg.phase, f + late / dt / n as f64, rest, &|p| {
+                    vector_at(p, t + late)
+                });
                 let (u, ts) = sample(cfg, &unit, &at, &mut dist, a, t + late);
                 (u, ts, at.air)
             } else {
-                let a = phase_vector(seg.phase, f, rest, &vector);
+                let a = phase_vector(seg.phase, f, rest, &|p| vector_at(p, t));
                 let (u, ts) = sample(cfg, &unit, &th, &mut dist, a, t);
                 (u, ts, th.air)
             };

@@ -54,7 +54,10 @@ pub(super) fn readings(
             ui += w.d_v[i] * (-since_on / w.tau_s).exp();
         }
         if let Some(b) = e.bias_step {
-            ui += if t >= b.at_s { b.value[i] } else { 0.0 };
+            ui += b.value[i] * step_shape(t - b.at_s, b.rise_s);
+        }
+        if let Some(g) = e.bias_aging {
+            ui += g.value[i] * t / 3600.0;
         }
         if let Some(w) = e.bias_walk {
             dist.walk[i] += w.value[i] * dt.sqrt() * dist.rng.normal();
@@ -64,7 +67,7 @@ pub(super) fn readings(
             ui += k3.value[i] * a[i] * a[i] * a[i];
         }
         if let Some(p) = e.periodic {
-            ui += p.value[i] * (std::f64::consts::TAU * t / p.period_s).sin();
+            ui += p.value[i] * (std::f64::consts::TAU * t / p.period_s + p.phase_rad).sin();
         }
         if let Some(g) = e.scale_aging {
             ui += c.k[i][i] * g.value[i] * t / 3600.0 * a[i];
@@ -79,6 +82,16 @@ pub(super) fn readings(
         u[i] = ui;
     }
     u
+}
+
+/// A step's progress `x` seconds after its middle: 0 before, 1 after, a raised cosine over
+/// `rise_s` (0: sudden, at `x = 0`).
+fn step_shape(x: f64, rise_s: f64) -> f64 {
+    if rise_s <= 0.0 {
+        return if x >= 0.0 { 1.0 } else { 0.0 };
+    }
+    let f = (x / rise_s + 0.5).clamp(0.0, 1.0);
+    0.5 - 0.5 * (std::f64::consts::PI * f).cos()
 }
 
 /// One sample of voltmeter noise: white, or first-order autoregressive with the same

@@ -1,4 +1,5 @@
 //! The recording as text (recording-format v1): metadata, then rows through a CSV writer.
+use crate::data::output_unit::OutputUnit;
 use crate::error::{HostError, Result};
 use crate::simulate::config::SimConfig;
 
@@ -24,6 +25,11 @@ pub(super) struct RecordingWriter {
     dwell_means: bool,
     /// The open dwell: its name, and the sums of t, temperature, air and outputs.
     acc: Option<(String, usize, [f64; 6])>,
+    /// Written output units per volt, and the step of the written values (0: none).
+    per_v: f64,
+    step: f64,
+    /// The outputs are counts: written as integers (unless averaged over a dwell).
+    counts: bool,
 }
 
 impl RecordingWriter {
@@ -34,6 +40,11 @@ impl RecordingWriter {
             "# format=at-recording/1\n# unit={}\n# t0_c={}\n# g_local=9.80665\n# simulated by host-fit simulate, seed {}\n",
             cfg.unit.serial, cfg.t0_c, cfg.seed
         );
+        let (per_v, step) = cfg.output.scale_and_step()?;
+        // V is the format's default: a twin recording in volts stays as it always was
+        if cfg.output.unit != OutputUnit::Volt {
+            head.push_str(&format!("# output_unit={}\n", cfg.output.unit));
+        }
         if cfg.logger.power_off_metadata && !power_offs.is_empty() {
             let spans: Vec<String> = power_offs
                 .iter()
@@ -59,6 +70,9 @@ impl RecordingWriter {
             rows: 0,
             dwell_means: cfg.schedule.dwell_means,
             acc: None,
+            per_v,
+            step,
+            counts: cfg.output.unit == OutputUnit::Counts,
         })
     }
 
@@ -68,17 +82,38 @@ impl RecordingWriter {
 
     fn write(&mut self, t: f64, name: &str, ts: f64, air: f64, u: [f64; 3]) -> Result<()> {
         self.rows += 1;
+        // counts as read are integers; a dwell's mean of them is not
+        let out = |v: f64| {
+            if self.counts && !self.dwell_means {
+                // + 0.0: a rounded -0.4 is the count 0, not "-0"
+                format!("{:.0}", v.round() + 0.0)
+            } else {
+                format!("{v:.8}")
+            }
+        };
         self.csv
             .write_record([
                 format!("{t:.*}", self.decimals),
                 name.to_string(),
                 format!("{ts:.4}"),
                 format!("{air:.3}"),
-                format!("{:.8}", u[0]),
-                format!("{:.8}", u[1]),
-                format!("{:.8}", u[2]),
+                out(u[0]),
+                out(u[1]),
+                out(u[2]),
             ])
             .map_err(Self::err)
+    }
+
+    /// The outputs in the written unit: scaled, and rounded to its step.
+    fn convert(&self, u: [f64; 3]) -> [f64; 3] {
+        u.map(|v| {
+            let w = v * self.per_v;
+            if self.step > 0.0 {
+                (w / self.step).round() * self.step
+            } else {
+                w
+            }
+        })
     }
 
     /// Write the open dwell's mean.
@@ -99,6 +134,7 @@ impl RecordingWriter {
         u: [f64; 3],
         measuring: bool,
     ) -> Result<()> {
+        let u = self.convert(u);
         if !self.dwell_means {
             return self.write(t, name, ts, air, u);
         }

@@ -191,9 +191,12 @@ pub fn warmup(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
     let taken: Vec<Restart> = spec
         .extras
         .iter()
-        .filter_map(|e| match e {
-            Extra::Warmup { restart, .. } => Some(*restart),
-            _ => None,
+        .filter_map(|e| {
+            if let Extra::Warmup { restart, .. } = e {
+                Some(*restart)
+            } else {
+                None
+            }
         })
         .collect();
     let mut restarts = vec![Restart::Start];
@@ -230,14 +233,10 @@ fn one_sign_per_axis(f: &Fit) -> bool {
             .labels
             .iter()
             .zip(f.x.iter())
-            .filter_map(|(l, x)| match l {
-                Param::Effect {
-                    term: Term::Warmup,
-                    axis,
-                    ..
-                } if *axis == i => Some(*x),
-                _ => None,
-            })
+            .filter(
+                |(l, _)| matches!(l, Param::Effect { term: Term::Warmup, axis, .. } if *axis == i),
+            )
+            .map(|(_, x)| *x)
             .collect();
         d.iter().all(|x| *x >= 0.0) || d.iter().all(|x| *x <= 0.0)
     })

@@ -158,9 +158,12 @@ impl Forward<'_, '_> {
             let taken = |changed: bool| -> Vec<usize> {
                 spec.extras
                     .iter()
-                    .filter_map(|e| match e {
-                        Extra::Fixture(p, from) if from.is_some() == changed => Some(*p),
-                        _ => None,
+                    .filter_map(|e| {
+                        if let Extra::Fixture(p, from) = e {
+                            (from.is_some() == changed).then_some(*p)
+                        } else {
+                            None
+                        }
                     })
                     .collect()
             };

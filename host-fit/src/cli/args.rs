@@ -432,7 +432,7 @@ pub struct SimulateArgs {
 #[derive(Args, Debug)]
 pub struct PlanArgs {
     /// The chamber's range, C: `LO,HI`.
-    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [-40.0, 70.0])]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, default_values_t = [-40.0, 70.0])]
     pub range_c: Vec<f64>,
     /// The chamber's fastest ramp, C/min.
     #[arg(long, default_value_t = 3.0)]

@@ -170,6 +170,50 @@ struct Planned<'a> {
     program_rows: usize,
 }
 
+/// The plan's options checked one by one, so the error names the option at fault.
+fn check_plan_options(a: &PlanArgs) -> Result<()> {
+    let bad = |opt: &str, why: String| Err(HostError::msg(format!("plan: {opt} {why}")));
+    match a.range_c.as_slice() {
+        [lo, hi] if lo.is_finite() && hi.is_finite() && lo < hi => {}
+        r => {
+            return bad(
+                "--range-c",
+                format!("must be LO,HI with LO < HI (got {r:?})"),
+            )
+        }
+    }
+    for (opt, v, strict) in [
+        ("--max-ramp-c-per-min", a.max_ramp_c_per_min, true),
+        ("--rate-hz", a.rate_hz, true),
+        ("--noise", a.noise, true),
+        ("--dwell-s", a.dwell_s, true),
+        ("--move-s", a.move_s, false),
+        ("--tau-s", a.tau_s, false),
+    ] {
+        if !v.is_finite() || v < 0.0 || (strict && v == 0.0) {
+            let need = if strict { "> 0" } else { ">= 0" };
+            return bad(opt, format!("must be a finite number {need} (got {v})"));
+        }
+    }
+    if a.positions.len() < 6 {
+        return bad(
+            "--positions",
+            format!("needs at least 6 positions (got {})", a.positions.len()),
+        );
+    }
+    match (a.target_mg, a.hours) {
+        (Some(v), None) | (None, Some(v)) if !(v.is_finite() && v > 0.0) => bad(
+            if a.target_mg.is_some() {
+                "--target-mg"
+            } else {
+                "--hours"
+            },
+            format!("must be a finite number > 0 (got {v})"),
+        ),
+        _ => Ok(()),
+    }
+}
+
 pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
     use crate::plan::{
         candidates, choose, program, table, verification, verification_temps, Limits, Target,
@@ -180,6 +224,7 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
         (None, Some(h)) => Target::Hours(h),
         _ => return Err(HostError::msg("give a target: --target-mg MG or --hours H")),
     };
+    check_plan_options(&a)?;
     let l = Limits {
         lo_c: a.range_c.first().copied().unwrap_or(f64::NAN),
         hi_c: a.range_c.get(1).copied().unwrap_or(f64::NAN),

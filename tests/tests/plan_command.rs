@@ -241,3 +241,88 @@ fn plan_writes_a_program_the_chamber_can_follow_and_the_twin_meets_its_predictio
         predicted(chosen)
     );
 }
+
+/// `--from-diagnosis`: the unit type's time constant and noise read from an earlier
+/// `diagnose --json` of a lagging unit (the truth: 600 s, 2e-5 per sample); `--tau-s`
+/// and `--noise` override; a JSON without them is refused naming what is missing.
+#[test]
+fn plan_reads_the_unit_types_lag_and_noise_from_a_diagnosis() {
+    use host_fit::simulate::{simulate, PerAxis, SimConfig};
+    let dir = tempfile::tempdir().unwrap();
+    let mut cfg = SimConfig {
+        seed: 3,
+        ..SimConfig::default()
+    };
+    cfg.effects.thermal_lag = Some(PerAxis { value: [600.0; 3] });
+    let truth_noise = cfg.unit.noise_v;
+    let rec = dir.path().join("unit.csv");
+    std::fs::write(&rec, simulate(&cfg, |_| {}).unwrap().csv).unwrap();
+    let (code, diag, err) = cli(&["diagnose", s(&rec), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let d = dir.path().join("d.json");
+    std::fs::write(&d, &diag).unwrap();
+    let out = dir.path().join("p.csv");
+    let run = |extra: &[&str]| {
+        let mut a = vec![
+            "plan",
+            "--from-diagnosis",
+            s(&d),
+            "--hours",
+            "100",
+            "--out",
+            s(&out),
+            "--force",
+            "--json",
+        ];
+        a.extend_from_slice(extra);
+        cli_json(&a)["limits"].clone()
+    };
+    let l = run(&[]);
+    let tau = l["tau_s"].as_f64().unwrap();
+    let noise = l["noise_v"].as_f64().unwrap();
+    assert!((tau - 600.0).abs() < 0.05 * 600.0, "tau {tau} s");
+    assert!(
+        (noise / truth_noise - 1.0).abs() < 0.3,
+        "noise {noise}, truth {truth_noise}"
+    );
+    let l = run(&["--tau-s", "120", "--noise", "3e-5"]);
+    assert_eq!(l["tau_s"].as_f64(), Some(120.0));
+    assert_eq!(l["noise_v"].as_f64(), Some(3e-5));
+
+    // a diagnosis without the lag (or the noise): refused, naming what is missing
+    let mut j: Value = serde_json::from_str(&diag).unwrap();
+    j["findings"] = Value::Array(vec![]);
+    std::fs::write(&d, j.to_string()).unwrap();
+    let fresh = dir.path().join("q.csv");
+    let (code, _, err) = cli(&[
+        "plan",
+        "--from-diagnosis",
+        s(&d),
+        "--hours",
+        "100",
+        "--out",
+        s(&fresh),
+    ]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("thermal_lag") && err.contains("--tau-s"),
+        "{err}"
+    );
+    assert!(!fresh.exists());
+    j.as_object_mut().unwrap().remove("noise_sigma_per_sample");
+    std::fs::write(&d, j.to_string()).unwrap();
+    let (code, _, err) = cli(&[
+        "plan",
+        "--from-diagnosis",
+        s(&d),
+        "--tau-s",
+        "0",
+        "--hours",
+        "100",
+        "--out",
+        s(&fresh),
+    ]);
+    assert_ne!(code, 0);
+    assert!(err.contains("noise_sigma_per_sample"), "{err}");
+    assert!(!fresh.exists());
+}

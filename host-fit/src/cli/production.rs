@@ -185,10 +185,10 @@ fn check_plan_options(a: &PlanArgs) -> Result<()> {
     for (opt, v, strict) in [
         ("--max-ramp-c-per-min", a.max_ramp_c_per_min, true),
         ("--rate-hz", a.rate_hz, true),
-        ("--noise", a.noise, true),
+        ("--noise", a.noise.unwrap_or(1.0), true),
         ("--dwell-s", a.dwell_s, true),
         ("--move-s", a.move_s, false),
-        ("--tau-s", a.tau_s, false),
+        ("--tau-s", a.tau_s.unwrap_or(0.0), false),
     ] {
         if !v.is_finite() || v < 0.0 || (strict && v == 0.0) {
             let need = if strict { "> 0" } else { ">= 0" };
@@ -214,6 +214,37 @@ fn check_plan_options(a: &PlanArgs) -> Result<()> {
     }
 }
 
+/// The unit type's (time constant s, noise per sample) from a `diagnose --json` output:
+/// the thermal_lag finding's slowest axis, the noisiest axis; an error names the file
+/// and what it lacks.
+pub(super) fn from_diagnosis(
+    path: &std::path::Path,
+    text: &str,
+) -> Result<(Option<f64>, Option<f64>)> {
+    let bad = |why: &str| HostError::msg(format!("{}: {why}", path.display()));
+    let j: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| bad(&format!("not a diagnosis JSON ({e})")))?;
+    let noise = j["noise_sigma_per_sample"].as_array().and_then(|v| {
+        let v: Vec<f64> = v.iter().filter_map(serde_json::Value::as_f64).collect();
+        (v.len() == 3 && v.iter().all(|x| x.is_finite() && *x > 0.0))
+            .then(|| v.iter().copied().fold(0.0, f64::max))
+    });
+    let tau = j["findings"].as_array().and_then(|f| {
+        f.iter()
+            .find(|x| x["effect"] == "thermal_lag")
+            .and_then(|x| x["parameters"].as_object())
+            .map(|p| {
+                p.iter()
+                    .filter(|(k, _)| k.starts_with("tau_") && k.ends_with("_s"))
+                    .filter_map(|(_, v)| v.as_f64())
+                    .filter(|t| t.is_finite() && *t >= 0.0)
+                    .fold(f64::NAN, f64::max)
+            })
+            .filter(|t| t.is_finite())
+    });
+    Ok((tau, noise))
+}
+
 pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
     use crate::plan::{
         candidates, choose, program, table, verification, verification_temps, Limits, Target,
@@ -225,6 +256,37 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
         _ => return Err(HostError::msg("give a target: --target-mg MG or --hours H")),
     };
     check_plan_options(&a)?;
+    let (mut tau_s, mut noise) = (a.tau_s, a.noise);
+    if let Some(d) = &a.from_diagnosis {
+        let text = std::fs::read_to_string(d)
+            .map_err(|e| HostError::msg(format!("{}: {e}", d.display())))?;
+        let (t, n) = from_diagnosis(d, &text)?;
+        let missing = |what: &str, opt: &str| {
+            HostError::msg(format!(
+                "{}: {what} missing (give {opt}{})",
+                d.display(),
+                if opt == "--tau-s" {
+                    ", --tau-s 0 for a unit found without lag"
+                } else {
+                    ""
+                }
+            ))
+        };
+        if tau_s.is_none() {
+            tau_s = Some(t.ok_or_else(|| {
+                missing(
+                    "the thermal_lag finding's time constant (tau_*_s)",
+                    "--tau-s",
+                )
+            })?);
+        }
+        if noise.is_none() {
+            noise =
+                Some(n.ok_or_else(|| {
+                    missing("noise_sigma_per_sample (three values > 0)", "--noise")
+                })?);
+        }
+    }
     let l = Limits {
         lo_c: a.range_c.first().copied().unwrap_or(f64::NAN),
         hi_c: a.range_c.get(1).copied().unwrap_or(f64::NAN),
@@ -233,8 +295,8 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
         dwell_s: a.dwell_s,
         move_s: a.move_s,
         rate_hz: a.rate_hz,
-        noise_v: a.noise,
-        tau_s: a.tau_s,
+        noise_v: noise.unwrap_or(2e-5),
+        tau_s: tau_s.unwrap_or(0.0),
     };
     let c = candidates(&l, a.seed)?;
     let chosen = choose(&c, target);

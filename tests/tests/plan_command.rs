@@ -61,50 +61,11 @@ fn predicted(c: &Value) -> f64 {
     c["predicted_mg"].as_f64().unwrap()
 }
 
-#[test]
-fn plan_writes_a_program_the_chamber_can_follow_and_the_twin_meets_its_prediction() {
-    let dir = tempfile::tempdir().unwrap();
-    // a target between the candidates' predictions: some meet it, some do not
-    let (all, _) = plan(dir.path(), "all.csv", &["--hours", "1000"]);
-    let cands = all["candidates"].as_array().unwrap().clone();
-    assert!(cands.len() >= 4, "{cands:?}");
-    let mut preds: Vec<f64> = cands.iter().map(predicted).collect();
-    preds.sort_by(f64::total_cmp);
-    // --hours without a binding limit: the most accurate of all
-    assert_eq!(predicted(&all["chosen"]), preds[0]);
-    let target_mg = (preds[preds.len() / 2] + preds[preds.len() / 2 - 1]) / 2.0;
-    let (j, prog) = plan(
-        dir.path(),
-        "plan.csv",
-        &["--target-mg", &format!("{target_mg}")],
-    );
+/// The program holds to the chamber and ends with the verification block.
+fn check_program(rows: &[Row], j: &Value) {
     let chosen = &j["chosen"];
-    let meets: Vec<&Value> = cands.iter().filter(|c| predicted(c) <= target_mg).collect();
-    let shortest = meets.iter().map(|c| hours(c)).fold(f64::INFINITY, f64::min);
-    assert!(predicted(chosen) <= target_mg, "{chosen}");
-    assert_eq!(
-        hours(chosen),
-        shortest,
-        "not the shortest that meets {target_mg} mg"
-    );
-
-    // --hours: the most accurate within the hours (between the shortest and longest)
-    let mut hs: Vec<f64> = cands.iter().map(hours).collect();
-    hs.sort_by(f64::total_cmp);
-    let limit = (hs[1] + hs[2]) / 2.0;
-    let (jh, _) = plan(dir.path(), "hours.csv", &["--hours", &format!("{limit}")]);
-    let best = cands
-        .iter()
-        .filter(|c| hours(c) <= limit)
-        .map(predicted)
-        .fold(f64::INFINITY, f64::min);
-    assert!(hours(&jh["chosen"]) <= limit);
-    assert_eq!(predicted(&jh["chosen"]), best);
-
     // the program: header, times increasing, set points inside the range, ramps no
     // faster than the limit
-    let text = std::fs::read_to_string(&prog).unwrap();
-    let rows = parse(&text);
     assert_eq!(rows.len() as u64, j["program_rows"].as_u64().unwrap());
     for w in rows.windows(2) {
         assert!(w[1].t > w[0].t, "time {} after {}", w[1].t, w[0].t);
@@ -159,22 +120,12 @@ fn plan_writes_a_program_the_chamber_can_follow_and_the_twin_meets_its_predictio
         .iter()
         .filter(|r| r.pos != "-")
         .all(|r| temps.iter().any(|&vt| (r.sp - vt).abs() < 1e-9)));
+}
 
-    // never overwritten without --force
-    let (code, _, err) = cli(&[
-        "plan",
-        "--range-c=-30,60",
-        "--target-mg",
-        "1",
-        "--out",
-        s(&prog),
-    ]);
-    assert_ne!(code, 0);
-    assert!(err.contains("--force"), "{err}");
-    assert_eq!(std::fs::read_to_string(&prog).unwrap(), text);
-
+/// Bad options are refused naming the option, and write nothing.
+fn refuses_bad_options(dir: &std::path::Path) {
     // bad options: refused, naming the option
-    let other = dir.path().join("bad.csv");
+    let other = dir.join("bad.csv");
     for (args, opt) in [
         (vec!["--range-c=60,-30", "--target-mg", "1"], "--range-c"),
         (vec!["--range-c", "10,10", "--hours", "3"], "--range-c"),
@@ -193,6 +144,66 @@ fn plan_writes_a_program_the_chamber_can_follow_and_the_twin_meets_its_predictio
         assert!(err.contains(opt), "{a:?}: {err}");
         assert!(!other.exists(), "{a:?} wrote a program");
     }
+}
+
+#[test]
+fn plan_writes_a_program_the_chamber_can_follow_and_the_twin_meets_its_prediction() {
+    let dir = tempfile::tempdir().unwrap();
+    // a target between the candidates' predictions: some meet it, some do not
+    let (all, _) = plan(dir.path(), "all.csv", &["--hours", "1000"]);
+    let cands = all["candidates"].as_array().unwrap().clone();
+    assert!(cands.len() >= 4, "{cands:?}");
+    let mut preds: Vec<f64> = cands.iter().map(predicted).collect();
+    preds.sort_by(f64::total_cmp);
+    // --hours without a binding limit: the most accurate of all
+    assert_eq!(predicted(&all["chosen"]), preds[0]);
+    let target_mg = (preds[preds.len() / 2] + preds[preds.len() / 2 - 1]) / 2.0;
+    let (j, prog) = plan(
+        dir.path(),
+        "plan.csv",
+        &["--target-mg", &format!("{target_mg}")],
+    );
+    let chosen = &j["chosen"];
+    let meets: Vec<&Value> = cands.iter().filter(|c| predicted(c) <= target_mg).collect();
+    let shortest = meets.iter().map(|c| hours(c)).fold(f64::INFINITY, f64::min);
+    assert!(predicted(chosen) <= target_mg, "{chosen}");
+    assert_eq!(
+        hours(chosen),
+        shortest,
+        "not the shortest that meets {target_mg} mg"
+    );
+
+    // --hours: the most accurate within the hours (between the shortest and longest)
+    let mut hs: Vec<f64> = cands.iter().map(hours).collect();
+    hs.sort_by(f64::total_cmp);
+    let limit = (hs[1] + hs[2]) / 2.0;
+    let (jh, _) = plan(dir.path(), "hours.csv", &["--hours", &format!("{limit}")]);
+    let best = cands
+        .iter()
+        .filter(|c| hours(c) <= limit)
+        .map(predicted)
+        .fold(f64::INFINITY, f64::min);
+    assert!(hours(&jh["chosen"]) <= limit);
+    assert_eq!(predicted(&jh["chosen"]), best);
+
+    let text = std::fs::read_to_string(&prog).unwrap();
+    let rows = parse(&text);
+    check_program(&rows, &j);
+    let end = hours(chosen) * 3600.0;
+    // never overwritten without --force
+    let (code, _, err) = cli(&[
+        "plan",
+        "--range-c=-30,60",
+        "--target-mg",
+        "1",
+        "--out",
+        s(&prog),
+    ]);
+    assert_ne!(code, 0);
+    assert!(err.contains("--force"), "{err}");
+    assert_eq!(std::fs::read_to_string(&prog).unwrap(), text);
+
+    refuses_bad_options(dir.path());
 
     // the written plan on the twin: the calibration program and the verification block
     // recorded apart (so no verification dwell is fitted), fitted and verified
@@ -325,4 +336,86 @@ fn plan_reads_the_unit_types_lag_and_noise_from_a_diagnosis() {
     assert_ne!(code, 0);
     assert!(err.contains("noise_sigma_per_sample"), "{err}");
     assert!(!fresh.exists());
+}
+
+/// `--report`: the page plots a point per candidate at its (hours, predicted mg), and
+/// rings the chosen one on its point; the page is well-formed XML.
+#[test]
+fn plan_report_plots_every_candidate_and_rings_the_chosen_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let page = dir.path().join("plan.html");
+    let (j, _) = plan(dir.path(), "p.csv", &["--hours", "3", "--report", s(&page)]);
+    let cands = j["candidates"].as_array().unwrap();
+    let html = std::fs::read_to_string(&page).unwrap();
+    let opt = roxmltree::ParsingOptions {
+        allow_dtd: true,
+        ..Default::default()
+    };
+    let doc = roxmltree::Document::parse_with_options(&html, opt).unwrap();
+    // the drawn data beside the SVG: a point per candidate, the chosen one apart
+    let data: Value = serde_json::from_str(
+        doc.descendants()
+            .find(|n| n.attribute("class") == Some("plot-data"))
+            .unwrap()
+            .text()
+            .unwrap(),
+    )
+    .unwrap();
+    let series = data["series"].as_array().unwrap();
+    assert_eq!(series.len(), 3);
+    let drawn: Vec<(f64, f64)> = series[..2]
+        .iter()
+        .flat_map(|s| s["points"].as_array().unwrap().iter())
+        .map(|p| (p[0].as_f64().unwrap(), p[1].as_f64().unwrap()))
+        .collect();
+    assert_eq!(drawn.len(), cands.len());
+    for c in cands {
+        assert!(
+            drawn.contains(&(hours(c), predicted(c))),
+            "{c} not drawn: {drawn:?}"
+        );
+    }
+    let ring = &series[2]["points"][0];
+    assert_eq!(
+        (ring[0].as_f64().unwrap(), ring[1].as_f64().unwrap()),
+        (hours(&j["chosen"]), predicted(&j["chosen"]))
+    );
+    // the SVG: as many marker vertices as candidates, the ring on one of them
+    let vertices = |i: usize| -> Vec<(String, String)> {
+        let g = doc
+            .descendants()
+            .find(|n| n.attribute("data-series") == Some(&i.to_string()))
+            .unwrap();
+        let d = g
+            .descendants()
+            .find(|n| n.attribute("class") == Some("markers"))
+            .unwrap()
+            .attribute("d")
+            .unwrap()
+            .trim_start_matches('M')
+            .to_string();
+        let v: Vec<String> = d.split_whitespace().map(String::from).collect();
+        v.chunks(2).map(|c| (c[0].clone(), c[1].clone())).collect()
+    };
+    let marks: Vec<(String, String)> = (0..2).flat_map(vertices).collect();
+    assert_eq!(marks.len(), cands.len());
+    let ringed = vertices(2);
+    assert_eq!(ringed.len(), 1);
+    assert!(
+        marks.contains(&ringed[0]),
+        "{ringed:?} not on a candidate {marks:?}"
+    );
+    // never overwritten without --force
+    let (code, _, err) = cli(&[
+        "plan",
+        "--hours",
+        "3",
+        "--out",
+        s(&dir.path().join("other.csv")),
+        "--report",
+        s(&page),
+    ]);
+    assert_ne!(code, 0);
+    assert!(err.contains("--force"), "{err}");
+    assert_eq!(std::fs::read_to_string(&page).unwrap(), html);
 }

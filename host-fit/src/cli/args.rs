@@ -466,6 +466,10 @@ pub struct PlanArgs {
     /// used where --tau-s and --noise are not given.
     #[arg(long)]
     pub from_diagnosis: Option<PathBuf>,
+    /// Also write an HTML page plotting every candidate's predicted accuracy against
+    /// its chamber hours, the chosen one ringed.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
     /// Target: the shortest plan predicted within this worst verification |dg|, mg.
     #[arg(long, conflicts_with = "hours")]
     pub target_mg: Option<f64>,

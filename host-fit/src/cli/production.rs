@@ -250,6 +250,9 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
         candidates, choose, program, table, verification, verification_temps, Limits, Target,
     };
     check_writable(&a.out, a.force)?;
+    if let Some(r) = &a.report {
+        check_writable(r, a.force)?;
+    }
     let target = match (a.target_mg, a.hours) {
         (Some(mg), None) => Target::AccuracyMg(mg),
         (None, Some(h)) => Target::Hours(h),
@@ -310,7 +313,14 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
     let last = steps.pop().map(|s| s.setpoint_c).unwrap_or(l.lo_c);
     steps.extend(verification(&l, end, last));
     let csv = crate::simulate::program::to_csv(&steps);
+    let page = match &a.report {
+        Some(_) => Some(crate::report::plan::html(&c, i, target)?),
+        None => None,
+    };
     write_atomic(&a.out, csv.as_bytes(), a.force)?;
+    if let (Some(r), Some(p)) = (&a.report, &page) {
+        write_atomic(r, p.as_bytes(), a.force)?;
+    }
     if a.json {
         return w(
             out,

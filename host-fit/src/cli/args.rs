@@ -432,7 +432,7 @@ pub struct SimulateArgs {
 #[derive(Args, Debug)]
 pub struct PlanArgs {
     /// The chamber's range, C: `LO,HI`.
-    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [-40.0, 70.0])]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, default_values_t = [-40.0, 70.0])]
     pub range_c: Vec<f64>,
     /// The chamber's fastest ramp, C/min.
     #[arg(long, default_value_t = 3.0)]
@@ -453,12 +453,23 @@ pub struct PlanArgs {
     /// Samples per second.
     #[arg(long, default_value_t = 1.0)]
     pub rate_hz: f64,
-    /// The unit type's output noise, 1 sigma per sample (output units).
-    #[arg(long, default_value_t = 2e-5)]
-    pub noise: f64,
-    /// The unit type's thermal time constant (its element behind its sensor), s.
-    #[arg(long, default_value_t = 0.0)]
-    pub tau_s: f64,
+    /// The unit type's output noise, 1 sigma per sample (output units; default 2e-5, or
+    /// the diagnosis's with --from-diagnosis).
+    #[arg(long)]
+    pub noise: Option<f64>,
+    /// The unit type's thermal time constant (its element behind its sensor), s (default
+    /// 0, or the diagnosis's with --from-diagnosis).
+    #[arg(long)]
+    pub tau_s: Option<f64>,
+    /// An earlier `diagnose --json` of a unit of the type: its thermal_lag finding's
+    /// time constant (the slowest axis) and its noise per sample (the noisiest axis) are
+    /// used where --tau-s and --noise are not given.
+    #[arg(long)]
+    pub from_diagnosis: Option<PathBuf>,
+    /// Also write an HTML page plotting every candidate's predicted accuracy against
+    /// its chamber hours, the chosen one ringed.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
     /// Target: the shortest plan predicted within this worst verification |dg|, mg.
     #[arg(long, conflicts_with = "hours")]
     pub target_mg: Option<f64>,

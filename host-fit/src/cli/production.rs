@@ -170,16 +170,126 @@ struct Planned<'a> {
     program_rows: usize,
 }
 
+/// The plan's options checked one by one, so the error names the option at fault.
+fn check_plan_options(a: &PlanArgs) -> Result<()> {
+    let bad = |opt: &str, why: String| Err(HostError::msg(format!("plan: {opt} {why}")));
+    match a.range_c.as_slice() {
+        [lo, hi] if lo.is_finite() && hi.is_finite() && lo < hi => {}
+        r => {
+            return bad(
+                "--range-c",
+                format!("must be LO,HI with LO < HI (got {r:?})"),
+            )
+        }
+    }
+    for (opt, v, strict) in [
+        ("--max-ramp-c-per-min", a.max_ramp_c_per_min, true),
+        ("--rate-hz", a.rate_hz, true),
+        ("--noise", a.noise.unwrap_or(1.0), true),
+        ("--dwell-s", a.dwell_s, true),
+        ("--move-s", a.move_s, false),
+        ("--tau-s", a.tau_s.unwrap_or(0.0), false),
+    ] {
+        if !v.is_finite() || v < 0.0 || (strict && v == 0.0) {
+            let need = if strict { "> 0" } else { ">= 0" };
+            return bad(opt, format!("must be a finite number {need} (got {v})"));
+        }
+    }
+    if a.positions.len() < 6 {
+        return bad(
+            "--positions",
+            format!("needs at least 6 positions (got {})", a.positions.len()),
+        );
+    }
+    match (a.target_mg, a.hours) {
+        (Some(v), None) | (None, Some(v)) if !(v.is_finite() && v > 0.0) => bad(
+            if a.target_mg.is_some() {
+                "--target-mg"
+            } else {
+                "--hours"
+            },
+            format!("must be a finite number > 0 (got {v})"),
+        ),
+        _ => Ok(()),
+    }
+}
+
+/// The unit type's (time constant s, noise per sample) from a `diagnose --json` output:
+/// the thermal_lag finding's slowest axis, the noisiest axis; an error names the file
+/// and what it lacks.
+pub(super) fn from_diagnosis(
+    path: &std::path::Path,
+    text: &str,
+) -> Result<(Option<f64>, Option<f64>)> {
+    let bad = |why: &str| HostError::msg(format!("{}: {why}", path.display()));
+    let j: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| bad(&format!("not a diagnosis JSON ({e})")))?;
+    let noise = j["noise_sigma_per_sample"].as_array().and_then(|v| {
+        let v: Vec<f64> = v.iter().filter_map(serde_json::Value::as_f64).collect();
+        (v.len() == 3 && v.iter().all(|x| x.is_finite() && *x > 0.0))
+            .then(|| v.iter().copied().fold(0.0, f64::max))
+    });
+    let tau = j["findings"].as_array().and_then(|f| {
+        f.iter()
+            .find(|x| x["effect"] == "thermal_lag")
+            .and_then(|x| x["parameters"].as_object())
+            .map(|p| {
+                p.iter()
+                    .filter(|(k, _)| k.starts_with("tau_") && k.ends_with("_s"))
+                    .filter_map(|(_, v)| v.as_f64())
+                    .filter(|t| t.is_finite() && *t >= 0.0)
+                    .fold(f64::NAN, f64::max)
+            })
+            .filter(|t| t.is_finite())
+    });
+    Ok((tau, noise))
+}
+
 pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
     use crate::plan::{
         candidates, choose, program, table, verification, verification_temps, Limits, Target,
     };
     check_writable(&a.out, a.force)?;
+    if let Some(r) = &a.report {
+        check_writable(r, a.force)?;
+    }
     let target = match (a.target_mg, a.hours) {
         (Some(mg), None) => Target::AccuracyMg(mg),
         (None, Some(h)) => Target::Hours(h),
         _ => return Err(HostError::msg("give a target: --target-mg MG or --hours H")),
     };
+    check_plan_options(&a)?;
+    let (mut tau_s, mut noise) = (a.tau_s, a.noise);
+    if let Some(d) = &a.from_diagnosis {
+        let text = std::fs::read_to_string(d)
+            .map_err(|e| HostError::msg(format!("{}: {e}", d.display())))?;
+        let (t, n) = from_diagnosis(d, &text)?;
+        let missing = |what: &str, opt: &str| {
+            HostError::msg(format!(
+                "{}: {what} missing (give {opt}{})",
+                d.display(),
+                if opt == "--tau-s" {
+                    ", --tau-s 0 for a unit found without lag"
+                } else {
+                    ""
+                }
+            ))
+        };
+        if tau_s.is_none() {
+            tau_s = Some(t.ok_or_else(|| {
+                missing(
+                    "the thermal_lag finding's time constant (tau_*_s)",
+                    "--tau-s",
+                )
+            })?);
+        }
+        if noise.is_none() {
+            noise =
+                Some(n.ok_or_else(|| {
+                    missing("noise_sigma_per_sample (three values > 0)", "--noise")
+                })?);
+        }
+    }
     let l = Limits {
         lo_c: a.range_c.first().copied().unwrap_or(f64::NAN),
         hi_c: a.range_c.get(1).copied().unwrap_or(f64::NAN),
@@ -188,8 +298,8 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
         dwell_s: a.dwell_s,
         move_s: a.move_s,
         rate_hz: a.rate_hz,
-        noise_v: a.noise,
-        tau_s: a.tau_s,
+        noise_v: noise.unwrap_or(2e-5),
+        tau_s: tau_s.unwrap_or(0.0),
     };
     let c = candidates(&l, a.seed)?;
     let chosen = choose(&c, target);
@@ -203,7 +313,14 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
     let last = steps.pop().map(|s| s.setpoint_c).unwrap_or(l.lo_c);
     steps.extend(verification(&l, end, last));
     let csv = crate::simulate::program::to_csv(&steps);
+    let page = match &a.report {
+        Some(_) => Some(crate::report::plan::html(&c, i, target)?),
+        None => None,
+    };
     write_atomic(&a.out, csv.as_bytes(), a.force)?;
+    if let (Some(r), Some(p)) = (&a.report, &page) {
+        write_atomic(r, p.as_bytes(), a.force)?;
+    }
     if a.json {
         return w(
             out,

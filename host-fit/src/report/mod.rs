@@ -4,6 +4,7 @@ pub mod axis;
 pub mod demo;
 pub mod diagnosis;
 pub mod page;
+pub mod plan;
 pub mod plot;
 pub mod svg;
 pub mod trace;

@@ -143,20 +143,7 @@ pub fn program(kind: Kind, l: &Limits) -> (Vec<Step>, f64) {
                 (2.0 * ramp + 2.0 * hold, l.lo_c),
             ];
             let end = knots[4].0;
-            let set_at = |t: f64| {
-                knots
-                    .windows(2)
-                    .find(|w| t <= w[1].0)
-                    .map(|w| {
-                        let span = w[1].0 - w[0].0;
-                        if span > 0.0 {
-                            w[0].1 + (w[1].1 - w[0].1) * (t - w[0].0) / span
-                        } else {
-                            w[1].1
-                        }
-                    })
-                    .unwrap_or(l.lo_c)
-            };
+            let set_at = |t: f64| crate::simulate::program::set_point_at(&knots, t);
             'turning: loop {
                 for p in &l.positions {
                     if t + l.move_s + l.dwell_s > end {

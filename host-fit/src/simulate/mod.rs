@@ -157,20 +157,7 @@ fn sweep_plan(
             "schedule.sweep needs legs of some duration, positions, dwell_s > 0 and move_s >= 0",
         ));
     }
-    let set_at = |t: f64| {
-        knots
-            .windows(2)
-            .find(|w| t <= w[1].0)
-            .map(|w| {
-                let span = w[1].0 - w[0].0;
-                if span > 0.0 {
-                    w[0].1 + (w[1].1 - w[0].1) * (t - w[0].0) / span
-                } else {
-                    w[1].1
-                }
-            })
-            .unwrap_or(knots[knots.len() - 1].1)
-    };
+    let set_at = |t: f64| program::set_point_at(&knots, t);
     let names: Vec<usize> = sch
         .positions
         .iter()

@@ -117,3 +117,40 @@ pub fn to_csv(steps: &[Step]) -> String {
     }
     s
 }
+
+/// The set point at `t` on a profile of `(time_s, setpoint_c)` knots in time order: linear
+/// between knots, a step where two share a time, the last knot's value after the end
+/// (0 for no knots). The sweep of the twin and `plan`'s sweeps share it, so a planned
+/// sweep is the one the twin runs.
+pub fn set_point_at(knots: &[(f64, f64)], t: f64) -> f64 {
+    knots
+        .windows(2)
+        .find(|w| t <= w[1].0)
+        .map(|w| {
+            let span = w[1].0 - w[0].0;
+            if span > 0.0 {
+                w[0].1 + (w[1].1 - w[0].1) * (t - w[0].0) / span
+            } else {
+                w[1].1
+            }
+        })
+        .unwrap_or_else(|| knots.last().map_or(0.0, |k| k.1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::set_point_at;
+
+    #[test]
+    fn the_set_point_runs_linearly_steps_at_shared_times_and_holds_after_the_end() {
+        let knots = [(0.0, -40.0), (600.0, 20.0), (900.0, 20.0), (900.0, 70.0)];
+        assert_eq!(set_point_at(&knots, 0.0), -40.0);
+        assert!((set_point_at(&knots, 150.0) - -25.0).abs() < 1e-12);
+        assert_eq!(set_point_at(&knots, 700.0), 20.0);
+        // two knots at one time: the later value from that time on
+        assert_eq!(set_point_at(&knots, 900.0), 20.0);
+        assert_eq!(set_point_at(&knots, 901.0), 70.0);
+        assert_eq!(set_point_at(&knots, 1e6), 70.0);
+        assert_eq!(set_point_at(&[], 5.0), 0.0);
+    }
+}

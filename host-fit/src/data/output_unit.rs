@@ -2,6 +2,7 @@
 //! The model is linear, so the unit only labels the numbers, except `counts`, whose
 //! integers are a digital sensor's own steps (the quantisation the diagnosis's floor
 //! must count).
+use firmware_core::blob::OutputUnit as Firmware;
 use serde::{Deserialize, Serialize};
 
 /// The unit of a recording's output columns (`# output_unit=`).
@@ -27,28 +28,44 @@ pub enum OutputUnit {
 
 impl OutputUnit {
     /// The unit a `output_unit` value names (never an error: an unknown label is kept).
+    /// The spellings are firmware-core's ([`Firmware::from_label`]), the one table both
+    /// the reader and the blob use.
     pub fn parse(s: &str) -> OutputUnit {
-        match s.trim() {
-            "V" => OutputUnit::Volt,
-            "mV" => OutputUnit::Millivolt,
-            "m/s2" | "m/s^2" => OutputUnit::MetresPerS2,
-            "g" => OutputUnit::G,
-            "mg" => OutputUnit::MilliG,
-            "counts" => OutputUnit::Counts,
-            other => OutputUnit::Other(other.to_string()),
+        let s = s.trim();
+        // firmware-core's enum is non_exhaustive: find the known unit that records as
+        // the label's code, so no arm hides a unit added there
+        let code = Firmware::from_label(s);
+        [
+            OutputUnit::Volt,
+            OutputUnit::Millivolt,
+            OutputUnit::MetresPerS2,
+            OutputUnit::G,
+            OutputUnit::MilliG,
+            OutputUnit::Counts,
+        ]
+        .into_iter()
+        .find(|u| u.in_blob() == code)
+        .unwrap_or_else(|| OutputUnit::Other(s.to_string()))
+    }
+
+    /// The unit as the blob records it (byte 15).
+    pub fn in_blob(&self) -> Firmware {
+        match self {
+            OutputUnit::Volt => Firmware::Volt,
+            OutputUnit::Millivolt => Firmware::MilliVolt,
+            OutputUnit::MetresPerS2 => Firmware::MetrePerSecond2,
+            OutputUnit::G => Firmware::G,
+            OutputUnit::MilliG => Firmware::MilliG,
+            OutputUnit::Counts => Firmware::Counts,
+            OutputUnit::Other(_) => Firmware::Other,
         }
     }
 
     /// The label as the format writes it.
     pub fn as_str(&self) -> &str {
         match self {
-            OutputUnit::Volt => "V",
-            OutputUnit::Millivolt => "mV",
-            OutputUnit::MetresPerS2 => "m/s2",
-            OutputUnit::G => "g",
-            OutputUnit::MilliG => "mg",
-            OutputUnit::Counts => "counts",
             OutputUnit::Other(s) => s,
+            known => known.in_blob().label(),
         }
     }
 

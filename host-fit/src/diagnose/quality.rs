@@ -4,7 +4,7 @@
 use crate::data::recording::Recording;
 use crate::diagnose::floor::Floor;
 use crate::diagnose::observations::DObs;
-use crate::diagnose::regressors::{median_step, Events};
+use crate::diagnose::regressors::Events;
 use crate::diagnose::rules::Rules;
 use firmware_core::model::AXES;
 use serde::Serialize;
@@ -115,7 +115,7 @@ pub fn notes(inputs: &Inputs) -> Vec<QualityNote> {
             text: format!(
                 "{} gaps in time (longest {longest:.0} s, the step is {:.3} s); a warm-up may restart after them",
                 events.gaps.len(),
-                median_step(rec)
+                rec.median_step_s()
             ),
         });
     }
@@ -175,7 +175,7 @@ pub fn notes(inputs: &Inputs) -> Vec<QualityNote> {
 
 /// The sensor against the chamber at the end of every steady soak.
 fn chamber(rec: &Recording, rules: &Rules) -> Option<QualityNote> {
-    let step = median_step(rec);
+    let step = rec.median_step_s();
     let hold = (rules.chamber_hold_s / step).ceil() as usize;
     let steady = rules.chamber_steady_c;
     let mut offsets = Vec::new();

@@ -10,18 +10,6 @@ use firmware_core::inflight::{
 };
 use firmware_core::temperature::Physics;
 
-/// Median time step, s.
-pub fn median_step(rec: &Recording) -> f64 {
-    let mut d: Vec<f64> = rec
-        .rows
-        .windows(2)
-        .map(|w| w[1].t_s - w[0].t_s)
-        .filter(|d| *d > 0.0)
-        .collect();
-    d.sort_by(f64::total_cmp);
-    d.get(d.len() / 2).copied().unwrap_or(1.0)
-}
-
 /// Where a warm-up clock may restart: after gaps in the recording, and after handling.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Events {
@@ -35,7 +23,7 @@ pub struct Events {
 /// least [`Rules::gap_min_s`]: the unit may have been powered off) and handling runs (a
 /// `-` run longer than [`Rules::handling_s`]: the unit re-mounted, turned by hand).
 pub fn events(rec: &Recording, rules: &Rules) -> Events {
-    let step = median_step(rec);
+    let step = rec.median_step_s();
     let mut e = Events::default();
     let rows = &rec.rows;
     for k in 1..rows.len() {

@@ -44,6 +44,7 @@ pub mod store;
 
 pub mod batch;
 pub mod demo;
+pub mod demo_plan;
 pub mod report;
 
 pub mod cli;

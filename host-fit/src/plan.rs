@@ -5,7 +5,7 @@
 //! verification accuracy predicted from the fit's covariance at the verification block's
 //! temperatures and positions; the chosen program (shortest that meets an accuracy, or
 //! most accurate within the hours) is written with an equilibrium verification block at
-//! three temperatures.
+//! three temperatures (T0 among them when the range holds it).
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::diagnose::design::static_at;
@@ -86,10 +86,23 @@ pub struct Candidate {
     pub lag_s: Option<f64>,
 }
 
-/// The verification block's temperatures: 15%, 50% and 85% of the range.
+/// The reference temperature the fit and the acceptance's tighter band use, C (a
+/// recording's default `t0_c`).
+pub const T0_C: f64 = 20.0;
+
+/// The verification block's temperatures: 15% and 85% of the range, and between them
+/// [`T0_C`] when the range holds it inside those two (else 50%): the acceptance judges
+/// the band around T0 apart, so the block must have a dwell there.
 pub fn verification_temps(l: &Limits) -> [f64; 3] {
     let span = l.hi_c - l.lo_c;
-    [0.15, 0.5, 0.85].map(|f| ((l.lo_c + f * span) * 10.0).round() / 10.0)
+    let at = |f: f64| ((l.lo_c + f * span) * 10.0).round() / 10.0;
+    let (lo, hi) = (at(0.15), at(0.85));
+    let mid = if lo < T0_C && T0_C < hi {
+        T0_C
+    } else {
+        at(0.5)
+    };
+    [lo, mid, hi]
 }
 
 fn push(steps: &mut Vec<Step>, t: &mut f64, sp: f64, pos: &str, d: f64) {

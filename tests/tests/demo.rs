@@ -101,6 +101,8 @@ fn demo_outputs_agree_with_each_other_and_the_report_holds_its_data() {
         }
     }
 
+    check_plan(&dir, &summary);
+
     // a second run does not overwrite without --force
     let (code, _, err) = cli(&["demo", "--out", d]);
     assert_eq!(code, 1);
@@ -181,6 +183,65 @@ fn a_unit_outside_every_fitted_family_is_not_claimed_within_acceptance() {
 /// The demo report's plots draw their data (`reports::check_plots`), and the numbers
 /// they show are summary.json's: the worst |dg| per temperature of every model, method
 /// and the T0 constants, and the maxima of the per-position plots.
+/// The plan beside the paper test: `plan` itself, given the demo unit's chamber and the
+/// paper test's predicted accuracy, writes the demo's program; `verify` of each blob on
+/// the written verification block gives summary.json's figures and verdicts; the plan
+/// is shorter than the paper test and predicted at least as accurate.
+fn check_plan(dir: &std::path::Path, summary: &Value) {
+    let p = &summary["plan"];
+    let target = p["paper_predicted_mg"].as_f64().unwrap();
+    assert_eq!(p["target_from"], "paper_prediction", "{p}");
+    let chosen = &p["chosen"];
+    assert!(chosen["predicted_mg"].as_f64().unwrap() <= target, "{p}");
+    let again = dir.join("again.csv");
+    let (code, _, err) = cli(&[
+        "plan",
+        "--range-c=-40,70",
+        "--dwell-s",
+        "60",
+        "--target-mg",
+        &format!("{target}"),
+        "--seed",
+        "1",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        std::fs::read_to_string(&again).unwrap(),
+        std::fs::read_to_string(dir.join("plan.csv")).unwrap(),
+        "the demo's program is not the one `plan` writes"
+    );
+    let ver = dir.join("plan-verification.csv");
+    let judged = p["judged"].as_array().unwrap();
+    assert_eq!(judged.len(), 2);
+    assert!(judged[1]["hours"].as_f64().unwrap() < judged[0]["hours"].as_f64().unwrap());
+    for (file, j) in ["chosen.blob", "plan.blob"].iter().zip(judged) {
+        let (code, out, err) = cli(&[
+            "verify",
+            ver.to_str().unwrap(),
+            "--blob",
+            dir.join(file).to_str().unwrap(),
+            "--json",
+        ]);
+        let v: Value = serde_json::from_str(&out).unwrap_or_else(|_| panic!("{err}"));
+        let verdict = v["acceptance"].as_str().unwrap();
+        assert_eq!(code, if verdict == "pass" { 0 } else { 3 }, "{err}");
+        assert_eq!(j["acceptance"]["acceptance"], verdict, "{file}");
+        let worst = v["max_by_temperature"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| t["max_abs_dg_mg"].as_f64().unwrap())
+            .fold(0.0, f64::max);
+        let want = j["worst_mg"].as_f64().unwrap();
+        assert!(
+            (worst - want).abs() < 1e-9,
+            "{file}: verify says {worst} mg, summary.json {want} mg"
+        );
+    }
+}
+
 fn check_report(html: &str, rows: &[(String, String, f64, f64)]) {
     let figures = reports::check_plots(html);
     assert!(figures.len() >= 2 + 5 + 24 + 2, "{} figures", figures.len());

@@ -350,7 +350,7 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
 }
 
 pub(super) fn demo(a: DemoArgs, out: &mut dyn Write) -> Result<()> {
-    let oc = crate::demo::run(&a.out, a.seed, a.force)?;
+    let (oc, plan) = crate::demo::run(&a.out, a.seed, a.force)?;
     w(
         out,
         format!(
@@ -360,6 +360,15 @@ pub(super) fn demo(a: DemoArgs, out: &mut dyn Write) -> Result<()> {
                 &crate::analysis::verification_names(&oc.recording)
             ),
             crate::analysis::verdicts(&oc)
+        ),
+    )?;
+    w(out, crate::demo_plan::text(&plan))?;
+    w(
+        out,
+        format!(
+            "plan:    {} (its program), {} (its blob)",
+            a.out.join(crate::demo::PLAN_PROGRAM).display(),
+            a.out.join(crate::demo::PLAN_BLOB).display()
         ),
     )?;
     w(

@@ -293,17 +293,18 @@ pub fn predict(
 }
 
 /// The candidates: stops and soaks of 10, 25 and 40 minutes; sweeps at the fastest
-/// ramp holding at each end one or two of the unit's and the case's time constants, and
-/// at half the ramp with one.
+/// ramp holding at each end half, one or two of the unit's and the case's time constants
+/// (half: the dynamic fit carries the lag, so the element need not settle at the ends;
+/// the shortest sweep a slowly lagging unit can have), and at half the ramp with one.
 pub fn kinds(l: &Limits) -> Vec<Kind> {
     let settle_min = ((l.tau_s + 600.0) / 60.0).round();
     let mut v: Vec<Kind> = [10.0, 25.0, 40.0]
         .map(|soak_min| Kind::StopSoak { soak_min })
         .to_vec();
-    for (f, k) in [(1.0, 1.0), (1.0, 2.0), (0.5, 1.0)] {
+    for (f, k) in [(1.0, 0.5), (1.0, 1.0), (1.0, 2.0), (0.5, 1.0)] {
         v.push(Kind::Sweep {
             c_per_min: l.max_ramp_c_per_min * f,
-            hold_min: settle_min * k,
+            hold_min: (settle_min * k).round(),
         });
     }
     v

@@ -7,7 +7,7 @@
 use crate::repo;
 
 /// Every figure of the README and the test file that checks it (`tests/tests/FILE`).
-pub const FIGURES: [(&str, &str); 12] = [
+pub const FIGURES: [(&str, &str); 15] = [
     ("demo", "readme.rs"),
     ("coverage", "production.rs"),
     ("model-choice", "production.rs"),
@@ -20,6 +20,9 @@ pub const FIGURES: [(&str, &str); 12] = [
     ("cats-tag", "readme.rs"),
     ("golden", "golden_paper.rs"),
     ("sweep", "sweep.rs"),
+    ("plan-candidates", "plan.rs"),
+    ("demo-plan", "readme.rs"),
+    ("demo-plan-program", "readme.rs"),
 ];
 
 /// The fenced block right after the marker `<!-- figure: id -->`.

@@ -1,6 +1,7 @@
 //! `host-fit plan` (issue 19): every candidate plan's predicted worst verification |dg|
 //! (from the fit's covariance) against the same plan run on the twin, fitted by `fit`
-//! and verified through firmware-core on the equilibrium verification block.
+//! and verified through firmware-core on the equilibrium verification block; the
+//! table is the README's figure `plan-candidates` (accuracy against chamber hours).
 use host_fit::plan::{candidates, program, run, twin, verification, Limits};
 use tests::cli_json;
 use tests::time_true::{s, verify};
@@ -28,6 +29,9 @@ fn predicted_accuracy_covers_the_simulated_one_over_the_candidate_plans() {
     let dir = tempfile::tempdir().unwrap();
     let c = candidates(&l, 41).unwrap();
     let mut failed = Vec::new();
+    let mut text = String::from(
+        "plan (candidate)                   chamber h  predicted mg  simulated mg\n",
+    );
     for (i, x) in c.iter().enumerate() {
         // another unit of the same type than the one the prediction was made on
         let cfg = twin(&l, 100 + i as u64);
@@ -54,13 +58,13 @@ fn predicted_accuracy_covers_the_simulated_one_over_the_candidate_plans() {
             "--json",
         ]);
         let (sim, _) = verify(&vrec, None, &b);
-        println!(
-            "{:<34} {:>5.2} h  predicted {:.4} mg  simulated {:.4} mg",
+        text.push_str(&format!(
+            "{:<34} {:>9.2}  {:>12.4}  {:>12.4}\n",
             x.kind.describe(),
             x.hours,
             x.predicted_mg,
             sim
-        );
+        ));
         if sim > x.predicted_mg || x.predicted_mg > MAX_PESSIMISM * sim {
             failed.push(format!(
                 "{}: predicted {:.4} mg, simulated {sim:.4} mg",
@@ -69,5 +73,7 @@ fn predicted_accuracy_covers_the_simulated_one_over_the_candidate_plans() {
             ));
         }
     }
+    println!("{text}");
+    tests::readme::same("plan-candidates", &text);
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }

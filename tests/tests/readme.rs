@@ -4,9 +4,14 @@
 use tests::readme::{block, rewrite, same, FIGURES};
 use tests::{figures, repo};
 
+/// The demo's run: its comparison of the paper's models, the plan beside the paper test,
+/// and the head of the plan's program.
 #[test]
 fn demo_table() {
-    same("demo", &figures::demo_table());
+    let d = figures::demo_run();
+    same("demo", &d.table);
+    same("demo-plan", &d.plan);
+    same("demo-plan-program", &d.program_head);
 }
 
 #[test]

@@ -6,7 +6,7 @@ mod paper;
 mod production;
 
 pub use diagnosis::{blind_long, cats_tag, physics_blob, real_recordings};
-pub use paper::{demo_table, golden_table3};
+pub use paper::{demo_run, demo_table, golden_table3, DemoRun};
 pub use production::{
     coverage, fit_verify, ggir_wrist, imucal, model_choice, ChoiceRow, FitVerified,
 };

@@ -4,14 +4,38 @@ use crate::{cli, cli_json, repo, s};
 
 /// `host-fit demo --seed 1`: the table it prints.
 pub fn demo_table() -> String {
+    demo_run().table
+}
+
+/// What the README quotes of one `host-fit demo --seed 1` run.
+pub struct DemoRun {
+    /// The first paragraph: the models' table, the data's choice, the verdicts.
+    pub table: String,
+    /// The second: the candidate plans, the choice, the paper test beside the plan.
+    pub plan: String,
+    /// The first lines of the plan's program (`plan.csv`) and its row count.
+    pub program_head: String,
+}
+
+/// `host-fit demo --seed 1` into a temporary folder: its printed paragraphs and the
+/// head of the program it writes.
+pub fn demo_run() -> DemoRun {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("demo");
     let (code, out, err) = cli(&["demo", "--out", s(&dir), "--seed", "1"]);
     assert_eq!(code, 0, "{err}");
-    out.lines()
-        .take_while(|l| !l.is_empty())
-        .collect::<Vec<_>>()
-        .join("\n")
+    let mut paras = out.split("\n\n");
+    let table = paras.next().unwrap_or("").trim_end().to_string();
+    let plan = paras.next().unwrap_or("").trim_end().to_string();
+    let program = std::fs::read_to_string(dir.join("plan.csv")).unwrap();
+    let n = program.lines().count();
+    let mut program_head: Vec<String> = program.lines().take(13).map(String::from).collect();
+    program_head.push(format!("... ({n} lines in all)"));
+    DemoRun {
+        table,
+        plan,
+        program_head: program_head.join("\n"),
+    }
 }
 
 /// `temp-fit` on the paper's Tables 1-2 (pwl, relative) against its Table 3: the

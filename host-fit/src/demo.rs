@@ -140,7 +140,13 @@ fn records(
         r.with_verdict(&m.acceptance.acceptance, &m.acceptance.reason)?;
         out.push(r);
     }
-    out.push(plan_record(oc, plan, &rec_path.with_file_name(PLAN_RECORDING), seed, &started)?);
+    out.push(plan_record(
+        oc,
+        plan,
+        &rec_path.with_file_name(PLAN_RECORDING),
+        seed,
+        &started,
+    )?);
     // the data-chosen model's blob is the unit's calibration: recorded last, it is the
     // one `history` marks as the latest
     out.sort_by_key(|r| r.options["blob"] == "chosen.blob");

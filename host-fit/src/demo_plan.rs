@@ -11,8 +11,8 @@ use crate::diagnose::dynamic::{fit_dynamic, Shape};
 use crate::error::{HostError, Result};
 use crate::fit::pipeline::{fit_chosen, ModelRequest};
 use crate::plan::{
-    candidates, choose, predict, program, run, verification, verification_temps, Candidate,
-    Limits, Target,
+    candidates, choose, predict, program, run, verification, verification_temps, Candidate, Limits,
+    Target,
 };
 use crate::simulate::program::{to_csv, Step};
 use crate::simulate::SimConfig;
@@ -164,24 +164,23 @@ pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> 
     let (paper_predicted_mg, _) = predict(paper, &temps, &l.positions, l.noise_v, dwell_samples)?;
     let paper_hours = paper.rows.last().map_or(0.0, |r| r.t_s) / 3600.0;
     let c = candidates(&l, cfg.seed)?;
-    let (target_from, target, chosen) =
-        match choose(&c, Target::AccuracyMg(paper_predicted_mg)) {
-            Some(i) => (
-                TargetFrom::PaperPrediction,
-                Target::AccuracyMg(paper_predicted_mg),
-                i,
-            ),
-            None => {
-                let t = Target::Hours(paper_hours);
-                let i = choose(&c, t).ok_or_else(|| {
-                    HostError::msg(format!(
-                        "no candidate plan within the paper test's {paper_hours:.2} h:\n{}",
-                        crate::plan::table(&c, None)
-                    ))
-                })?;
-                (TargetFrom::PaperHours, t, i)
-            }
-        };
+    let (target_from, target, chosen) = match choose(&c, Target::AccuracyMg(paper_predicted_mg)) {
+        Some(i) => (
+            TargetFrom::PaperPrediction,
+            Target::AccuracyMg(paper_predicted_mg),
+            i,
+        ),
+        None => {
+            let t = Target::Hours(paper_hours);
+            let i = choose(&c, t).ok_or_else(|| {
+                HostError::msg(format!(
+                    "no candidate plan within the paper test's {paper_hours:.2} h:\n{}",
+                    crate::plan::table(&c, None)
+                ))
+            })?;
+            (TargetFrom::PaperHours, t, i)
+        }
+    };
     let (mut steps, end) = program(c[chosen].kind, &l);
     let cal_steps: Vec<Step> = steps.clone();
     let last = steps.pop().map_or(l.lo_c, |s| s.setpoint_c);

@@ -29,9 +29,8 @@ fn predicted_accuracy_covers_the_simulated_one_over_the_candidate_plans() {
     let dir = tempfile::tempdir().unwrap();
     let c = candidates(&l, 41).unwrap();
     let mut failed = Vec::new();
-    let mut text = String::from(
-        "plan (candidate)                   chamber h  predicted mg  simulated mg\n",
-    );
+    let mut text =
+        String::from("plan (candidate)                   chamber h  predicted mg  simulated mg\n");
     for (i, x) in c.iter().enumerate() {
         // another unit of the same type than the one the prediction was made on
         let cfg = twin(&l, 100 + i as u64);

@@ -52,7 +52,11 @@ fn a_plan_of_two_hours_chosen_by_plan_meets_the_six_hour_test_on_the_same_unit()
             text.push_str(&format!(
                 "lag {:>2.0} min       no plan within {MAX_HOURS} h{:>47}\n",
                 lag_s / 60.0,
-                format!("{:.4}{}", six.worst_mg, if six.pass { "" } else { " (fail)" }),
+                format!(
+                    "{:.4}{}",
+                    six.worst_mg,
+                    if six.pass { "" } else { " (fail)" }
+                ),
             ));
             failed.push(format!("lag {lag_s} s: plan chose nothing:\n{err}"));
             continue;

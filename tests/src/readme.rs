@@ -7,7 +7,7 @@
 use crate::repo;
 
 /// Every figure of the README and the test file that checks it (`tests/tests/FILE`).
-pub const FIGURES: [(&str, &str); 15] = [
+pub const FIGURES: [(&str, &str); 16] = [
     ("demo", "readme.rs"),
     ("coverage", "production.rs"),
     ("model-choice", "production.rs"),
@@ -21,6 +21,7 @@ pub const FIGURES: [(&str, &str); 15] = [
     ("golden", "golden_paper.rs"),
     ("sweep", "sweep.rs"),
     ("plan-candidates", "plan.rs"),
+    ("plan-done", "plan_done.rs"),
     ("demo-plan", "readme.rs"),
     ("demo-plan-program", "readme.rs"),
 ];

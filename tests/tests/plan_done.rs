@@ -119,5 +119,6 @@ fn a_plan_of_two_hours_chosen_by_plan_meets_the_six_hour_test_on_the_same_unit()
         }
     }
     println!("{text}");
+    tests::readme::same("plan-done", &text);
     assert!(failed.is_empty(), "{}\n{text}", failed.join("\n"));
 }

@@ -11,9 +11,10 @@ use crate::blob::build_blob;
 use crate::data::positions::{Positions, Role};
 use crate::data::recording::Recording;
 use crate::diagnose::contract::Contract;
+use crate::diagnose::dynamic::{auto, Routed};
 use crate::diagnose::EffectId;
 use crate::error::{HostError, Result};
-use crate::fit::pipeline::{fit_chosen, ModelKind, ModelRequest};
+use crate::fit::pipeline::{ModelKind, ModelRequest};
 use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
 use crate::fit::temperature::span;
@@ -145,6 +146,9 @@ struct UnitJson<'a> {
     #[serde(flatten)]
     acceptance: &'a Acceptance,
     warnings: usize,
+    /// Why the route `fit` would first try was not kept (a settling seen, no lag kept).
+    #[serde(skip_serializing_if = "<[String]>::is_empty")]
+    route_notes: &'a [String],
     /// Positions missing at a stop, each named with the stop (also counted in
     /// `warnings`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -172,15 +176,14 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     if !rec.unit.is_empty() {
         r.unit = rec.unit.clone();
     }
-    let oc = fit_chosen(
-        &rec,
-        &ModelRequest {
-            kind: o.model,
-            order: None,
-            breakpoints: None,
-        },
-    )?;
-    r.model = oc.fit.basis.describe();
+    let req = ModelRequest {
+        kind: o.model,
+        order: None,
+        breakpoints: None,
+    };
+    let mut notes = Vec::new();
+    let routed = auto(&rec, &req, &mut notes)?;
+    let mut selection = None;
     // the blob's model, and its own uncertainty for the lot's statistics
     let (cal, diagnosis) = if o.diagnose {
         // the diagnosis needs every pose's vector: estimate those of unknown orientation
@@ -192,10 +195,22 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         r.at_t0_sigma = d.coefficient_sigma(rec.t0_c);
         (d.calibration(rec.t0_c)?, Some(d.contract()))
     } else {
-        r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
-        let mut cal = oc.fit.calibration(0.0, false);
-        crate::blob::Cache::for_fit(&rec, &oc, &mut cal, None);
-        (cal, None)
+        match routed {
+            Routed::Static(oc) => {
+                r.model = oc.fit.basis.describe();
+                selection = oc.selection.clone();
+                r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
+                let mut cal = oc.fit.calibration(0.0, false);
+                crate::blob::Cache::for_fit(&rec, &oc, &mut cal, None);
+                (cal, None)
+            }
+            Routed::Dynamic { fit, .. } => {
+                r.model = format!("{} (dynamic route)", fit.describe());
+                r.at_t0_sigma =
+                    crate::diagnose::metrics::coefficient_sigma(&fit.data, &fit.fit, rec.t0_c);
+                (fit.calibration()?, None)
+            }
+        }
     };
     r.at_t0 = Some(cal.at_t0());
     let (blob, mut bytes, dep) = build_blob(&r.unit, &rec.output_unit, &cal)?;
@@ -238,11 +253,8 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         unit: &r.unit,
         file: path.display().to_string(),
         model: &r.model,
-        chosen_by: if o.diagnose {
-            None
-        } else {
-            oc.selection.as_ref()
-        },
+        chosen_by: selection.as_ref(),
+        route_notes: &notes,
         t_min_c: cal.t_min_c,
         t_max_c: cal.t_max_c,
         f32_departure_g: dep,

@@ -74,6 +74,9 @@ impl From<ModelArg> for ModelKind {
 /// An identification route.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RouteArg {
+    /// Chosen by the data: the static route, or the dynamic one for a sweep and for a
+    /// stop-and-soak test whose dwells still settle (when the held-out blocks keep a lag).
+    Auto,
     /// The dwells in thermal equilibrium.
     Static,
     /// Every dwell, ramps included.
@@ -88,7 +91,8 @@ pub enum RouteArg {
 impl From<RouteArg> for Route {
     fn from(r: RouteArg) -> Self {
         match r {
-            RouteArg::Static => Route::Static,
+            // auto starts on the static route (see `fit`)
+            RouteArg::Auto | RouteArg::Static => Route::Static,
             RouteArg::Joint => Route::Joint,
             RouteArg::PerStop => Route::PerStop,
             RouteArg::Dynamic => Route::Dynamic,
@@ -248,12 +252,15 @@ pub struct FitArgs {
     /// The temperature model.
     #[command(flatten)]
     pub model: ModelArgs,
-    /// Identification route: static (the dwells in thermal equilibrium), joint (every
-    /// dwell, ramps included), per-stop (the paper's), dynamic (every window, jointly
-    /// with the thermal lag and rate the held-out blocks support). A recording whose
-    /// dwells mostly move in temperature (a sweep) takes the dynamic route unless
-    /// `--model` or another route is given.
-    #[arg(long, value_enum, default_value = "static")]
+    /// Identification route: auto (chosen by the data, below), static (the dwells in
+    /// thermal equilibrium), joint (every dwell, ramps included), per-stop (the paper's),
+    /// dynamic (every window, jointly with the thermal lag and rate the held-out blocks
+    /// support). Auto: a recording whose dwells mostly move in temperature (a sweep)
+    /// takes the dynamic route; a stop-and-soak test whose dwells still carry the
+    /// element's settling (a lag explaining a share of the static fit's residual) is
+    /// fitted on the dynamic route too and kept there when the held-out blocks keep the
+    /// lag; otherwise the static route. `--model` keeps the static route.
+    #[arg(long, value_enum, default_value = "auto")]
     pub route: RouteArg,
     /// The serial written into the blob (default: the recording's `unit`).
     #[arg(long)]

@@ -1,9 +1,9 @@
 //! `temp-fit`, `identify` and `fit`: from data to coefficients and blobs.
-use super::args::{FitArgs, IdentifyArgs, TempFitArgs};
+use super::args::{FitArgs, IdentifyArgs, RouteArg, TempFitArgs};
 use super::common::{load_to_fit, oriented, serial, w};
 use crate::blob::{build_blob, Cache, F32_BOUND_G};
 use crate::data::table::{read_table, to_csv, TableRow};
-use crate::diagnose::dynamic::{fit_dynamic, Candidate, Shape};
+use crate::diagnose::dynamic::{auto, fit_dynamic, Candidate, DynamicFit, Routed, Shape};
 use crate::error::{HostError, Result};
 use crate::fit::describe::ModelDescription;
 use crate::fit::equilibrium::Excluded;
@@ -15,6 +15,7 @@ use crate::fit::pipeline::{
     Route,
 };
 use crate::fit::predict::{directions, predict, Prediction, Request};
+use crate::fit::route::Settling;
 use crate::fit::select::Selection;
 use crate::fit::temperature::fit_table;
 use crate::output::{check_writable, json, write_atomic};
@@ -335,26 +336,38 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     let req = ModelRequest::from(&a.model);
     req.check()?;
     let rec = load_to_fit(&a.input, err)?;
-    let shape = Shape::of(&rec);
     let route = Route::from(a.route);
-    if route == Route::Dynamic || (route == Route::Static && req.kind.is_none() && shape.is_sweep())
-    {
-        if req.kind.is_some() {
-            return Err(HostError::msg(
-                "the dynamic route chooses its model on held-out blocks of time; --model does not apply to it",
-            ));
-        }
-        return fit_dynamic_cli(&a, &rec, out, err);
+    if route == Route::Dynamic && req.kind.is_some() {
+        return Err(HostError::msg(
+            "the dynamic route chooses its model on held-out blocks of time; --model does not apply to it",
+        ));
     }
-    let oc = match (req.kind, route) {
-        (_, Route::Static) => fit_chosen(&rec, &req)?,
-        (None, route) => {
+    if route == Route::Dynamic {
+        let d = fit_dynamic(&rec)?;
+        return fit_dynamic_cli(&a, &rec, d, None, out, err);
+    }
+    let oc = match (req.kind, a.route) {
+        (_, RouteArg::Auto) => {
+            let mut notes = Vec::new();
+            let routed = auto(&rec, &req, &mut notes)?;
+            for n in notes {
+                w(err, format!("note: {n}"))?;
+            }
+            match routed {
+                Routed::Dynamic { fit, settling } => {
+                    return fit_dynamic_cli(&a, &rec, *fit, settling, out, err)
+                }
+                Routed::Static(oc) => *oc,
+            }
+        }
+        (_, RouteArg::Static) => fit_chosen(&rec, &req)?,
+        (None, _) => {
             return Err(HostError::msg(format!(
                 "the model is chosen by the data on the static route only; with --route {} give --model",
                 route.name()
             )))
         }
-        (Some(kind), route) => fit_recording(
+        (Some(kind), _) => fit_recording(
             &rec,
             &ModelChoice {
                 kind,
@@ -406,6 +419,9 @@ struct FittedDynamic<'a> {
     model: String,
     /// The recording's dwells: how many move in temperature.
     shape: Shape,
+    /// Why a stop-and-soak test took this route: the settling its dwells showed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    settling: Option<Settling>,
     /// The thermal lag the blob carries, s (absent: none was supported).
     #[serde(skip_serializing_if = "Option::is_none")]
     thermal_lag_tau_s: Option<f64>,
@@ -431,10 +447,11 @@ struct FittedDynamic<'a> {
 fn fit_dynamic_cli(
     a: &FitArgs,
     rec: &crate::data::recording::Recording,
+    d: DynamicFit<'_>,
+    settling: Option<Settling>,
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<()> {
-    let d = fit_dynamic(rec)?;
     let mut cal = d.calibration()?;
     cal.clamp = a.clamp;
     if let Some(step) = a.update_step {
@@ -455,6 +472,7 @@ fn fit_dynamic_cli(
         route: Route::Dynamic.name(),
         model: d.describe(),
         shape: d.shape,
+        settling,
         thermal_lag_tau_s: d.lag_tau_s,
         temp_rate: d.rate,
         heldout_blocks: d.blocks,
@@ -484,6 +502,16 @@ fn fit_dynamic_cli(
         j.t_max_c,
         j.heldout_blocks
     );
+    if let Some(st) = j.settling {
+        s.insert_str(
+            0,
+            &format!(
+                "the dwells still settle (a lag near {:.0} s explains {:.0}% of the static fit's residual): fitted on the dynamic route\n",
+                st.tau_s,
+                100.0 * st.explained
+            ),
+        );
+    }
     for c in j.candidates {
         s.push_str(&format!(
             "  {} {:<48} {:.1}\n",

@@ -10,5 +10,6 @@ pub mod noise;
 pub mod orientation;
 pub mod pipeline;
 pub mod predict;
+pub mod route;
 pub mod select;
 pub mod temperature;

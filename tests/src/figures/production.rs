@@ -61,8 +61,12 @@ pub fn fit_verify(dir: &Path, rec: &Path, args: &[&str]) -> FitVerified {
         .iter()
         .enumerate()
         .map(|(i, k)| {
-            let sigma_v = j["noise_sigma"][i].as_f64().unwrap();
-            let k_v_per_g = j["temperature_model"]["at_t0"][k].as_f64().unwrap().abs();
+            // NaN on the dynamic route, whose JSON states its floor, not these
+            let sigma_v = j["noise_sigma"][i].as_f64().unwrap_or(f64::NAN);
+            let k_v_per_g = j["temperature_model"]["at_t0"][k]
+                .as_f64()
+                .unwrap_or(f64::NAN)
+                .abs();
             sigma_v / k_v_per_g / samples.sqrt() * 1e3
         })
         .fold(0.0, f64::max);

@@ -7,9 +7,9 @@ use crate::acceptance::{judge, Acceptance, Spec};
 use crate::blob::{build_blob, Cache};
 use crate::data::positions::Role;
 use crate::data::recording::Recording;
-use crate::diagnose::dynamic::{fit_dynamic, Shape};
+use crate::diagnose::dynamic::{auto, Routed};
 use crate::error::{HostError, Result};
-use crate::fit::pipeline::{fit_chosen, ModelRequest};
+use crate::fit::pipeline::ModelRequest;
 use crate::plan::{
     candidates, choose, predict, program, run, verification, verification_temps, Candidate, Limits,
     Target,
@@ -103,23 +103,27 @@ pub fn limits(cfg: &SimConfig) -> Limits {
     }
 }
 
-/// A recording fitted as `fit` fits it by default: the dynamic route when it is a
-/// sweep, else the static route with the model the data choose; its calibration (the
-/// cache chosen as `fit` chooses it) and a description.
+/// A recording fitted as `fit` fits it by default (`--route auto`: the dynamic route for
+/// a sweep or a stop-and-soak test still settling behind a lag, else the static route
+/// with the model the data choose); its calibration (the cache chosen as `fit` chooses
+/// it) and a description.
 pub fn fit_as_fit_does(rec: &Recording) -> Result<(Calibration<f64>, String)> {
-    let shape = Shape::of(rec);
-    if shape.is_sweep() {
-        let d = fit_dynamic(rec)?;
-        return Ok((d.calibration()?, format!("dynamic route, {}", d.describe())));
+    let mut notes = Vec::new();
+    match auto(rec, &ModelRequest::default(), &mut notes)? {
+        Routed::Dynamic { fit, .. } => Ok((
+            fit.calibration()?,
+            format!("dynamic route, {}", fit.describe()),
+        )),
+        Routed::Static(oc) => {
+            let mut cal = oc.fit.calibration(0.0, false);
+            Cache::for_fit(rec, &oc, &mut cal, None);
+            let name = crate::analysis::chosen_name(&oc.fit.basis);
+            Ok((
+                cal,
+                format!("static route, {}", name.trim_start_matches("chosen-")),
+            ))
+        }
     }
-    let oc = fit_chosen(rec, &ModelRequest::default())?;
-    let mut cal = oc.fit.calibration(0.0, false);
-    Cache::for_fit(rec, &oc, &mut cal, None);
-    let name = crate::analysis::chosen_name(&oc.fit.basis);
-    Ok((
-        cal,
-        format!("static route, {}", name.trim_start_matches("chosen-")),
-    ))
 }
 
 /// Verify `blob` on the block `ver` with method 1 and judge it.

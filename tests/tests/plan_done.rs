@@ -3,9 +3,10 @@
 //! unit type's lag stated), run on the same unit and fitted by default, passes acceptance
 //! on an equilibrium verification block with its worst |dg| within 1.5x of the 6-h
 //! stop-and-soak test's (fitted on the route `fit` chooses for it, the default) on the
-//! same unit, and `plan`'s predicted accuracy covers the simulated one. The 6-h test on
-//! the dynamic route is shown beside (not the criterion: with a 20-min lag the default
-//! static fit of the 6-h test fails, the dynamic one does not).
+//! same unit, and `plan`'s predicted accuracy covers the simulated one. Today the 20-min
+//! lag misses the 1.5x (0.0419 mg against 0.0091 mg, README figure `plan-done`): the
+//! test fails there on purpose, the criterion not loosened. The 6-h test on the dynamic
+//! route is shown beside (since `fit --route auto` it is also the default's).
 use host_fit::simulate::program::parse_program;
 use serde_json::Value;
 use tests::cli;

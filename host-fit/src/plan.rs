@@ -53,8 +53,10 @@ pub enum Kind {
     Sweep {
         /// Ramp rate, C/min.
         c_per_min: f64,
-        /// Hold at each end, min.
+        /// Hold at the hot end, min.
         hold_min: f64,
+        /// Hold at the cold end where the sweep ends, min (the start is soaked).
+        end_hold_min: f64,
     },
 }
 
@@ -66,7 +68,17 @@ impl Kind {
             Kind::Sweep {
                 c_per_min,
                 hold_min,
-            } => format!("sweep {c_per_min:.1} C/min, {hold_min:.0}-min holds"),
+                end_hold_min,
+            } if hold_min == end_hold_min => {
+                format!("sweep {c_per_min:.1} C/min, {hold_min:.0}-min holds")
+            }
+            Kind::Sweep {
+                c_per_min,
+                hold_min,
+                end_hold_min,
+            } => format!(
+                "sweep {c_per_min:.1} C/min, holds {hold_min:.0} min hot, {end_hold_min:.0} cold"
+            ),
         }
     }
 }
@@ -144,16 +156,17 @@ pub fn program(kind: Kind, l: &Limits) -> (Vec<Step>, f64) {
         Kind::Sweep {
             c_per_min,
             hold_min,
+            end_hold_min,
         } => {
             // knots of the set point; the tilter turns through the positions meanwhile
             let ramp = (l.hi_c - l.lo_c) / c_per_min * 60.0;
-            let hold = hold_min * 60.0;
+            let (hold, end_hold) = (hold_min * 60.0, end_hold_min * 60.0);
             let knots = [
                 (0.0, l.lo_c),
                 (ramp, l.hi_c),
                 (ramp + hold, l.hi_c),
                 (2.0 * ramp + hold, l.lo_c),
-                (2.0 * ramp + 2.0 * hold, l.lo_c),
+                (2.0 * ramp + hold + end_hold, l.lo_c),
             ];
             let end = knots[4].0;
             let set_at = |t: f64| crate::simulate::program::set_point_at(&knots, t);
@@ -295,16 +308,26 @@ pub fn predict(
 /// The candidates: stops and soaks of 10, 25 and 40 minutes; sweeps at the fastest
 /// ramp holding at each end half, one or two of the unit's and the case's time constants
 /// (half: the dynamic fit carries the lag, so the element need not settle at the ends;
-/// the shortest sweep a slowly lagging unit can have), and at half the ramp with one.
+/// the shortest sweep a slowly lagging unit can have), one held a settle time at the hot
+/// end and half of it at the cold end (the start is soaked there already; the hot end is
+/// where the element must come close to the top of the range), and at half the ramp with
+/// one.
 pub fn kinds(l: &Limits) -> Vec<Kind> {
     let settle_min = ((l.tau_s + 600.0) / 60.0).round();
     let mut v: Vec<Kind> = [10.0, 25.0, 40.0]
         .map(|soak_min| Kind::StopSoak { soak_min })
         .to_vec();
-    for (f, k) in [(1.0, 0.5), (1.0, 1.0), (1.0, 2.0), (0.5, 1.0)] {
+    for (f, hot, cold) in [
+        (1.0, 0.5, 0.5),
+        (1.0, 1.0, 0.5),
+        (1.0, 1.0, 1.0),
+        (1.0, 2.0, 2.0),
+        (0.5, 1.0, 1.0),
+    ] {
         v.push(Kind::Sweep {
             c_per_min: l.max_ramp_c_per_min * f,
-            hold_min: (settle_min * k).round(),
+            hold_min: (settle_min * hot).round(),
+            end_hold_min: (settle_min * cold).round(),
         });
     }
     v

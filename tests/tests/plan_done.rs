@@ -3,10 +3,10 @@
 //! unit type's lag stated), run on the same unit and fitted by default, passes acceptance
 //! on an equilibrium verification block with its worst |dg| within 1.5x of the 6-h
 //! stop-and-soak test's (fitted on the route `fit` chooses for it, the default) on the
-//! same unit, and `plan`'s predicted accuracy covers the simulated one. Today the 20-min
-//! lag misses the 1.5x (0.0419 mg against 0.0091 mg, README figure `plan-done`): the
-//! test fails there on purpose, the criterion not loosened. The 6-h test on the dynamic
-//! route is shown beside (since `fit --route auto` it is also the default's).
+//! same unit, and `plan`'s predicted accuracy covers the simulated one. The 20-min lag
+//! needs the candidate held longer at the hot end than at the cold one (equal 15-min
+//! holds gave 0.0419 mg against 0.0091 mg). The 6-h test on the dynamic route is shown
+//! beside (since `fit --route auto` it is also the default's).
 use host_fit::simulate::program::parse_program;
 use serde_json::Value;
 use tests::cli;
@@ -79,9 +79,10 @@ fn a_plan_of_two_hours_chosen_by_plan_meets_the_six_hour_test_on_the_same_unit()
         let what = chosen["kind"]["kind"].as_str().unwrap_or("?").to_string();
         let describe = match what.as_str() {
             "sweep" => format!(
-                "sweep {:.1} C/min, {:.0}-min holds",
+                "sweep {:.1} C/min, holds {:.0}/{:.0} min",
                 chosen["kind"]["c_per_min"].as_f64().unwrap(),
-                chosen["kind"]["hold_min"].as_f64().unwrap()
+                chosen["kind"]["hold_min"].as_f64().unwrap(),
+                chosen["kind"]["end_hold_min"].as_f64().unwrap()
             ),
             _ => format!(
                 "5 stops, {:.0}-min soaks",

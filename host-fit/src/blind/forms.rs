@@ -3,6 +3,7 @@
 //! clean recordings with the nuisances real data has; and the classes of issue 18
 //! ([`crate::blind::kinds`]). Each class is its own enum, so every form is concealed by
 //! an exhaustive match: a form without physics cannot compile.
+use crate::blind::draw::{axes3, main_axis};
 use crate::blind::kinds::{Digital, Mixture, Refixed, Slow};
 use crate::blind::profiles::Profile;
 use crate::diagnose::quality::NoteKind;
@@ -447,28 +448,6 @@ impl Nuisance {
             Nuisance::NoisyVoltmeter => c.unit.noise_v = 1e-4,
         }
     }
-}
-
-/// One axis, random sign, 0.7..1.3 of `size`.
-pub fn main_axis(rng: &mut Rng, size: f64) -> [f64; 3] {
-    let mut v = [0.0; 3];
-    let s = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
-    v[(rng.next_u64() % 3) as usize] = s * size * rng.range(0.7, 1.3);
-    v
-}
-
-/// Per-axis sizes: one or two axes, random signs, 0.7..1.3 of `size` times `scale`.
-pub fn axes3(rng: &mut Rng, scale: f64, size: f64) -> [f64; 3] {
-    // one or two axes, random signs, 0.7..1.3 of the size
-    let main = (rng.next_u64() % 3) as usize;
-    let mut v = [0.0; 3];
-    for (i, x) in v.iter_mut().enumerate() {
-        if i == main || rng.uniform() < 0.3 {
-            let s = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
-            *x = s * size * scale * rng.range(0.7, 1.3);
-        }
-    }
-    v
 }
 
 /// The axes an outside effect of configuration `c` is on (all three for other cases).

@@ -2,8 +2,7 @@
 //! disturbances with no power-on behind them, digital outputs of a few counts per g,
 //! a fixture re-clamped between two stops, and mixtures of three catalogue effects at
 //! 0.3-1x their nominal sizes; all on the profiles of [`crate::blind::profiles`].
-use crate::blind::config::conceal;
-use crate::blind::forms::main_axis;
+use crate::blind::draw::{conceal, main_axis};
 use crate::blind::profiles::{stop_spans, Profile};
 use crate::data::output_unit::OutputUnit;
 use crate::diagnose::EffectId;

@@ -6,6 +6,7 @@
 //! on the right axis; clean recordings with real-world nuisances must get no physics.
 pub mod cases;
 pub mod config;
+pub mod draw;
 pub mod forms;
 pub mod kinds;
 pub mod outcome;

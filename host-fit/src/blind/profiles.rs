@@ -79,7 +79,6 @@ pub fn stop_spans(c: &SimConfig) -> Vec<[f64; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::blind::cases::profile;
     use crate::simulate::simulate;
 
     /// The spans end where the twin's recording ends (within one row), so a disturbance
@@ -87,7 +86,7 @@ mod tests {
     #[test]
     fn stop_spans_end_where_the_recording_ends() {
         for p in [Profile::ColdFirst, Profile::HotFirst] {
-            let mut c = profile(false);
+            let mut c = SimConfig::default();
             p.apply(&mut c);
             let spans = stop_spans(&c);
             assert_eq!(spans.len(), 4);

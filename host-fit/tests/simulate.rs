@@ -635,7 +635,7 @@ fn every_option() -> SimConfig {
 
 /// Every effect of [`every_option`] set (a literal without `..`, for the same reason).
 fn every_effect() -> Effects {
-    use host_fit::simulate::{Bend, BiasStep, FixtureChange, Gradient, Periodic};
+    use host_fit::simulate::{Bend, BiasStep, FixtureChange, Gradient, Periodic, Settle};
     let p = |v: f64| {
         Some(PerAxis {
             value: [v, 0.0, 0.0],
@@ -697,6 +697,11 @@ fn every_effect() -> Effects {
             at_s: 100.0,
         }),
         bias_aging: p(1e-5),
+        bias_settle: Some(Settle {
+            at_s: 100.0,
+            value: [1e-4, 0.0, 0.0],
+            tau_s: 60.0,
+        }),
     }
 }
 

@@ -56,6 +56,47 @@ fn blind_suite_by_class() {
     // the TP-only recording cannot separate K2 from scale asymmetry: reported, not guessed
     let tp = outcomes.iter().find(|o| o.case.tp_only).unwrap();
     assert!(tp.found.is_empty() && !tp.ambiguous.is_empty(), "{text}");
+    issue_18_classes(&outcomes, &text);
+}
+
+/// Issue 18's classes in the short suite (one seed, the cold-first profile): every class
+/// is there and reported apart; a digital output of a few counts per g is diagnosed like
+/// any other; a re-clamped fixture and a mixture get no wrong name (a missed effect is a
+/// miss, a wrong name worse); slow disturbances may leave at most two of five cases
+/// named (on main before issue 18's items 1 and 3 a settling that starts mid-test is
+/// still called a warm-up, and a re-clamped fixture is not named: measured, not hidden,
+/// in the long suite's figure).
+fn issue_18_classes(outcomes: &[host_fit::blind::Outcome], text: &str) {
+    let classes = [
+        Class::SlowDisturbance,
+        Class::Digital,
+        Class::FixtureChange,
+        Class::Mixture,
+    ];
+    for c in classes {
+        assert!(
+            outcomes.iter().any(|o| o.case.class() == c),
+            "{}: no case in the short suite",
+            c.name()
+        );
+        assert!(
+            text.contains(&format!("\n{}: ", c.name())),
+            "{}\n{text}",
+            c.name()
+        );
+    }
+    let of = |c: Class| outcomes.iter().filter(move |o| o.case.class() == c);
+    let passed = |c: Class| of(c).filter(|o| o.passed()).count();
+    assert_eq!(passed(Class::Digital), of(Class::Digital).count(), "{text}");
+    for c in [Class::FixtureChange, Class::Mixture] {
+        for o in of(c) {
+            assert!(o.wrong_names().is_empty(), "{}\n{text}", o.case.name());
+        }
+    }
+    assert!(
+        passed(Class::SlowDisturbance) + 2 >= of(Class::SlowDisturbance).count(),
+        "{text}"
+    );
 }
 
 /// The rules are the diagnosis's, and the blind suite can vary them: a case found under

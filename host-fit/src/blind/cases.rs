@@ -61,7 +61,11 @@ impl Case {
                 .collect::<Vec<_>>()
                 .join("+"),
         };
-        base + if self.tp_only { " (TP only)" } else { "" }
+        let profile = self
+            .form
+            .and_then(|f| f.profile(self.seed))
+            .map_or(String::new(), |p| format!(" [{}]", p.name()));
+        base + if self.tp_only { " (TP only)" } else { "" } + &profile
     }
 }
 

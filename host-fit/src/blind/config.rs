@@ -1,10 +1,9 @@
 //! A blind case as a twin configuration: the catalogue's forms here, the others in
 //! [`crate::blind::forms`].
 use crate::blind::cases::{profile, Case};
-use crate::blind::forms::axes3;
-use crate::diagnose::EffectId;
+use crate::blind::draw::conceal;
 use crate::rng::Rng;
-use crate::simulate::{Curvature, Fixture, PerAxis, SimConfig, Warmup};
+use crate::simulate::SimConfig;
 
 /// Conceal the effects of `case` in the profile; returns the config.
 pub fn configure(case: &Case) -> SimConfig {
@@ -16,57 +15,7 @@ pub fn configure(case: &Case) -> SimConfig {
         return c;
     }
     for e in &case.effects {
-        let s = case.scale;
-        match *e {
-            EffectId::ThermalLag => {
-                c.effects.thermal_lag = Some(PerAxis {
-                    value: [rng.range(300.0, 900.0); 3],
-                })
-            }
-            EffectId::TempRate => {
-                c.effects.temp_rate = Some(PerAxis {
-                    value: axes3(&mut rng, s, 0.02),
-                })
-            }
-            EffectId::Hysteresis => {
-                c.effects.hysteresis = Some(PerAxis {
-                    value: axes3(&mut rng, s, 1e-4),
-                })
-            }
-            EffectId::NonlinearityK2 => {
-                c.effects.nonlinearity_k2 = Some(PerAxis {
-                    value: axes3(&mut rng, s, 1e-4),
-                })
-            }
-            EffectId::ScaleAsymmetry => {
-                c.effects.scale_asymmetry = Some(PerAxis {
-                    value: axes3(&mut rng, s, 2e-4),
-                })
-            }
-            EffectId::FixtureError => {
-                let p = ["TP2", "TP3", "TP5", "PP1", "PP4"][(rng.next_u64() % 5) as usize];
-                c.effects.fixture_error = Some(Fixture {
-                    position: p.into(),
-                    angles_rad: [
-                        rng.range(-2e-4, 2e-4) * s + 2e-4 * s,
-                        rng.range(-2e-4, 2e-4) * s,
-                    ],
-                });
-            }
-            EffectId::WarmupDrift => {
-                c.effects.warmup_drift = Some(Warmup {
-                    d_v: axes3(&mut rng, s, 2e-4),
-                    tau_s: rng.range(600.0, 2400.0),
-                })
-            }
-            EffectId::TempCurvature => {
-                c.effects.temp_curvature = Some(Curvature {
-                    u0_v: axes3(&mut rng, s, 1e-4),
-                    k_rel: [0.0; 3],
-                    period_c: 25.0,
-                })
-            }
-        }
+        conceal(*e, case.scale, &mut c, &mut rng);
     }
     c
 }

@@ -1,7 +1,11 @@
 //! The blind suite's cases beyond the catalogue's own forms, written from physics (not
 //! from the diagnosis): other forms of each effect, effects outside the catalogue, and
-//! clean recordings with the nuisances real data has. Each class is its own enum, so
-//! every form is concealed by an exhaustive match: a form without physics cannot compile.
+//! clean recordings with the nuisances real data has; and the classes of issue 18
+//! ([`crate::blind::kinds`]). Each class is its own enum, so every form is concealed by
+//! an exhaustive match: a form without physics cannot compile.
+use crate::blind::draw::{axes3, main_axis};
+use crate::blind::kinds::{Digital, Mixture, Refixed, Slow};
+use crate::blind::profiles::Profile;
 use crate::diagnose::quality::NoteKind;
 use crate::diagnose::EffectId;
 use crate::rng::Rng;
@@ -18,6 +22,14 @@ pub enum Class {
     Outside,
     /// A clean recording with a real-world nuisance.
     Nuisance,
+    /// A slow disturbance of the bias with no power-on behind it.
+    SlowDisturbance,
+    /// A digital output of a few counts per g.
+    Digital,
+    /// A fixture re-clamped between two stops.
+    FixtureChange,
+    /// Three catalogue effects at 0.3-1x their nominal sizes.
+    Mixture,
 }
 
 impl Class {
@@ -28,6 +40,10 @@ impl Class {
             Class::OtherForm => "catalogue effects, other forms",
             Class::Outside => "effects outside the catalogue",
             Class::Nuisance => "clean recordings with nuisances",
+            Class::SlowDisturbance => "slow disturbances without a power-on",
+            Class::Digital => "digital outputs of a few counts per g",
+            Class::FixtureChange => "fixtures re-clamped between two stops",
+            Class::Mixture => "mixtures of three effects at 0.3-1x nominal",
         }
     }
 }
@@ -41,6 +57,14 @@ pub enum Form {
     Outside(Outside),
     /// A clean unit with a real-world nuisance.
     Nuisance(Nuisance),
+    /// A slow disturbance without a power-on.
+    Slow(Slow),
+    /// A digital output of a few counts per g.
+    Digital(Digital),
+    /// A fixture re-clamped between two stops.
+    Refixed(Refixed),
+    /// Three catalogue effects at once.
+    Mixture(Mixture),
 }
 
 /// A catalogue effect in another form.
@@ -129,12 +153,36 @@ impl Form {
         Form::Nuisance(Nuisance::NoisyVoltmeter),
     ];
 
+    /// The forms of issue 18's classes, in the order of their report: slow
+    /// disturbances, digital outputs, re-clamped fixtures, mixtures.
+    pub fn issue_18() -> Vec<Form> {
+        let mut v: Vec<Form> = Slow::ALL.map(Form::Slow).to_vec();
+        v.extend(Digital::ALL.map(Form::Digital));
+        v.extend(Refixed::ALL.map(Form::Refixed));
+        v.extend(Mixture::ALL.map(Form::Mixture));
+        v
+    }
+
     /// Its class.
     pub fn class(self) -> Class {
         match self {
             Form::Other(_) => Class::OtherForm,
             Form::Outside(_) => Class::Outside,
             Form::Nuisance(_) => Class::Nuisance,
+            Form::Slow(_) => Class::SlowDisturbance,
+            Form::Digital(_) => Class::Digital,
+            Form::Refixed(_) => Class::FixtureChange,
+            Form::Mixture(_) => Class::Mixture,
+        }
+    }
+
+    /// The test profile it runs on, for the classes that do not use the suite's own.
+    pub fn profile(self, seed: u64) -> Option<Profile> {
+        match self {
+            Form::Other(_) | Form::Outside(_) | Form::Nuisance(_) => None,
+            Form::Slow(_) | Form::Digital(_) | Form::Refixed(_) | Form::Mixture(_) => {
+                Some(Profile::of_seed(seed))
+            }
         }
     }
 
@@ -144,6 +192,10 @@ impl Form {
             Form::Other(f) => f.name(),
             Form::Outside(f) => f.name(),
             Form::Nuisance(f) => f.name(),
+            Form::Slow(f) => f.name(),
+            Form::Digital(f) => f.name(),
+            Form::Refixed(f) => f.name(),
+            Form::Mixture(f) => f.name(),
         }
     }
 
@@ -151,7 +203,10 @@ impl Form {
     pub fn expect(self) -> &'static [EffectId] {
         match self {
             Form::Other(f) => f.expect(),
-            Form::Outside(_) | Form::Nuisance(_) => &[],
+            Form::Digital(f) => f.expect(),
+            Form::Refixed(_) => &[EffectId::FixtureError],
+            Form::Mixture(f) => f.expect(),
+            Form::Outside(_) | Form::Nuisance(_) | Form::Slow(_) => &[],
         }
     }
 
@@ -159,7 +214,12 @@ impl Form {
     pub fn note(self) -> Option<NoteKind> {
         match self {
             Form::Nuisance(f) => f.note(),
-            Form::Other(_) | Form::Outside(_) => None,
+            Form::Other(_)
+            | Form::Outside(_)
+            | Form::Slow(_)
+            | Form::Digital(_)
+            | Form::Refixed(_)
+            | Form::Mixture(_) => None,
         }
     }
 
@@ -170,6 +230,10 @@ impl Form {
             Form::Other(f) => f.apply(scale, c, rng),
             Form::Outside(f) => f.apply(scale, c, rng),
             Form::Nuisance(f) => f.apply(c),
+            Form::Slow(f) => f.apply(scale, c, rng),
+            Form::Digital(f) => f.apply(c, rng),
+            Form::Refixed(f) => f.apply(c, rng),
+            Form::Mixture(f) => f.apply(c, rng),
         }
     }
 }
@@ -386,27 +450,6 @@ impl Nuisance {
     }
 }
 
-fn main_axis(rng: &mut Rng, size: f64) -> [f64; 3] {
-    let mut v = [0.0; 3];
-    let s = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
-    v[(rng.next_u64() % 3) as usize] = s * size * rng.range(0.7, 1.3);
-    v
-}
-
-/// Per-axis sizes: one or two axes, random signs, 0.7..1.3 of `size` times `scale`.
-pub fn axes3(rng: &mut Rng, scale: f64, size: f64) -> [f64; 3] {
-    // one or two axes, random signs, 0.7..1.3 of the size
-    let main = (rng.next_u64() % 3) as usize;
-    let mut v = [0.0; 3];
-    for (i, x) in v.iter_mut().enumerate() {
-        if i == main || rng.uniform() < 0.3 {
-            let s = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
-            *x = s * size * scale * rng.range(0.7, 1.3);
-        }
-    }
-    v
-}
-
 /// The axes an outside effect of configuration `c` is on (all three for other cases).
 pub fn axes(c: &SimConfig) -> Vec<usize> {
     let e = &c.effects;
@@ -416,7 +459,9 @@ pub fn axes(c: &SimConfig) -> Vec<usize> {
         .or(e.bias_walk.map(|p| p.value))
         .or(e.nonlinearity_k3.map(|p| p.value))
         .or(e.periodic.map(|p| p.value))
-        .or(e.scale_aging.map(|p| p.value));
+        .or(e.scale_aging.map(|p| p.value))
+        .or(e.bias_aging.map(|p| p.value))
+        .or(e.bias_settle.map(|p| p.value));
     match v {
         Some(v) => (0..3).filter(|&i| v[i] != 0.0).collect(),
         None => vec![0, 1, 2],
@@ -448,12 +493,31 @@ mod tests {
                 form.name()
             );
         }
+        // issue 18's forms run on profiles of their own: against the same profile without
+        // effects (a digital clean form conceals nothing but its output unit)
+        for form in Form::issue_18() {
+            let cfg = configure(&Case::of_form(form, seed));
+            let mut bare = cfg.clone();
+            bare.effects = crate::simulate::Effects::default();
+            let clean_here = matches!(
+                form,
+                Form::Digital(Digital::Clean20 | Digital::Clean100 | Digital::Clean500)
+            );
+            if clean_here {
+                assert_eq!(cfg, bare, "{}", form.name());
+                continue;
+            }
+            let csv = simulate(&cfg, |_| {}).unwrap().csv;
+            let bare_csv = simulate(&bare, |_| {}).unwrap().csv;
+            assert_ne!(csv, bare_csv, "{}: nothing concealed", form.name());
+        }
     }
 
     #[test]
     fn form_names_are_distinct() {
-        for (i, a) in Form::ALL.iter().enumerate() {
-            for b in &Form::ALL[i + 1..] {
+        let all: Vec<Form> = Form::ALL.into_iter().chain(Form::issue_18()).collect();
+        for (i, a) in all.iter().enumerate() {
+            for b in &all[i + 1..] {
                 assert_ne!(a.name(), b.name());
             }
         }

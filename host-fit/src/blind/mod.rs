@@ -6,14 +6,17 @@
 //! on the right axis; clean recordings with real-world nuisances must get no physics.
 pub mod cases;
 pub mod config;
+pub mod draw;
 pub mod forms;
+pub mod kinds;
 pub mod outcome;
+pub mod profiles;
 pub mod report;
 
 pub use cases::{Case, EFFECTS};
 pub use config::configure;
 pub use forms::Class;
-pub use outcome::Outcome;
+pub use outcome::{FixtureClaim, Outcome};
 pub use report::report;
 
 use crate::data::positions::Positions;
@@ -42,6 +45,7 @@ pub fn run_with(case: &Case, rules: Rules) -> Outcome {
         verdict: None,
         unexplained_axis: None,
         quality: Vec::new(),
+        fixture_claims: Vec::new(),
         note,
     };
     let sim = match simulate(&cfg, |_| {}) {
@@ -92,6 +96,7 @@ pub fn run_with(case: &Case, rules: Rules) -> Outcome {
         verdict: Some(d.verdict()),
         unexplained_axis: d.unexplained.first().map(|h| h.axis.clone()),
         quality: d.quality.iter().map(|q| q.kind).collect(),
+        fixture_claims: d.findings.iter().filter_map(FixtureClaim::of).collect(),
         note: String::new(),
     }
 }
@@ -192,7 +197,7 @@ pub fn suite(long: bool) -> Vec<Case> {
             tp_only: true,
             ..Case::catalogue(vec![EffectId::NonlinearityK2], 1.0, seed)
         });
-        for f in forms::Form::ALL {
+        for f in forms::Form::ALL.into_iter().chain(forms::Form::issue_18()) {
             v.push(Case::of_form(f, seed));
         }
     }

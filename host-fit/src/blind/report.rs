@@ -158,7 +158,15 @@ fn scores(outcomes: &[Outcome]) -> String {
 /// Per form of the other classes: cases passed, and what was named or noted.
 fn by_form(outcomes: &[Outcome]) -> String {
     let mut s = String::new();
-    for class in [Class::OtherForm, Class::Outside, Class::Nuisance] {
+    for class in [
+        Class::OtherForm,
+        Class::Outside,
+        Class::Nuisance,
+        Class::SlowDisturbance,
+        Class::Digital,
+        Class::FixtureChange,
+        Class::Mixture,
+    ] {
         let of: Vec<&Outcome> = outcomes
             .iter()
             .filter(|o| o.case.class() == class)
@@ -168,9 +176,10 @@ fn by_form(outcomes: &[Outcome]) -> String {
         }
         let passed = of.iter().filter(|o| o.passed()).count();
         s.push_str(&format!(
-            "\n{}: {passed}/{} passed\n",
+            "\n{}: {passed}/{} passed{}\n",
             class.name(),
-            of.len()
+            of.len(),
+            class_summary(class, &of)
         ));
         let mut forms: Vec<_> = Vec::new();
         for o in &of {
@@ -185,6 +194,11 @@ fn by_form(outcomes: &[Outcome]) -> String {
             // by name, as the report always listed them
             named.sort_by_key(|e| e.as_str());
             named.dedup();
+            let named_list = if named.is_empty() {
+                "nothing".to_string()
+            } else {
+                ids(&named, ", ")
+            };
             let detail = match class {
                 Class::Outside => format!(
                     "{} with no catalogue name, {} located on the right axis",
@@ -196,13 +210,35 @@ fn by_form(outcomes: &[Outcome]) -> String {
                     cases.iter().filter(|o| o.named().is_empty()).count(),
                     cases.iter().filter(|o| o.noted()).count()
                 ),
-                Class::OtherForm | Class::Catalogue => format!(
-                    "named: {}",
-                    if named.is_empty() {
-                        "nothing".into()
-                    } else {
-                        ids(&named, ", ")
-                    }
+                Class::OtherForm | Class::Catalogue => format!("named: {named_list}"),
+                Class::SlowDisturbance => format!(
+                    "{} with no catalogue name, {} named warmup_drift, {} located on the right axis; named: {named_list}",
+                    cases.iter().filter(|o| o.named().is_empty()).count(),
+                    cases
+                        .iter()
+                        .filter(|o| o.named().contains(&EffectId::WarmupDrift))
+                        .count(),
+                    cases.iter().filter(|o| o.located()).count()
+                ),
+                Class::Digital => format!(
+                    "{} diagnosed, {} exactly right; named: {named_list}",
+                    cases.iter().filter(|o| o.verdict.is_some()).count(),
+                    cases.iter().filter(|o| o.exact).count()
+                ),
+                Class::FixtureChange => format!(
+                    "{} named fixture_error, {} with the right position and stop; named: {named_list}",
+                    cases
+                        .iter()
+                        .filter(|o| o.named().contains(&EffectId::FixtureError))
+                        .count(),
+                    cases.iter().filter(|o| o.right_stop()).count()
+                ),
+                Class::Mixture => format!(
+                    "{} exact, {} of the {} concealed named, {} wrong names",
+                    cases.iter().filter(|o| o.exact).count(),
+                    cases.iter().map(|o| o.hits()).sum::<usize>(),
+                    cases.iter().map(|o| o.case.effects.len()).sum::<usize>(),
+                    cases.iter().map(|o| o.wrong_names().len()).sum::<usize>()
                 ),
             };
             let name = f.map_or("", |f| f.name());
@@ -210,6 +246,43 @@ fn by_form(outcomes: &[Outcome]) -> String {
         }
     }
     s
+}
+
+/// A class's line beyond its pass count: mixtures count the cases by how many of their
+/// three effects were named, and the wrong names apart (a missed small effect is a miss,
+/// a wrong name worse); digital outputs count the cases the diagnosis refused.
+fn class_summary(class: Class, of: &[&Outcome]) -> String {
+    match class {
+        Class::Mixture => {
+            let with = |k: usize| of.iter().filter(|o| o.hits() == k).count();
+            let wrong = of.iter().filter(|o| !o.wrong_names().is_empty()).count();
+            let mut names: Vec<EffectId> = of.iter().flat_map(|o| o.wrong_names()).collect();
+            names.sort();
+            names.dedup();
+            format!(
+                " (exactly the set); of the three named: 3 in {}, 2 in {}, 1 in {}, 0 in {}; cases with a wrong name: {wrong} ({})",
+                with(3),
+                with(2),
+                with(1),
+                with(0),
+                if names.is_empty() {
+                    "none".to_string()
+                } else {
+                    ids(&names, ", ")
+                }
+            )
+        }
+        Class::Digital => format!(
+            "; refused by the diagnosis: {}",
+            of.iter().filter(|o| o.verdict.is_none()).count()
+        ),
+        Class::Catalogue
+        | Class::OtherForm
+        | Class::Outside
+        | Class::Nuisance
+        | Class::SlowDisturbance
+        | Class::FixtureChange => String::new(),
+    }
 }
 
 /// The whole report: every case, then the catalogue class's confusion, magnitudes and

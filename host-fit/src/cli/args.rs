@@ -405,6 +405,10 @@ pub struct BlindArgs {
     /// Run only the cases whose name contains this, and print each one's diagnosis.
     #[arg(long)]
     pub only: Option<String>,
+    /// Run only the cases of the classes whose report name contains one of these
+    /// (comma-separated, e.g. `slow,digital,re-clamped,mixtures`).
+    #[arg(long, value_delimiter = ',')]
+    pub class: Vec<String>,
 }
 
 /// `simulate`.

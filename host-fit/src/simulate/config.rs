@@ -334,6 +334,22 @@ pub struct Effects {
     /// Outside the catalogue: the bias ages, V per hour since the start (no power-on
     /// behind it: a slow drift of the whole test).
     pub bias_aging: Option<PerAxis>,
+    /// Outside the catalogue: the bias settles exponentially toward a new value from
+    /// `at_s` on (a disturbance that starts mid-test, no power-on behind it).
+    pub bias_settle: Option<Settle>,
+}
+
+/// An exponential approach of the bias that starts mid-test: `value (1 - exp(-(t -
+/// at_s) / tau_s))` from `at_s` on, nothing before.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Settle {
+    /// When it starts, s.
+    pub at_s: f64,
+    /// The shift it approaches, per axis, V.
+    pub value: [f64; 3],
+    /// Its time constant, s.
+    pub tau_s: f64,
 }
 
 /// A tilter position whose orientation changes at one moment of the test.

@@ -59,6 +59,11 @@ pub(super) fn readings(
         if let Some(g) = e.bias_aging {
             ui += g.value[i] * t / 3600.0;
         }
+        if let Some(b) = e.bias_settle {
+            if t >= b.at_s {
+                ui += b.value[i] * (1.0 - (-(t - b.at_s) / b.tau_s).exp());
+            }
+        }
         if let Some(w) = e.bias_walk {
             dist.walk[i] += w.value[i] * dt.sqrt() * dist.rng.normal();
             ui += dist.walk[i];

@@ -16,7 +16,7 @@
 //! | 3 | `blob`, `verify`, `vectors`, `acceptance` | blobs built and read, formula (13) through firmware-core, firmware test vectors, pass/fail against a specification |
 //! | 4 | `diagnose` | locate, explain, model what the paper's model leaves out |
 //! | 5 | `analysis`, `blind`, `plan`, `store` | the demo's comparison (pure), the blind tests of the diagnosis, chamber programs designed for a target accuracy, the record store (SQLite: records, history, trends) |
-//! | 6 | `report`, `batch`, `demo` | HTML reports, production batches, the main job's files |
+//! | 6 | `report`, `batch`, `demo`, `demo_plan` | HTML reports, production batches, the main job's files (and its plan beside the paper's test) |
 //! | 7 | `cli` | the command line |
 #![forbid(unsafe_code)]
 

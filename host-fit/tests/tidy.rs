@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 const MAX_FN_LINES: usize = 120;
 
 /// The layers of lib.rs's table: a module may use modules of its own rank or below.
-const LAYERS: [(&str, u8); 23] = [
+const LAYERS: [(&str, u8); 24] = [
     ("error", 0),
     ("rng", 0),
     ("output", 0),
@@ -31,6 +31,7 @@ const LAYERS: [(&str, u8); 23] = [
     ("report", 6),
     ("batch", 6),
     ("demo", 6),
+    ("demo_plan", 6),
     ("cli", 7),
     ("lib", 8),
     ("main", 8),

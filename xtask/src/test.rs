@@ -53,9 +53,10 @@ pub fn test(s: &mut Steps) {
     );
     // the reports' browser test needs Chromium: it fails (not skips) without it
     s.prepare("install chromium", crate::setup::chromium);
+    // every test binary runs, so one failure does not hide the others
     s.run(
         "tests (workspace)",
-        cargo(&["test", "--workspace", "--release"]),
+        cargo(&["test", "--workspace", "--release", "--no-fail-fast"]),
     );
     crate::cross::cross(s);
     crate::embedded::embedded(s);

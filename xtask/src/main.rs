@@ -92,7 +92,7 @@ commands:
                             the paper's experiment on the digital twin -> demo-out/ (or DIR,
                             relative to where you run it): recording, blobs, summary.json,
                             report.html
-  blind                     the long blind suite of the diagnosis (about 2 minutes)
+  blind                     the long blind suite of the diagnosis (tens of minutes)
   bench                     criterion benchmarks and a batch of 1000 simulated units
                             -> target/bench/summary.md
   fuzz [--seconds N] [TARGET..]

@@ -118,7 +118,7 @@ fn assert_records_hold_what_was_made(
     assert_eq!(f.lot.as_deref(), Some("L7"));
     assert_eq!(f.options["lot"], "L7");
     assert_eq!(f.options["out"], s(fb));
-    assert_eq!(f.options["route"], "static");
+    assert_eq!(f.options["route"], "auto");
     assert_eq!(f.options["json"], true);
     assert_eq!(f.model.as_deref(), fit["model"].as_str());
     assert_eq!(f.blob.as_deref(), Some(&std::fs::read(fb).unwrap()[..]));
@@ -611,11 +611,18 @@ fn the_demo_records_its_blobs_and_shows_the_history() {
     assert_eq!(code, 0, "{err}");
     let db = dir.join("records.sqlite");
     let all = records(&db);
-    assert_eq!(all.len(), 3);
+    // the paper's pwl-2, the pwl through every stop, the plan's blob, the chosen model
+    assert_eq!(all.len(), 4);
     let sha = sha256sum(&dir.join("recording.csv"));
+    let plan_sha = sha256sum(&dir.join("plan-recording.csv"));
     for r in &all {
         assert_eq!(r.command, Command::Demo);
-        assert_eq!(r.input_sha256.as_deref(), Some(sha.as_str()));
+        let want = if r.options["blob"] == "plan.blob" {
+            &plan_sha
+        } else {
+            &sha
+        };
+        assert_eq!(r.input_sha256.as_deref(), Some(want.as_str()));
         let file = r.options["blob"].as_str().unwrap();
         assert_eq!(
             blob_run_id(r.blob.as_ref().unwrap()),
@@ -628,20 +635,21 @@ fn the_demo_records_its_blobs_and_shows_the_history() {
             "{file}"
         );
     }
-    assert_eq!(all[2].options["blob"], "chosen.blob");
+    assert_eq!(all[2].options["blob"], "plan.blob");
+    assert_eq!(all[3].options["blob"], "chosen.blob");
     // the history printed is the store's, the chosen model marked
-    let shown = &out[out.find("unit PAPER-UNIT: 3 records").expect("the history")..];
+    let shown = &out[out.find("unit PAPER-UNIT: 4 records").expect("the history")..];
     let (code, text, _) = cli(&["history", "PAPER-UNIT", "--db", s(&db)]);
     assert_eq!(code, 0);
     assert_eq!(shown.trim_end(), text.trim_end());
     let marked: Vec<&str> = text.lines().filter(|l| l.starts_with("* #")).collect();
     assert!(
-        marked.len() == 1 && marked[0].starts_with("* #3 "),
+        marked.len() == 1 && marked[0].starts_with("* #4 "),
         "{text}"
     );
     assert!(text.contains("model chosen-poly4"), "{text}");
     let (code, _, err) = cli(&["demo", "--out", s(&dir), "--force"]);
     assert_eq!(code, 0, "{err}");
-    assert_eq!(records(&db).len(), 6);
+    assert_eq!(records(&db).len(), 8);
     let _ = std::fs::remove_dir_all(&root);
 }

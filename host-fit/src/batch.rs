@@ -182,10 +182,12 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         breakpoints: None,
     };
     let mut notes = Vec::new();
-    let routed = auto(&rec, &req, &mut notes)?;
     let mut selection = None;
     // the blob's model, and its own uncertainty for the lot's statistics
     let (cal, diagnosis) = if o.diagnose {
+        // the static fit still checks the data (its errors are the unit's); the route
+        // choice is not run, the diagnosed model makes the blob
+        crate::fit::pipeline::fit_chosen(&rec, &req)?;
         // the diagnosis needs every pose's vector: estimate those of unknown orientation
         let oriented = crate::fit::pipeline::with_orientations(&rec, None)?;
         let d = crate::diagnose::diagnose(&oriented.rec)?;
@@ -195,7 +197,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         r.at_t0_sigma = d.coefficient_sigma(rec.t0_c);
         (d.calibration(rec.t0_c)?, Some(d.contract()))
     } else {
-        match routed {
+        match auto(&rec, &req, &mut notes)? {
             Routed::Static(oc) => {
                 r.model = oc.fit.basis.describe();
                 selection = oc.selection.clone();

@@ -163,3 +163,35 @@ pub fn table() -> (Vec<(&'static str, [f64; 4])>, String) {
     }
     (rows, text)
 }
+
+/// `c` flying a short flight at `rate_hz` through `legs` (`(to_c, C/min, hold_s)`), 12
+/// attitudes held 20 s, the power cycles `power_offs`; the voltmeter and the temperature
+/// sensor noiseless, so that flights at different MCU rates differ only by their clock.
+pub fn noiseless_flight(
+    mut c: SimConfig,
+    rate_hz: f64,
+    legs: &[(f64, f64, f64)],
+    power_offs: Vec<[f64; 2]>,
+) -> SimConfig {
+    c.unit.noise_v = 0.0;
+    c.unit.resolution_v = 0.0;
+    c.sensor.noise_c = 0.0;
+    c.sensor.quantum_c = 0.0;
+    c.flight = Some(Flight {
+        rate_hz,
+        legs: legs
+            .iter()
+            .map(|&(to_c, c_per_min, hold_s)| host_fit::simulate::Leg {
+                to_c,
+                c_per_min,
+                hold_s,
+            })
+            .collect(),
+        attitudes: 12,
+        hold_s: 20.0,
+        move_s: 2.0,
+        power_offs,
+        ..Flight::default()
+    });
+    c
+}

@@ -3,10 +3,10 @@
 //! unit sampled at 10 Hz, 100 Hz and 1 kHz gives the same |dg| at every held attitude,
 //! and the lag the blob carries is what makes the flight right (the same tables with the
 //! lag taken out are worse).
-use host_fit::simulate::{Flight, Leg, SimConfig};
+use host_fit::simulate::SimConfig;
 use tests::cli_json;
 use tests::sweep::{sweep, unit};
-use tests::time_true::{s, verify, write};
+use tests::time_true::{noiseless_flight, s, verify, write};
 
 /// The element's lag behind its temperature sensor, s (the slowest unit).
 const LAG_S: f64 = 1200.0;
@@ -19,25 +19,8 @@ const RATES_BOUND_MG: f64 = 0.002;
 /// a warming at 8 C/min to +10 C, 10 min there; 12 attitudes held 20 s; the voltmeter and
 /// the temperature sensor noiseless so that only the clock differs between rates.
 fn flight(rate_hz: f64) -> SimConfig {
-    let mut c = unit(LAG_S, 31);
-    c.unit.noise_v = 0.0;
-    c.unit.resolution_v = 0.0;
-    c.sensor.noise_c = 0.0;
-    c.sensor.quantum_c = 0.0;
-    let leg = |to_c: f64, c_per_min: f64, hold_s: f64| Leg {
-        to_c,
-        c_per_min,
-        hold_s,
-    };
-    c.flight = Some(Flight {
-        rate_hz,
-        legs: vec![leg(-30.0, 1.0, 600.0), leg(10.0, 8.0, 600.0)],
-        attitudes: 12,
-        hold_s: 20.0,
-        move_s: 2.0,
-        ..Flight::default()
-    });
-    c
+    let legs = [(-30.0, 1.0, 600.0), (10.0, 8.0, 600.0)];
+    noiseless_flight(unit(LAG_S, 31), rate_hz, &legs, Vec::new())
 }
 
 #[test]

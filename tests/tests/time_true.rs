@@ -7,8 +7,8 @@
 //! writes a flight-like recording of the same unit (a cold power-on, fast warming and
 //! cooling both ways, a second power cycle, 24 attitudes over the sphere held 40 s, at
 //! an MCU rate).
-use host_fit::simulate::{Flight, Leg, PerAxis, SimConfig, Warmup};
-use tests::time_true::{production, s, table, verify, write};
+use host_fit::simulate::{PerAxis, SimConfig, Warmup};
+use tests::time_true::{noiseless_flight, production, s, table, verify, write};
 use tests::{cli, cli_json};
 
 /// The stated bounds (mg): a diagnosed blob through firmware-core on its own recording
@@ -99,26 +99,8 @@ fn dynamic_unit() -> SimConfig {
 /// warming at 8 C/min; 12 attitudes held 20 s) at an MCU rate, the voltmeter and the
 /// temperature sensor noiseless so that only the clock differs.
 fn short_flight(rate_hz: f64) -> SimConfig {
-    let mut c = dynamic_unit();
-    c.unit.noise_v = 0.0;
-    c.unit.resolution_v = 0.0;
-    c.sensor.noise_c = 0.0;
-    c.sensor.quantum_c = 0.0;
-    let leg = |to_c: f64, c_per_min: f64, hold_s: f64| Leg {
-        to_c,
-        c_per_min,
-        hold_s,
-    };
-    c.flight = Some(Flight {
-        rate_hz,
-        legs: vec![leg(-30.0, 1.0, 120.0), leg(10.0, 8.0, 120.0)],
-        attitudes: 12,
-        hold_s: 20.0,
-        move_s: 2.0,
-        power_offs: vec![[60.0, 30.0]],
-        ..Flight::default()
-    });
-    c
+    let legs = [(-30.0, 1.0, 120.0), (10.0, 8.0, 120.0)];
+    noiseless_flight(dynamic_unit(), rate_hz, &legs, vec![[60.0, 30.0]])
 }
 
 /// The same blob compensates the same flight alike sampled at 10 Hz, 100 Hz and 1 kHz:

@@ -6,6 +6,7 @@ use crate::diagnose::findings::{Ambiguity, Finding};
 use crate::diagnose::location::Hotspot;
 use crate::diagnose::metrics::{dispersion, max_dg, normalized_rms, residual_rms};
 use crate::diagnose::quality::QualityNote;
+use crate::diagnose::search::Research;
 use crate::diagnose::Diagnosis;
 use firmware_core::model::AXES;
 use serde::Serialize;
@@ -95,6 +96,9 @@ pub struct Contract {
     pub quality: Vec<QualityNote>,
     /// What the final model leaves above the floor, located; none at the floor.
     pub unexplained: Option<Unexplained>,
+    /// After the effects accepted, each look again where the rest was located: the
+    /// region, the effects tried there, the one found (null: nothing passed the rules).
+    pub research: Vec<Research>,
     /// The final model.
     #[serde(rename = "final")]
     pub final_model: FinalFigures,
@@ -287,6 +291,7 @@ impl Diagnosis<'_> {
                 residual_rms_over_noise: final_rms,
                 located: self.unexplained.iter().take(12).cloned().collect(),
             }),
+            research: self.research.clone(),
             final_model: FinalFigures {
                 temperature_model: f.spec.basis.describe(),
                 model: f
@@ -378,6 +383,24 @@ impl Contract {
                 u.residual_rms_over_noise
             ));
             for x in u.located.iter().take(6) {
+                s.push_str(&hotspot_line(x, &self.output_unit));
+            }
+        }
+        for r in &self.research {
+            let found = match r.found {
+                Some(id) => format!("found {id}"),
+                None => "nothing passed the rules".to_string(),
+            };
+            let tried: Vec<&str> = r.tried.iter().map(|e| e.as_str()).collect();
+            s.push_str(&format!(
+                "re-search where the rest is located (tried: {}): {found}\n",
+                if tried.is_empty() {
+                    "none".to_string()
+                } else {
+                    tried.join(", ")
+                }
+            ));
+            for x in r.region.iter().take(4) {
                 s.push_str(&hotspot_line(x, &self.output_unit));
             }
         }

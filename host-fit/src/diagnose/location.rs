@@ -172,3 +172,16 @@ pub fn locate(data: &Data, z: &[[f64; 3]], raw: &[[f64; 3]], min_rms: f64) -> Ve
     out.sort_by(|a, b| b.rms_sigma.total_cmp(&a.rms_sigma));
     out
 }
+
+/// The residual rows (`3 * window + axis`) of the located group `h`: where a re-search
+/// looks for what the model still misses.
+pub fn rows_of(data: &Data, h: &Hotspot) -> Vec<usize> {
+    let Some(axis) = AXES.iter().position(|a| *a == h.axis) else {
+        return Vec::new();
+    };
+    groups(data)
+        .into_iter()
+        .find(|g| g.by == h.group && g.value == h.value)
+        .map(|g| g.windows.iter().map(|&r| 3 * r + axis).collect())
+        .unwrap_or_default()
+}

@@ -73,6 +73,9 @@ pub struct Diagnosis<'a> {
     pub hotspots: Vec<Hotspot>,
     /// Where the final residual still exceeds the floor (empty when at the floor).
     pub unexplained: Vec<Hotspot>,
+    /// The re-searches where the rest was located after the effects accepted: the
+    /// region looked at and what was found there (empty: nothing was left to locate).
+    pub research: Vec<search::Research>,
     /// What cannot be identified from this recording.
     pub not_identifiable: Vec<String>,
     /// Notes on the data.
@@ -143,6 +146,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         .into_iter()
         .filter(|g| found.joint.spec.extras.iter().any(|e| g.contains(&e.id())))
         .collect();
+    let research = found.research;
     let (final_fit, findings) = findings_of(&data, found.joint, &ambiguous_groups);
     let ambiguous = ambiguous_groups
         .iter()
@@ -177,6 +181,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         ambiguous,
         hotspots,
         unexplained,
+        research,
         not_identifiable,
         quality,
         data,

@@ -137,6 +137,15 @@ pub struct Rules {
     /// to count as reproduced: the same sign and a similar size on data fitted apart.
     pub reproduced_amplitude: (f64, f64),
 
+    // --- the re-search where the rest is located ---
+    /// After the forward search, the worst this many located groups of the joint
+    /// model's residual are looked at again (each a position, an axis, a time span ...):
+    /// enough to reach a small effect's group past the large one's leftovers.
+    pub research_groups: usize,
+    /// At most this many re-searches (each adds at most one effect): the catalogue's
+    /// effects in a realistic mixture, with room for one the checks drop.
+    pub research_rounds: usize,
+
     // --- locating ---
     /// A group is located when its RMS is above this many floor sigmas ...
     pub located_sigmas: f64,
@@ -201,6 +210,8 @@ impl Default for Rules {
             adequate_ratio: 0.5,
             at_floor_rms: 1.5,
             reproduced_amplitude: (0.5, 1.5),
+            research_groups: 4,
+            research_rounds: 4,
             located_sigmas: 2.0,
             located_share: 0.01,
             colour_note: 2.0,

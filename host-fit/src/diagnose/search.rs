@@ -5,7 +5,12 @@
 //! [`Forward::accept`] the first that passes (the rivals within the ambiguity margin are
 //! named as ambiguous), [`Forward::stop`] when none passes or none is left; then the
 //! [`backward`] check of the joint model, and [`keep_adequate`]: each effect must explain
-//! the data where it acts.
+//! the data where it acts. Then the [`research`]: where the residual of the joint model
+//! still stands out (a position, an axis, a time span, ...), every candidate that explains
+//! a material share of what is left there is judged by the same rules, the share counted
+//! in that region instead of over the whole recording (a small effect beside a large one
+//! is diluted by the large one's imperfect fit elsewhere); an effect found joins the model,
+//! the backward and adequacy checks run again, and the search looks again.
 //!
 //! Every rule is a field of [`crate::diagnose::rules::Rules`] (all scaled by the
 //! dispersion phi of the larger model, so a model still far from the data cannot buy
@@ -18,8 +23,10 @@ use crate::diagnose::baseline::reorder;
 use crate::diagnose::data::Data;
 use crate::diagnose::effects::{EffectId, Extra};
 use crate::diagnose::fit::{Depth, Fit};
-use crate::diagnose::metrics::{adequate, dispersion, judge, qbic, Judgement};
+use crate::diagnose::location::{locate, rows_of, Hotspot};
+use crate::diagnose::metrics::{dispersion, inadequacy, judge, normalized_rms, qbic, z, Judgement};
 use crate::diagnose::profile;
+use serde::Serialize;
 
 /// What the data can identify.
 pub struct Scope {
@@ -40,6 +47,23 @@ pub struct Outcome {
     /// Groups of candidates that explained the data equally well (the best of each group
     /// was in the model, none is named).
     pub ambiguous: Vec<Vec<EffectId>>,
+    /// Every re-search, in order: where it looked and what it found.
+    pub research: Vec<Research>,
+}
+
+/// One re-search after the effects accepted so far: the located region it looked at,
+/// the candidates whose contribution sits there, and what passed the rules.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Research {
+    /// Where the joint model's residual still stands out (the groups looked at, worst
+    /// first; the one the effect found explains, when one was found).
+    pub region: Vec<Hotspot>,
+    /// The effects proposed there: each explains at least
+    /// [`crate::diagnose::rules::Rules::material_share`] of the excess in a located group.
+    pub tried: Vec<EffectId>,
+    /// The effect that passed every acceptance rule and stayed in the joint model; None:
+    /// nothing passed.
+    pub found: Option<EffectId>,
 }
 
 /// Search from `baseline` (see the module doc).
@@ -51,20 +75,44 @@ pub fn run(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
         used: Vec::new(),
         ambiguous: Vec::new(),
     };
+    let mut research = Vec::new();
+    // effects a re-search found that the checks then dropped: not proposed there again
+    let mut dropped: Vec<EffectId> = Vec::new();
+    // the effects a re-search found, with the located rows they were judged on: the
+    // backward check judges them there again
+    let mut regions: Vec<(Extra, Vec<usize>)> = Vec::new();
     loop {
-        let proposals = s.propose();
-        let ranked = s.rank(proposals);
-        let Some(step) = s.judge(ranked) else {
-            break;
-        };
-        s.accept(step);
-        if s.stop() {
+        s.forward();
+        s.current = keep_adequate(data, backward(data, s.current.clone(), &regions));
+        if research.len() >= data.rules.research_rounds || s.stop() {
             break;
         }
+        let Some((mut r, step)) = s.research(&dropped) else {
+            break;
+        };
+        let Some((step, rows)) = step else {
+            research.push(r);
+            break;
+        };
+        let id = step.id;
+        let Some(extra) = step.fit.spec.extras.last().cloned() else {
+            research.push(r);
+            break;
+        };
+        regions.push((extra.clone(), rows));
+        s.accept(step);
+        s.current = keep_adequate(data, backward(data, s.current.clone(), &regions));
+        if !s.current.spec.extras.contains(&extra) {
+            log::debug!("  re-search: {id:?} dropped by the checks");
+            dropped.push(id);
+            r.found = None;
+        }
+        research.push(r);
     }
     Outcome {
-        joint: keep_adequate(data, backward(data, s.current)),
+        joint: s.current,
         ambiguous: s.ambiguous,
+        research,
     }
 }
 
@@ -95,6 +143,101 @@ struct Step {
 }
 
 impl Forward<'_, '_> {
+    /// Rounds of propose, rank, judge, accept until none passes or none is left.
+    fn forward(&mut self) {
+        loop {
+            let proposals = self.propose();
+            let ranked = self.rank(proposals);
+            let Some(step) = self.judge(ranked) else {
+                break;
+            };
+            self.accept(step);
+            if self.stop() {
+                break;
+            }
+        }
+    }
+
+    /// Look again where the current model's residual is located: for each of the worst
+    /// [`crate::diagnose::rules::Rules::research_groups`] located groups, the ranked
+    /// proposals (effects not in `dropped`) that explain a material share of the excess
+    /// there are judged in full by the acceptance rules, the share counted in that
+    /// group. None when the residual is at the floor or nowhere located; else what was
+    /// looked at, and the step of the first that passed.
+    fn research(&self, dropped: &[EffectId]) -> Option<(Research, Option<(Step, Vec<usize>)>)> {
+        let data = self.data;
+        let rules = &data.rules;
+        if normalized_rms(data, &self.current) <= rules.at_floor_rms {
+            return None;
+        }
+        let zs = z(data, &self.current);
+        let spots: Vec<Hotspot> = locate(data, &zs, &self.current.resid, rules.located_sigmas)
+            .into_iter()
+            .take(rules.research_groups)
+            .collect();
+        if spots.is_empty() {
+            return None;
+        }
+        let ranked: Vec<Ranked> = self
+            .rank(self.propose())
+            .into_iter()
+            .filter(|r| !dropped.contains(&r.id))
+            .collect();
+        let mut tried: Vec<EffectId> = Vec::new();
+        for h in &spots {
+            let rows = rows_of(data, h);
+            for r in &ranked {
+                if regional_share(data, &self.current, &r.fit, &rows) < rules.material_share {
+                    continue;
+                }
+                if !tried.contains(&r.id) {
+                    tried.push(r.id);
+                }
+                if let Some(fit) = self.judged_in(&r.fit, &rows) {
+                    log::debug!(
+                        "  re-search at {} {} {}: {:?}",
+                        h.group,
+                        h.value,
+                        h.axis,
+                        r.id
+                    );
+                    let research = Research {
+                        region: vec![h.clone()],
+                        tried,
+                        found: Some(r.id),
+                    };
+                    let step = Step {
+                        id: r.id,
+                        fit,
+                        rivals: Vec::new(),
+                    };
+                    return Some((research, Some((step, rows))));
+                }
+            }
+        }
+        let research = Research {
+            region: spots,
+            tried,
+            found: None,
+        };
+        Some((research, None))
+    }
+
+    /// The proposal `f` fitted in full, when it passes every acceptance rule against the
+    /// current model with its share of the excess counted on `rows` (a located region).
+    fn judged_in(&self, f: &Fit, rows: &[usize]) -> Option<Fit> {
+        let data = self.data;
+        let full = data.fit(&f.spec, Some(&self.current), Depth::Full)?;
+        let mut j = judge(data, &self.current, &full, full.spec.extras.len() - 1);
+        j.share = regional_share(data, &self.current, &full, rows);
+        let ok = j.accepted(data);
+        log::debug!(
+            "  re-search {:?}: {j:?} accepted {ok}",
+            full.spec.extras.last()
+        );
+        ok.then_some(full)
+    }
+
     /// Whether effect `id` may still be proposed.
     fn open(&self, id: EffectId) -> bool {
         let count = self
@@ -268,6 +411,19 @@ impl Forward<'_, '_> {
     }
 }
 
+/// The share of the excess over the floor on `rows` (residual rows, floor-weighted) that
+/// `larger` explains beyond `smaller`: [`Judgement::share`] counted in a located region.
+fn regional_share(data: &Data, smaller: &Fit, larger: &Fit, rows: &[usize]) -> f64 {
+    let chi2 = |f: &Fit| -> f64 {
+        rows.iter()
+            .map(|&r| data.w[r] * f.resid[r / 3][r % 3] * f.resid[r / 3][r % 3])
+            .sum()
+    };
+    let before = chi2(smaller);
+    let excess = (before - rows.len() as f64).max(f64::MIN_POSITIVE);
+    (before - chi2(larger)) / excess
+}
+
 /// Of several forms of one effect on top of `current`, the simplest, unless a richer one
 /// fits better AND passes every acceptance rule against it (a richer form must earn its
 /// parameters as an effect must).
@@ -302,15 +458,20 @@ pub fn without(data: &Data, f: &Fit, e: usize) -> Option<Fit> {
 }
 
 /// The backward check: drop, one at a time, the effect the joint model needs least while
-/// one of them no longer passes the acceptance rules against the model without it.
-pub fn backward(data: &Data, mut current: Fit) -> Fit {
+/// one of them no longer passes the acceptance rules against the model without it. An
+/// effect a re-search found (in `regions`, with its located rows) has its share counted
+/// there, as when it was accepted.
+pub fn backward(data: &Data, mut current: Fit, regions: &[(Extra, Vec<usize>)]) -> Fit {
     loop {
         let mut weakest: Option<(Judgement, Fit)> = None;
         for e in 0..current.spec.extras.len() {
             let Some(reduced) = without(data, &current, e) else {
                 continue;
             };
-            let j = judge(data, &reduced, &current, e);
+            let mut j = judge(data, &reduced, &current, e);
+            if let Some((_, rows)) = regions.iter().find(|(x, _)| *x == current.spec.extras[e]) {
+                j.share = regional_share(data, &reduced, &current, rows);
+            }
             if !j.accepted(data) && weakest.as_ref().is_none_or(|(w, _)| j.gain < w.gain) {
                 weakest = Some((j, reduced));
             }
@@ -323,19 +484,24 @@ pub fn backward(data: &Data, mut current: Fit) -> Fit {
 }
 
 /// Drop every effect that does not explain the data where it acts (its region is
-/// reported as unexplained instead); refits after each drop.
+/// reported as unexplained instead), the least adequate first, refitting after each drop:
+/// one effect's leftover must not push a correct neighbour out before it goes itself.
 pub fn keep_adequate(data: &Data, mut current: Fit) -> Fit {
-    'again: loop {
+    loop {
+        let mut worst: Option<(f64, Fit)> = None;
         for e in 0..current.spec.extras.len() {
             let Some(reduced) = without(data, &current, e) else {
                 continue;
             };
-            if !adequate(data, &current, &reduced) {
-                log::debug!("  not adequate: {:?}", current.spec.extras[e]);
-                current = reduced;
-                continue 'again;
+            let bad = inadequacy(data, &current, &reduced);
+            if bad > data.rules.adequate_ratio && worst.as_ref().is_none_or(|(w, _)| bad > *w) {
+                log::debug!("  not adequate ({bad:.2}): {:?}", current.spec.extras[e]);
+                worst = Some((bad, reduced));
             }
         }
-        return current;
+        match worst {
+            Some((_, reduced)) => current = reduced,
+            None => return current,
+        }
     }
 }

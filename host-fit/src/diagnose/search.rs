@@ -135,6 +135,9 @@ struct Ranked {
     fit: Fit,
 }
 
+/// A re-search's step and the located rows it was judged on.
+type Relocated = (Step, Vec<usize>);
+
 /// One round's decision: the effect accepted (fitted in full) and its rivals.
 struct Step {
     id: EffectId,
@@ -164,7 +167,7 @@ impl Forward<'_, '_> {
     /// there are judged in full by the acceptance rules, the share counted in that
     /// group. None when the residual is at the floor or nowhere located; else what was
     /// looked at, and the step of the first that passed.
-    fn research(&self, dropped: &[EffectId]) -> Option<(Research, Option<(Step, Vec<usize>)>)> {
+    fn research(&self, dropped: &[EffectId]) -> Option<(Research, Option<Relocated>)> {
         let data = self.data;
         let rules = &data.rules;
         if normalized_rms(data, &self.current) <= rules.at_floor_rms {

@@ -61,11 +61,12 @@ fn blind_suite_by_class() {
 
 /// Issue 18's classes in the short suite (one seed, the cold-first profile): every class
 /// is there and reported apart; a digital output of a few counts per g is diagnosed like
-/// any other; a re-clamped fixture and a mixture get no wrong name (a missed effect is a
-/// miss, a wrong name worse); slow disturbances may leave at most two of five cases
-/// named (on main before issue 18's items 1 and 3 a settling that starts mid-test is
-/// still called a warm-up, and a re-clamped fixture is not named: measured, not hidden,
-/// in the long suite's figure).
+/// any other; a fixture re-clamped between two stops is named with its position and stop
+/// (before the held-out chunks stopped holding a whole stop's positions, none of the
+/// three was: every chunk with that position's dwells was an extrapolation); a mixture
+/// gets no wrong name (a missed effect is a miss, a wrong name worse); slow disturbances
+/// may leave at most two of five cases named (a settling that starts mid-test is still
+/// called a warm-up: measured, not hidden, in the long suite's figure).
 fn issue_18_classes(outcomes: &[host_fit::blind::Outcome], text: &str) {
     let classes = [
         Class::SlowDisturbance,
@@ -92,6 +93,9 @@ fn issue_18_classes(outcomes: &[host_fit::blind::Outcome], text: &str) {
         for o in of(c) {
             assert!(o.wrong_names().is_empty(), "{}\n{text}", o.case.name());
         }
+    }
+    for o in of(Class::FixtureChange) {
+        assert!(o.passed() && o.right_stop(), "{}\n{text}", o.case.name());
     }
     assert!(
         passed(Class::SlowDisturbance) + 2 >= of(Class::SlowDisturbance).count(),

@@ -110,3 +110,69 @@ fn slow_disturbances_without_a_power_on_are_not_called_warm_up() {
     let found: Vec<EffectId> = c.findings.iter().map(|f| f.effect).collect();
     assert_eq!(found, [EffectId::WarmupDrift], "{}", c.text());
 }
+
+/// A trend in time is not a hysteresis nor a warm-up (issue 18): on a single pass through
+/// the temperatures, scale factors or a bias that age linearly over the test are fitted
+/// by a direction switch or a long decay about as well as by the trend itself, so each
+/// must beat a linear drift of the same coefficients in its place. Before that rule (and
+/// with held-out chunks that no longer leave a whole stop to extrapolation) the scale
+/// ageing was named `hysteresis`, the residual brought to the floor. A real hysteresis,
+/// and a real warm-up, on the same profiles are still named.
+#[test]
+fn a_trend_in_time_is_not_called_hysteresis_or_warm_up() {
+    use host_fit::blind::profiles::Profile;
+    use host_fit::simulate::{PerAxis, Warmup};
+    let x = |v: f64| PerAxis {
+        value: [v, 0.0, 0.0],
+    };
+    let cold_first = |seed: u64| {
+        let mut c = twin(seed);
+        Profile::ColdFirst.apply(&mut c);
+        c
+    };
+    // the blind suite's own draws (seed 1), where each was named before the rule
+    let blind = |name: &str| {
+        let case = host_fit::blind::suite(false)
+            .into_iter()
+            .find(|c| c.name().starts_with(name))
+            .unwrap();
+        host_fit::blind::configure(&case)
+    };
+    let trends = [
+        ("scale factors ageing", blind("scale factors ageing")),
+        (
+            "a linear bias drift, cold first",
+            blind("slow: a linear bias drift"),
+        ),
+    ];
+    for (name, cfg) in &trends {
+        let rec = recording(cfg);
+        let d = diagnose(&rec).unwrap();
+        let c = d.contract();
+        assert!(
+            c.findings
+                .iter()
+                .all(|f| { f.effect != EffectId::Hysteresis && f.effect != EffectId::WarmupDrift }),
+            "{name}: {}",
+            c.text()
+        );
+        assert_ne!(c.verdict, Verdict::Explained, "{name}: {}", c.text());
+    }
+    let mut hyst = cold_first(43);
+    hyst.effects.hysteresis = Some(x(1e-4));
+    let mut warm = cold_first(44);
+    warm.effects.warmup_drift = Some(Warmup {
+        d_v: [2e-4, 0.0, 0.0],
+        tau_s: 1200.0,
+    });
+    for (name, cfg, id) in [
+        ("hysteresis, cold first", hyst, EffectId::Hysteresis),
+        ("warm-up, cold first", warm, EffectId::WarmupDrift),
+    ] {
+        let rec = recording(&cfg);
+        let d = diagnose(&rec).unwrap();
+        let c = d.contract();
+        let found: Vec<EffectId> = c.findings.iter().map(|f| f.effect).collect();
+        assert_eq!(found, [id], "{name}: {}", c.text());
+    }
+}

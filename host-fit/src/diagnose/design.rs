@@ -162,6 +162,30 @@ impl Data<'_> {
         }
     }
 
+    /// A linear drift in time of the offsets (and, with `scale`, of the scale factors),
+    /// over the recording's span: the rival of [`crate::diagnose::search`], outside the
+    /// catalogue (its columns name no extra of the spec).
+    pub fn drift_columns(&self, d: &mut Design, scale: bool) {
+        let (t0, t1) = self
+            .obs
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), o| {
+                (a.min(o.t_s), b.max(o.t_s))
+            });
+        let span = (t1 - t0).max(f64::MIN_POSITIVE);
+        let s: Vec<f64> = self
+            .obs
+            .iter()
+            .map(|o| (o.t_s - 0.5 * (t0 + t1)) / span)
+            .collect();
+        let none = usize::MAX;
+        self.per_axis(d, Term::Drift, none, &|r, _| s[r]);
+        if scale {
+            let obs = &self.obs;
+            self.per_axis(d, Term::DriftScale, none, &|r, i| obs[r].a[i] * s[r]);
+        }
+    }
+
     /// The restart rows of a warm-up clock.
     fn restarts(&self, restart: Restart) -> Vec<usize> {
         let mut v = match restart {
@@ -314,7 +338,9 @@ pub fn static_at(
                         | Term::HysteresisScale
                         | Term::K2
                         | Term::Asymmetry
-                        | Term::Warmup => {}
+                        | Term::Warmup
+                        | Term::Drift
+                        | Term::DriftScale => {}
                     }
                 }
             }

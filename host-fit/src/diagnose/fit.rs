@@ -63,6 +63,23 @@ impl Data<'_> {
     /// Fit a spec; `None` when the data do not determine it. A spec with fixture errors
     /// linearises them around `base`'s K(T) (or the spec's own without them).
     pub fn fit(&self, spec: &Spec, base: Option<&Fit>, depth: Depth) -> Option<Fit> {
+        self.fit_with(spec, base, depth, None)
+    }
+
+    /// `spec` with a linear drift in time of the offsets (and, with `scale`, of the scale
+    /// factors) beside it, for the chi-square only: the rival an effect that acts
+    /// through time must beat ([`crate::diagnose::search`]).
+    pub fn fit_drift(&self, spec: &Spec, base: Option<&Fit>, scale: bool) -> Option<Fit> {
+        self.fit_with(spec, base, Depth::Profile, Some(scale))
+    }
+
+    fn fit_with(
+        &self,
+        spec: &Spec,
+        base: Option<&Fit>,
+        depth: Depth,
+        drift: Option<bool>,
+    ) -> Option<Fit> {
         let own_base;
         let base = match base {
             Some(b) => Some(b),
@@ -74,7 +91,10 @@ impl Data<'_> {
             }
             None => None,
         };
-        let d = self.design(spec, base.map(|b| b.k_at.as_slice()));
+        let mut d = self.design(spec, base.map(|b| b.k_at.as_slice()));
+        if let Some(scale) = drift {
+            self.drift_columns(&mut d, scale);
+        }
         let p = d.labels.len();
         let b: Vec<f64> = self.obs.iter().flat_map(|o| o.u).collect();
         let mut chunks: Vec<Normal> = (0..self.n_chunks()).map(|_| Normal::new(p)).collect();

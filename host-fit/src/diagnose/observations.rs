@@ -71,16 +71,37 @@ pub fn observations(rec: &Recording, spikes: &[usize], rules: &Rules) -> Vec<DOb
 
 /// Contiguous chunks of about [`Rules::chunk_windows`] observations in time order: each
 /// is held out whole, predicted from all the others (short enough that the others span
-/// the same temperatures, so a held-out chunk tests the effects, not extrapolation).
+/// the same temperatures, so a held-out chunk tests the effects, not extrapolation). A
+/// chunk also ends before it would hold more than half of the recording's positions:
+/// a chunk that held every position of one stop would leave the coefficients at that
+/// stop's temperature to extrapolation, and no effect at the positions could be tested
+/// there.
 fn assign_chunks(obs: &mut [DObs], rules: &Rules) {
     let n = obs.len();
     let chunks = (n / rules.chunk_windows)
         .max(rules.min_chunks)
         .min(n.max(1));
+    let size = n.div_ceil(chunks.max(1));
+    let mut positions: Vec<usize> = obs.iter().map(|o| o.position).collect();
+    positions.sort_unstable();
+    positions.dedup();
+    let most = (positions.len() / 2).max(1);
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| obs[a].t_s.total_cmp(&obs[b].t_s));
-    for (rank, &i) in order.iter().enumerate() {
-        obs[i].chunk = rank * chunks / n.max(1);
+    let (mut chunk, mut count, mut held) = (0, 0, Vec::new());
+    for &i in &order {
+        let p = obs[i].position;
+        let new_position = !held.contains(&p);
+        if count > 0 && (count >= size || (new_position && held.len() >= most)) {
+            chunk += 1;
+            count = 0;
+            held.clear();
+        }
+        if !held.contains(&p) {
+            held.push(p);
+        }
+        obs[i].chunk = chunk;
+        count += 1;
     }
 }
 
@@ -94,4 +115,68 @@ pub fn window_means(obs: &[DObs], series: &[f64], spikes: &[usize]) -> Vec<f64> 
             s / c.max(1) as f64
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn window(position: usize, t_s: f64) -> DObs {
+        DObs {
+            position,
+            a: [0.0; 3],
+            n: 10,
+            start: 0,
+            end: 10,
+            dwell: 0,
+            chunk: 0,
+            temp_c: 20.0,
+            t_s,
+            u: [0.0; 3],
+        }
+    }
+
+    /// Four stops of twelve positions (two windows each) with rest windows between: no
+    /// chunk holds more than half of the 13 positions (with chunks of about 40 windows
+    /// alone, one chunk held a whole stop's twelve), every chunk is contiguous in time,
+    /// and there are at least `min_chunks` of them.
+    #[test]
+    fn no_chunk_holds_a_whole_stop() {
+        let rest = 12;
+        let mut obs = Vec::new();
+        let mut t = 0.0;
+        for _stop in 0..4 {
+            for _ in 0..20 {
+                obs.push(window(rest, t));
+                t += 60.0;
+            }
+            for p in 0..12 {
+                for _ in 0..2 {
+                    obs.push(window(p, t));
+                    t += 60.0;
+                }
+            }
+        }
+        // the order the windows come in is the dwells', not time's
+        obs.reverse();
+        let rules = Rules::default();
+        assign_chunks(&mut obs, &rules);
+        let n_chunks = obs.iter().map(|o| o.chunk + 1).max().unwrap();
+        assert!(n_chunks >= rules.min_chunks, "{n_chunks}");
+        for c in 0..n_chunks {
+            let mut held: Vec<usize> = obs
+                .iter()
+                .filter(|o| o.chunk == c)
+                .map(|o| o.position)
+                .collect();
+            held.sort_unstable();
+            held.dedup();
+            assert!(!held.is_empty() && held.len() <= 6, "chunk {c}: {held:?}");
+        }
+        let mut by_time: Vec<&DObs> = obs.iter().collect();
+        by_time.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+        for w in by_time.windows(2) {
+            assert!(w[1].chunk == w[0].chunk || w[1].chunk == w[0].chunk + 1);
+        }
+    }
 }

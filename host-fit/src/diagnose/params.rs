@@ -23,6 +23,13 @@ pub enum Term {
     BendOffset,
     /// `temp_curvature` (bend): scale factor per C beyond the knot.
     BendScale,
+    /// Not a catalogue effect: the offset drifting linearly in time (per recording span),
+    /// the rival a `hysteresis` or a `warmup_drift` must beat (see
+    /// [`crate::diagnose::search`]); never named, never flashed.
+    Drift,
+    /// Not a catalogue effect: the scale factor drifting linearly in time, beside
+    /// [`Term::Drift`] for a hysteresis of the scale factors.
+    DriftScale,
 }
 
 impl Term {
@@ -37,6 +44,8 @@ impl Term {
             Term::Warmup => "d",
             Term::BendOffset => "bend_u0",
             Term::BendScale => "bend_k",
+            Term::Drift => "drift",
+            Term::DriftScale => "drift_k",
         }
     }
 }

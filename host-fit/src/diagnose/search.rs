@@ -83,7 +83,7 @@ pub fn run(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
     let mut regions: Vec<(Extra, Vec<usize>)> = Vec::new();
     loop {
         s.forward();
-        s.current = keep_adequate(data, backward(data, s.current.clone(), &regions));
+        s.current = checked(data, s.current.clone(), &regions);
         if research.len() >= data.rules.research_rounds || s.stop() {
             break;
         }
@@ -101,7 +101,7 @@ pub fn run(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
         };
         regions.push((extra.clone(), rows));
         s.accept(step);
-        s.current = keep_adequate(data, backward(data, s.current.clone(), &regions));
+        s.current = checked(data, s.current.clone(), &regions);
         if !s.current.spec.extras.contains(&extra) {
             log::debug!("  re-search: {id:?} dropped by the checks");
             dropped.push(id);
@@ -233,7 +233,8 @@ impl Forward<'_, '_> {
         let full = data.fit(&f.spec, Some(&self.current), Depth::Full)?;
         let mut j = judge(data, &self.current, &full, full.spec.extras.len() - 1);
         j.share = regional_share(data, &self.current, &full, rows);
-        let ok = j.accepted(data);
+        let ok =
+            j.accepted(data) && beats_drift(data, &self.current, &full, full.spec.extras.len() - 1);
         log::debug!(
             "  re-search {:?}: {j:?} accepted {ok}",
             full.spec.extras.last()
@@ -387,7 +388,8 @@ impl Forward<'_, '_> {
         let data = self.data;
         let full = data.fit(&f.spec, Some(&self.current), Depth::Full)?;
         let j = judge(data, &self.current, &full, full.spec.extras.len() - 1);
-        let ok = j.accepted(data);
+        let ok =
+            j.accepted(data) && beats_drift(data, &self.current, &full, full.spec.extras.len() - 1);
         log::debug!("  {:?}: {j:?} accepted {ok}", full.spec.extras.last());
         ok.then_some(full)
     }
@@ -427,6 +429,48 @@ fn regional_share(data: &Data, smaller: &Fit, larger: &Fit, rows: &[usize]) -> f
     (before - chi2(larger)) / excess
 }
 
+/// Whether effect `e` of `full` (a full fit; `current` is it without `e`), when it can
+/// pass for a trend in time (a hysteresis, a warm-up, a temperature curvature), explains
+/// the data better than a linear drift in time of the same coefficients would in its
+/// place: its quasi-BIC is lower than the drift's by more than
+/// [`crate::diagnose::rules::Rules::q_margin`], in its own dispersion. A slow disturbance
+/// with no temperature reversal and no power-on behind it (bias or scale ageing, part of
+/// a slow cycle) is fitted by a direction switch, a long decay or a bend about as well as
+/// by the trend itself on a single pass through the temperatures; the effect must show
+/// its own shape (a switch at the reversals, a decay from the event, a bend at a
+/// temperature revisited at another time), not only a trend, to be named. The other
+/// effects act through the position or the rate, not through time, and have no such
+/// rival.
+fn beats_drift(data: &Data, current: &Fit, full: &Fit, e: usize) -> bool {
+    let scale = match full.spec.extras.get(e) {
+        Some(Extra::Hysteresis { scale, .. }) => *scale,
+        Some(Extra::Warmup { .. } | Extra::Curvature(_)) => false,
+        Some(Extra::Bend { .. }) => true,
+        Some(
+            Extra::Lag { .. }
+            | Extra::Rate { .. }
+            | Extra::K2
+            | Extra::Asymmetry
+            | Extra::Fixture(..),
+        )
+        | None => return true,
+    };
+    let Some(rival) = data.fit_drift(&current.spec, Some(current), scale) else {
+        return true;
+    };
+    let phi = dispersion(data, full);
+    let gain = qbic(data, &rival, phi) - qbic(data, full, phi);
+    log::debug!(
+        "  against a linear drift in time: gain {gain:.1} (chi2 {:.0} vs {:.0}, params {} vs {}, {:?})",
+        rival.chi2,
+        full.chi2,
+        rival.params(),
+        full.params(),
+        current.spec.extras
+    );
+    gain > data.rules.q_margin
+}
+
 /// Of several forms of one effect on top of `current`, the simplest, unless a richer one
 /// fits better AND passes every acceptance rule against it (a richer form must earn its
 /// parameters as an effect must).
@@ -461,7 +505,9 @@ pub fn without(data: &Data, f: &Fit, e: usize) -> Option<Fit> {
 }
 
 /// The backward check: drop, one at a time, the effect the joint model needs least while
-/// one of them no longer passes the acceptance rules against the model without it. An
+/// one of them no longer passes the acceptance rules against the model without it (a
+/// hysteresis or a warm-up also against a linear drift in its place, see
+/// [`beats_drift`]). An
 /// effect a re-search found (in `regions`, with its located rows) has its share counted
 /// there, as when it was accepted.
 pub fn backward(data: &Data, mut current: Fit, regions: &[(Extra, Vec<usize>)]) -> Fit {
@@ -475,7 +521,8 @@ pub fn backward(data: &Data, mut current: Fit, regions: &[(Extra, Vec<usize>)]) 
             if let Some((_, rows)) = regions.iter().find(|(x, _)| *x == current.spec.extras[e]) {
                 j.share = regional_share(data, &reduced, &current, rows);
             }
-            if !j.accepted(data) && weakest.as_ref().is_none_or(|(w, _)| j.gain < w.gain) {
+            let kept = j.accepted(data) && beats_drift(data, &reduced, &current, e);
+            if !kept && weakest.as_ref().is_none_or(|(w, _)| j.gain < w.gain) {
                 weakest = Some((j, reduced));
             }
         }
@@ -486,25 +533,32 @@ pub fn backward(data: &Data, mut current: Fit, regions: &[(Extra, Vec<usize>)]) 
     }
 }
 
-/// Drop every effect that does not explain the data where it acts (its region is
-/// reported as unexplained instead), the least adequate first, refitting after each drop:
-/// one effect's leftover must not push a correct neighbour out before it goes itself.
-pub fn keep_adequate(data: &Data, mut current: Fit) -> Fit {
+/// The backward check and the adequacy check, again until neither drops an effect: an
+/// effect dropped as inadequate changes what the others are judged against.
+fn checked(data: &Data, mut current: Fit, regions: &[(Extra, Vec<usize>)]) -> Fit {
     loop {
-        let mut worst: Option<(f64, Fit)> = None;
+        let n = current.spec.extras.len();
+        current = keep_adequate(data, backward(data, current, regions));
+        if current.spec.extras.len() == n {
+            return current;
+        }
+    }
+}
+
+/// Drop every effect that does not explain the data where it acts (its region is
+/// reported as unexplained instead); refits after each drop.
+pub fn keep_adequate(data: &Data, mut current: Fit) -> Fit {
+    'again: loop {
         for e in 0..current.spec.extras.len() {
             let Some(reduced) = without(data, &current, e) else {
                 continue;
             };
-            let bad = inadequacy(data, &current, &reduced);
-            if bad > data.rules.adequate_ratio && worst.as_ref().is_none_or(|(w, _)| bad > *w) {
-                log::debug!("  not adequate ({bad:.2}): {:?}", current.spec.extras[e]);
-                worst = Some((bad, reduced));
+            if inadequacy(data, &current, &reduced) > data.rules.adequate_ratio {
+                log::debug!("  not adequate: {:?}", current.spec.extras[e]);
+                current = reduced;
+                continue 'again;
             }
         }
-        match worst {
-            Some((_, reduced)) => current = reduced,
-            None => return current,
-        }
+        return current;
     }
 }

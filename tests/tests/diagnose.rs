@@ -65,8 +65,9 @@ fn blind_suite_by_class() {
 /// (before the held-out chunks stopped holding a whole stop's positions, none of the
 /// three was: every chunk with that position's dwells was an extrapolation); a mixture
 /// gets no wrong name (a missed effect is a miss, a wrong name worse); slow disturbances
-/// may leave at most two of five cases named (a settling that starts mid-test is still
-/// called a warm-up: measured, not hidden, in the long suite's figure).
+/// may leave at most one of five cases named (a settling that starts mid-test is still
+/// called a warm-up: measured, not hidden, in the long suite's figure; before a trend in
+/// time had to be beaten, two were named).
 fn issue_18_classes(outcomes: &[host_fit::blind::Outcome], text: &str) {
     let classes = [
         Class::SlowDisturbance,
@@ -98,7 +99,7 @@ fn issue_18_classes(outcomes: &[host_fit::blind::Outcome], text: &str) {
         assert!(o.passed() && o.right_stop(), "{}\n{text}", o.case.name());
     }
     assert!(
-        passed(Class::SlowDisturbance) + 2 >= of(Class::SlowDisturbance).count(),
+        passed(Class::SlowDisturbance) + 1 >= of(Class::SlowDisturbance).count(),
         "{text}"
     );
 }

@@ -22,6 +22,7 @@
 use crate::diagnose::baseline::reorder;
 use crate::diagnose::data::Data;
 use crate::diagnose::effects::{EffectId, Extra};
+use crate::diagnose::findings::reproduced;
 use crate::diagnose::fit::{Depth, Fit};
 use crate::diagnose::location::{locate, rows_of, Hotspot};
 use crate::diagnose::metrics::{dispersion, inadequacy, judge, normalized_rms, qbic, z, Judgement};
@@ -233,8 +234,12 @@ impl Forward<'_, '_> {
         let full = data.fit(&f.spec, Some(&self.current), Depth::Full)?;
         let mut j = judge(data, &self.current, &full, full.spec.extras.len() - 1);
         j.share = regional_share(data, &self.current, &full, rows);
-        let ok =
-            j.accepted(data) && beats_drift(data, &self.current, &full, full.spec.extras.len() - 1);
+        // its share counted only where it is located, an effect found again must also
+        // show on both halves of the recording: else the leftovers of a larger effect's
+        // imperfect form pass for a small one
+        let ok = j.accepted(data)
+            && beats_drift(data, &self.current, &full, full.spec.extras.len() - 1)
+            && reproduced(data, &full, &self.current);
         log::debug!(
             "  re-search {:?}: {j:?} accepted {ok}",
             full.spec.extras.last()

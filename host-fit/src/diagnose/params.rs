@@ -24,7 +24,7 @@ pub enum Term {
     /// `temp_curvature` (bend): scale factor per C beyond the knot.
     BendScale,
     /// Not a catalogue effect: the offset drifting linearly in time (per recording span),
-    /// the rival a `hysteresis` or a `warmup_drift` must beat (see
+    /// the rival a `hysteresis`, a `warmup_drift` or a `temp_curvature` must beat (see
     /// [`crate::diagnose::search`]); never named, never flashed.
     Drift,
     /// Not a catalogue effect: the scale factor drifting linearly in time, beside

@@ -5,12 +5,16 @@
 //! [`Forward::accept`] the first that passes (the rivals within the ambiguity margin are
 //! named as ambiguous), [`Forward::stop`] when none passes or none is left; then the
 //! [`backward`] check of the joint model, and [`keep_adequate`]: each effect must explain
-//! the data where it acts. Then the [`research`]: where the residual of the joint model
-//! still stands out (a position, an axis, a time span, ...), every candidate that explains
-//! a material share of what is left there is judged by the same rules, the share counted
-//! in that region instead of over the whole recording (a small effect beside a large one
-//! is diluted by the large one's imperfect fit elsewhere); an effect found joins the model,
-//! the backward and adequacy checks run again, and the search looks again.
+//! the data where it acts. Then the [`Forward::research`]: where the residual of the
+//! joint model still stands out (a position, an axis, a time span, ...), every candidate
+//! that explains a material share of what is left there is judged by the same rules, the
+//! share counted in that region instead of over the whole recording (a small effect
+//! beside a large one is diluted by the large one's imperfect fit elsewhere), and it
+//! must reproduce on both
+//! halves of the recording; an effect found joins the model, the backward and adequacy
+//! checks run again until neither drops one, and the search looks again. A hysteresis, a
+//! warm-up or a temperature curvature must also beat a linear drift in time in its place
+//! ([`beats_drift`]), when added and in the backward check.
 //!
 //! Every rule is a field of [`crate::diagnose::rules::Rules`] (all scaled by the
 //! dispersion phi of the larger model, so a model still far from the data cannot buy

@@ -6,6 +6,7 @@
 //! (host-fit/src/blind/config.rs).
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::Recording;
+use host_fit::diagnose::location::Grouping;
 use host_fit::diagnose::{diagnose, EffectId};
 use host_fit::simulate::{simulate, SimConfig};
 
@@ -88,7 +89,7 @@ fn a_fixture_error_beside_a_rate_and_a_lag_is_found_where_the_rest_is_located() 
     assert!(
         r.region
             .iter()
-            .any(|h| h.value == truth.position && h.group.as_str() == "position"),
+            .any(|h| h.value == truth.position && h.group == Grouping::Position),
         "{text}"
     );
     assert!(

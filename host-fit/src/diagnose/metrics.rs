@@ -227,18 +227,12 @@ fn region_rms(data: &Data, f: &Fit, contribution: &[f64]) -> Option<f64> {
 /// there the joint model's residual is at the floor, or at most
 /// [`Rules::adequate_ratio`] of the residual without the effect.
 pub fn adequate(data: &Data, full: &Fit, reduced: &Fit) -> bool {
-    inadequacy(data, full, reduced) <= data.rules.adequate_ratio
-}
-
-/// How far the effect `full` has and `reduced` lacks is from explaining the data where
-/// it acts: 0 where the joint model's residual there is at the floor, else the ratio of
-/// the residual there with and without the effect; infinite where it acts nowhere above
-/// [`Rules::acts_sigmas`]. [`adequate`] when at most [`Rules::adequate_ratio`].
-pub fn inadequacy(data: &Data, full: &Fit, reduced: &Fit) -> f64 {
     let c = contribution(data, full, reduced);
+    let r = &data.rules;
     match (region_rms(data, full, &c), region_rms(data, reduced, &c)) {
-        (Some(after), Some(_)) if after <= data.rules.at_floor_rms => 0.0,
-        (Some(after), Some(before)) if before > 0.0 => after / before,
-        _ => f64::INFINITY,
+        (Some(after), Some(before)) => {
+            after <= r.at_floor_rms || after <= r.adequate_ratio * before
+        }
+        _ => false,
     }
 }

@@ -10,11 +10,10 @@
 //! that explains a material share of what is left there is judged by the same rules, the
 //! share counted in that region instead of over the whole recording (a small effect
 //! beside a large one is diluted by the large one's imperfect fit elsewhere), and it
-//! must reproduce on both
-//! halves of the recording; an effect found joins the model, the backward and adequacy
-//! checks run again until neither drops one, and the search looks again. A hysteresis, a
-//! warm-up or a temperature curvature must also beat a linear drift in time in its place
-//! ([`beats_drift`]), when added and in the backward check.
+//! must reproduce on both halves of the recording; an effect found joins the model, the
+//! backward and adequacy checks run again until neither drops one, and the search looks
+//! again. A hysteresis, a warm-up or a temperature curvature must also beat a linear
+//! drift in time in its place ([`beats_drift`]), when added and in the backward check.
 //!
 //! Every rule is a field of [`crate::diagnose::rules::Rules`] (all scaled by the
 //! dispersion phi of the larger model, so a model still far from the data cannot buy
@@ -29,7 +28,7 @@ use crate::diagnose::effects::{EffectId, Extra};
 use crate::diagnose::findings::reproduced;
 use crate::diagnose::fit::{Depth, Fit};
 use crate::diagnose::location::{locate, rows_of, Hotspot};
-use crate::diagnose::metrics::{dispersion, inadequacy, judge, normalized_rms, qbic, z, Judgement};
+use crate::diagnose::metrics::{adequate, dispersion, judge, normalized_rms, qbic, z, Judgement};
 use crate::diagnose::profile;
 use serde::Serialize;
 
@@ -201,7 +200,7 @@ impl Forward<'_, '_> {
                 if !tried.contains(&r.id) {
                     tried.push(r.id);
                 }
-                if let Some(fit) = self.judged_in(&r.fit, &rows) {
+                if let Some(fit) = self.judged_where(&r.fit, Some(&rows)) {
                     log::debug!(
                         "  re-search at {} {} {}: {:?}",
                         h.group,
@@ -229,26 +228,6 @@ impl Forward<'_, '_> {
             found: None,
         };
         Some((research, None))
-    }
-
-    /// The proposal `f` fitted in full, when it passes every acceptance rule against the
-    /// current model with its share of the excess counted on `rows` (a located region).
-    fn judged_in(&self, f: &Fit, rows: &[usize]) -> Option<Fit> {
-        let data = self.data;
-        let full = data.fit(&f.spec, Some(&self.current), Depth::Full)?;
-        let mut j = judge(data, &self.current, &full, full.spec.extras.len() - 1);
-        j.share = regional_share(data, &self.current, &full, rows);
-        // its share counted only where it is located, an effect found again must also
-        // show on both halves of the recording: else the leftovers of a larger effect's
-        // imperfect form pass for a small one
-        let ok = j.accepted(data)
-            && beats_drift(data, &self.current, &full, full.spec.extras.len() - 1)
-            && reproduced(data, &full, &self.current);
-        log::debug!(
-            "  re-search {:?}: {j:?} accepted {ok}",
-            full.spec.extras.last()
-        );
-        ok.then_some(full)
     }
 
     /// Whether effect `id` may still be proposed.
@@ -394,12 +373,29 @@ impl Forward<'_, '_> {
     /// The proposal `f` fitted in full, when it passes every acceptance rule against the
     /// current model.
     fn judged(&self, f: &Fit) -> Option<Fit> {
+        self.judged_where(f, None)
+    }
+
+    /// [`Forward::judged`], its share of the excess counted on `rows` (a located region)
+    /// when given: an effect found there must then also show on both halves of the
+    /// recording, else the leftovers of a larger effect's imperfect form pass for a small
+    /// one.
+    fn judged_where(&self, f: &Fit, rows: Option<&[usize]>) -> Option<Fit> {
         let data = self.data;
         let full = data.fit(&f.spec, Some(&self.current), Depth::Full)?;
-        let j = judge(data, &self.current, &full, full.spec.extras.len() - 1);
-        let ok =
-            j.accepted(data) && beats_drift(data, &self.current, &full, full.spec.extras.len() - 1);
-        log::debug!("  {:?}: {j:?} accepted {ok}", full.spec.extras.last());
+        let e = full.spec.extras.len().checked_sub(1)?;
+        let mut j = judge(data, &self.current, &full, e);
+        if let Some(rows) = rows {
+            j.share = regional_share(data, &self.current, &full, rows);
+        }
+        let ok = j.accepted(data)
+            && beats_drift(data, &self.current, &full, e)
+            && rows.is_none_or(|_| reproduced(data, &full, &self.current));
+        log::debug!(
+            "  {}{:?}: {j:?} accepted {ok}",
+            if rows.is_some() { "re-search " } else { "" },
+            full.spec.extras.last()
+        );
         ok.then_some(full)
     }
 
@@ -515,10 +511,9 @@ pub fn without(data: &Data, f: &Fit, e: usize) -> Option<Fit> {
 
 /// The backward check: drop, one at a time, the effect the joint model needs least while
 /// one of them no longer passes the acceptance rules against the model without it (a
-/// hysteresis or a warm-up also against a linear drift in its place, see
-/// [`beats_drift`]). An
-/// effect a re-search found (in `regions`, with its located rows) has its share counted
-/// there, as when it was accepted.
+/// hysteresis, a warm-up or a curvature also against a linear drift in its place, see
+/// [`beats_drift`]). An effect a re-search found (in `regions`, with its located rows)
+/// has its share counted there, as when it was accepted.
 pub fn backward(data: &Data, mut current: Fit, regions: &[(Extra, Vec<usize>)]) -> Fit {
     loop {
         let mut weakest: Option<(Judgement, Fit)> = None;
@@ -562,7 +557,7 @@ pub fn keep_adequate(data: &Data, mut current: Fit) -> Fit {
             let Some(reduced) = without(data, &current, e) else {
                 continue;
             };
-            if inadequacy(data, &current, &reduced) > data.rules.adequate_ratio {
+            if !adequate(data, &current, &reduced) {
                 log::debug!("  not adequate: {:?}", current.spec.extras[e]);
                 current = reduced;
                 continue 'again;

@@ -19,8 +19,9 @@ use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
 use crate::fit::temperature::span;
 use crate::output::{check_writable, write_atomic, write_json};
+use crate::resume::Prior;
 use crate::store::record::{sha256_file, stamp, AtT0, Command as Recorded, HashingReader, Record};
-use crate::store::{Store, Target};
+use crate::store::{test_record, Store, Target};
 use crate::verify::{verify, TempMax};
 use firmware_core::compensate::Method;
 use firmware_core::model::COEFF_NAMES;
@@ -38,8 +39,8 @@ pub const OUTLIER_Z: f64 = 3.5;
 pub const RECORD_CHUNK: usize = 64;
 
 /// How a unit of the batch ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum UnitStatus {
     /// Fitted, and its blob passed acceptance.
     Pass,
@@ -157,8 +158,15 @@ struct UnitJson<'a> {
     diagnosis: Option<Contract>,
 }
 
-/// Fit one unit, write its blob and JSON; fills `r`.
-fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Result<()> {
+/// Fit one unit, write its blob, JSON and test record (over files of an earlier run
+/// when `force`); fills `r`.
+fn fit_unit(
+    path: &Path,
+    out: &Path,
+    o: &BatchOptions,
+    force: bool,
+    r: &mut UnitResult,
+) -> Result<()> {
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -234,7 +242,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         rc.blob = Some(bytes.clone());
         r.record = Some(rc);
     }
-    write_atomic(&out.join(format!("{stem}.blob")), &bytes, o.force)?;
+    write_atomic(&out.join(format!("{stem}.blob")), &bytes, force)?;
     let check = |p: usize| rec.positions.has_role(p, Role::Verification);
     let v = verify(&rec, &blob, Method::CorrectConstants, &check)
         .ok_or_else(|| HostError::in_file(path, "K(T0) of the blob is singular"))?;
@@ -249,7 +257,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     r.reason = acc.reason.clone();
     if let Some(rc) = &mut r.record {
         rc.worst_dg_mg = r.max_dg_after_mg;
-        rc.with_verdict(&acc.acceptance, &acc.reason)?;
+        rc.with_verdict(acc.acceptance, &acc.reason);
     }
     let j = UnitJson {
         unit: &r.unit,
@@ -267,10 +275,54 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         missing_positions: missing,
         diagnosis,
     };
-    write_json(&out.join(format!("{stem}.json")), &j, o.force)
+    write_json(&out.join(format!("{stem}.json")), &j, force)?;
+    let reason = r.reason.clone();
+    let unit = test_record::Unit {
+        acceptance: Some(&acc),
+        status: r.acceptance,
+        reason: &reason,
+        uncompensated_mg: r.max_dg_before_mg,
+    };
+    write_test_record(out, &stem, r, o, &unit, force)
 }
 
-fn one(path: &Path, out: &Path, o: &BatchOptions) -> UnitResult {
+/// The unit's test record: built from its store record (a bare one without a store),
+/// kept in it, and written beside the blob as `UNIT.test-record.json`.
+fn write_test_record(
+    out: &Path,
+    stem: &str,
+    r: &mut UnitResult,
+    o: &BatchOptions,
+    unit: &test_record::Unit<'_>,
+    force: bool,
+) -> Result<()> {
+    let bare;
+    let rc = match &r.record {
+        Some(rc) => rc,
+        None => {
+            let t = o
+                .store
+                .clone()
+                .unwrap_or_else(|| Target::new(PathBuf::new()));
+            bare = t.record(Recorded::Batch, &r.unit, &r.file)?;
+            &bare
+        }
+    };
+    let tr = test_record::build(rc, unit);
+    let v = serde_json::to_value(&tr)
+        .map_err(|e| HostError::msg(format!("cannot encode the test record: {e}")))?;
+    if let Some(rc) = &mut r.record {
+        rc.test_record = Some(v);
+    }
+    write_json(&test_record_path(out, stem), &tr, force)
+}
+
+/// Where a unit's test record is written.
+pub fn test_record_path(out: &Path, stem: &str) -> PathBuf {
+    out.join(format!("{stem}.test-record.json"))
+}
+
+fn one(path: &Path, out: &Path, o: &BatchOptions, force: bool) -> UnitResult {
     let mut r = UnitResult {
         file: path.to_path_buf(),
         unit: path
@@ -288,12 +340,21 @@ fn one(path: &Path, out: &Path, o: &BatchOptions) -> UnitResult {
         outlier: Vec::new(),
         record: None,
     };
-    if let Err(e) = fit_unit(path, out, o, &mut r) {
+    if let Err(e) = fit_unit(path, out, o, force, &mut r) {
         r.acceptance = UnitStatus::Error;
         r.reason = e.to_string();
         if let Some(t) = &o.store {
             let begun = r.record.take();
             r.record = error_record(t, path, &r, begun);
+            if let Some(rc) = &mut r.record {
+                let unit = test_record::Unit {
+                    acceptance: None,
+                    status: UnitStatus::Error,
+                    reason: &r.reason,
+                    uncompensated_mg: None,
+                };
+                rc.test_record = serde_json::to_value(test_record::build(rc, &unit)).ok();
+            }
         }
     }
     r
@@ -310,10 +371,7 @@ fn error_record(t: &Target, path: &Path, r: &UnitResult, begun: Option<Record>) 
             rc
         }
     };
-    rc.judged = Some(crate::store::record::Judged {
-        verdict: "error".into(),
-        reason: r.reason.clone(),
-    });
+    rc.with_verdict(UnitStatus::Error, &r.reason);
     Some(rc)
 }
 
@@ -484,6 +542,8 @@ pub struct BatchOutcome {
     pub lot: Vec<LotCoefficient>,
     /// Records written to the store.
     pub recorded: Option<usize>,
+    /// Units kept as an earlier run recorded them (a batch resumed after a crash).
+    pub resumed: usize,
 }
 
 impl BatchOutcome {
@@ -506,14 +566,47 @@ impl BatchOutcome {
     }
 }
 
+/// The store's writer and what it already holds of the lot (nothing with `--force`: the
+/// lot is done again). Opened before any unit is processed: a bad store stops the batch
+/// before it starts.
+fn open_store(
+    o: &BatchOptions,
+    files: &[PathBuf],
+    out: &Path,
+) -> Result<(Option<crate::store::Writer>, Prior)> {
+    let Some(t) = &o.store else {
+        return Ok((None, Prior::default()));
+    };
+    let mut store = Store::open(&t.db)?;
+    let prior = match (&t.lot, o.force) {
+        (Some(lot), false) => crate::resume::prior(&mut store, lot, files, out)?,
+        _ => Prior::default(),
+    };
+    Ok((Some(store.writer(RECORD_CHUNK)), prior))
+}
+
 /// Run a batch over every `*.csv` in `dir`; writes `summary.csv` and `lot.csv` in `out`.
+/// Run again after a crash, it resumes (see [`crate::resume`]).
 pub fn run(dir: &Path, out: &Path, o: &BatchOptions) -> Result<BatchOutcome> {
     let files = recordings(dir)?;
-    std::fs::create_dir_all(out).map_err(|e| HostError::io(out, &e))?;
     let summary = out.join("summary.csv");
     let lot_path = out.join("lot.csv");
-    check_writable(&summary, o.force)?;
-    check_writable(&lot_path, o.force)?;
+    // an output folder made for a batch that cannot start is taken away again
+    let made = !out.exists();
+    let opened = std::fs::create_dir_all(out)
+        .map_err(|e| HostError::io(out, &e))
+        .and_then(|_| check_writable(&summary, o.force))
+        .and_then(|_| check_writable(&lot_path, o.force))
+        .and_then(|_| open_store(o, &files, out));
+    let (writer, prior) = match opened {
+        Ok(v) => v,
+        Err(e) => {
+            if made {
+                let _ = std::fs::remove_dir(out);
+            }
+            return Err(e);
+        }
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(o.jobs.unwrap_or(0))
         .build()
@@ -527,16 +620,18 @@ pub fn run(dir: &Path, out: &Path, o: &BatchOptions) -> Result<BatchOutcome> {
         ProgressStyle::with_template("{pos}/{len} units [{bar:40}] {elapsed_precise} eta {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    // opened before any unit is processed: a bad store stops the batch before it starts
-    let writer = match &o.store {
-        Some(t) => Some(Store::open(&t.db)?.writer(RECORD_CHUNK)),
-        None => None,
-    };
     let mut units: Vec<UnitResult> = pool.install(|| {
         files
             .par_iter()
             .map(|f| {
-                let r = one(f, out, o);
+                let r = match crate::resume::recorded_for(&prior, f) {
+                    Some(rc) => crate::resume::kept(f, out, rc).unwrap_or_else(|e| {
+                        let mut r = one(f, out, o, o.force);
+                        r.reason = format!("{} (kept record unreadable: {e})", r.reason);
+                        r
+                    }),
+                    None => one(f, out, o, o.force || prior.orphans.contains(f)),
+                };
                 if let (Some(w), Some(rc)) = (&writer, &r.record) {
                     w.send(rc.clone());
                 }
@@ -550,7 +645,9 @@ pub fn run(dir: &Path, out: &Path, o: &BatchOptions) -> Result<BatchOutcome> {
     let lot = lot(&mut units);
     write_atomic(&summary, summary_csv(&units)?.as_bytes(), o.force)?;
     write_atomic(&lot_path, lot_csv(&lot)?.as_bytes(), o.force)?;
+    let resumed = units.iter().filter(|u| u.record.is_none()).count();
     Ok(BatchOutcome {
+        resumed: if recorded.is_some() { resumed } else { 0 },
         units,
         lot,
         recorded,

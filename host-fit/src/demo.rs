@@ -137,7 +137,7 @@ fn records(
             .iter()
             .map(|t| t.max_abs_dg_mg)
             .reduce(f64::max);
-        r.with_verdict(&m.acceptance.acceptance, &m.acceptance.reason)?;
+        r.with_verdict(m.acceptance.acceptance, &m.acceptance.reason);
         out.push(r);
     }
     out.push(plan_record(
@@ -184,7 +184,7 @@ fn plan_record(
     });
     r.blob = Some(stamp(&plan.blob, r.run_id)?);
     r.worst_dg_mg = Some(j.worst_mg);
-    r.with_verdict(&j.acceptance.acceptance, &j.acceptance.reason)?;
+    r.with_verdict(j.acceptance.acceptance, &j.acceptance.reason);
     Ok(r)
 }
 

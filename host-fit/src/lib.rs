@@ -46,5 +46,6 @@ pub mod batch;
 pub mod demo;
 pub mod demo_plan;
 pub mod report;
+pub mod resume;
 
 pub mod cli;

@@ -195,13 +195,27 @@ pub struct Input {
 /// Where a run is recorded (the record store; `history` and `trend` read it).
 #[derive(Args, Debug, Clone, Default)]
 pub struct RecordArgs {
-    /// Record the run in this record store (SQLite, created when missing; `batch`:
-    /// records.sqlite in its output folder unless given).
+    /// Record the run in this record store: a file path (SQLite, created when missing;
+    /// `batch`: records.sqlite in its output folder unless given) or
+    /// postgresql://user@host:port/database (the password from PGPASSWORD or a pgpass
+    /// file; docs/records.md).
     #[arg(long)]
-    pub db: Option<PathBuf>,
+    pub db: Option<String>,
     /// The unit's lot, recorded with the run (`batch`: default the folder's name).
     #[arg(long)]
     pub lot: Option<String>,
+    /// The station (bench computer) recorded with the run.
+    #[arg(long, env = "HOSTFIT_STATION")]
+    pub station: Option<String>,
+    /// The climatic chamber the unit ran in.
+    #[arg(long, env = "HOSTFIT_CHAMBER")]
+    pub chamber: Option<String>,
+    /// The tilter (rate table, dividing head) the unit ran on.
+    #[arg(long, env = "HOSTFIT_TILTER")]
+    pub tilter: Option<String>,
+    /// The operator (default: the login name, USER).
+    #[arg(long, env = "HOSTFIT_OPERATOR")]
+    pub operator: Option<String>,
     /// How the tool was run (filled by the command line; not an option).
     #[arg(skip)]
     pub invocation: Option<crate::store::Invocation>,
@@ -557,9 +571,16 @@ pub struct InspectArgs {
 pub struct HistoryArgs {
     /// The unit's serial (as in its blob).
     pub serial: String,
-    /// The record store.
+    /// The record store (a file, or postgresql://user@host:port/database).
     #[arg(long)]
-    pub db: PathBuf,
+    pub db: String,
+    /// Print the unit's test record (JSON) of its newest record that has one, or of the
+    /// run given with --run.
+    #[arg(long, conflicts_with_all = ["blob", "json"])]
+    pub test_record: bool,
+    /// With --test-record: the run (its id or its first 6 or more hex digits).
+    #[arg(long, requires = "test_record")]
+    pub run: Option<String>,
     /// Re-issue the blob of this run, bit for bit (its run id, or its first 6 or more
     /// hex digits); needs --out.
     #[arg(long, requires = "out")]
@@ -578,9 +599,9 @@ pub struct HistoryArgs {
 /// `trend`.
 #[derive(Args, Debug)]
 pub struct TrendArgs {
-    /// The record store.
+    /// The record store (a file, or postgresql://user@host:port/database).
     #[arg(long)]
-    pub db: PathBuf,
+    pub db: String,
     /// The HTML report to write.
     #[arg(long)]
     pub out: PathBuf,
@@ -603,6 +624,34 @@ pub struct TrendArgs {
     /// Machine-readable output (every flagged point).
     #[arg(long)]
     pub json: bool,
+}
+
+/// `store`.
+#[derive(Args, Debug)]
+pub struct StoreArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub action: StoreAction,
+}
+
+/// What `store` does.
+#[derive(Subcommand, Debug)]
+pub enum StoreAction {
+    /// Bring a record store to this host-fit's schema version (a new one is made; an
+    /// older one is upgraded in one transaction: back it up first).
+    Migrate {
+        /// The record store (a file, or postgresql://user@host:port/database).
+        #[arg(long)]
+        db: String,
+    },
+    /// Copy every record of one store into another, between backends too (records
+    /// the destination holds already are not copied again).
+    Copy {
+        /// The store to copy from.
+        src: String,
+        /// The store to copy into (made when missing or empty).
+        dst: String,
+    },
 }
 
 /// The commands.
@@ -647,4 +696,7 @@ pub enum Command {
     /// worst verification |dg|, with limits from a reference period and the points the
     /// run rules flag (HTML report).
     Trend(TrendArgs),
+    /// The record store itself: upgrade its schema (`migrate`), copy it between
+    /// backends (`copy`).
+    Store(StoreArgs),
 }

@@ -69,5 +69,6 @@ fn dispatch(cmd: Command, out: &mut dyn Write, err: &mut dyn Write) -> Result<Ou
         Command::Demo(a) => done(production::demo(a, out)),
         Command::History(a) => done(records::history(a, out)),
         Command::Trend(a) => done(records::trend(a, out)),
+        Command::Store(a) => done(records::store(a, out)),
     }
 }

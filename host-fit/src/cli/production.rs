@@ -23,7 +23,7 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
         diagnose: a.diagnose,
         force: a.force,
         positions,
-        store: super::records::batch_store(&a.dir, &a.out, &a.record, a.no_db),
+        store: super::records::batch_store(&a.dir, &a.out, &a.record, a.no_db)?,
     };
     let res = crate::batch::run(&a.dir, &a.out, &o)?;
     let count = |s: UnitStatus| res.units.iter().filter(|r| r.acceptance == s).count();
@@ -80,14 +80,23 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
         ),
     )?;
     if let (Some(t), Some(n)) = (&o.store, res.recorded) {
+        if res.resumed > 0 {
+            w(
+                out,
+                format!(
+                    "resumed: {} units already recorded in {} were kept as recorded (not computed again)",
+                    res.resumed, t.db
+                ),
+            )?;
+        }
         w(
             out,
             format!(
                 "records: {n} units recorded in {} (lot {}; host-fit history SERIAL --db {}, host-fit trend --db {} --out trend.html)",
-                t.db.display(),
+                t.db,
                 t.lot.as_deref().unwrap_or("-"),
-                t.db.display(),
-                t.db.display()
+                t.db,
+                t.db
             ),
         )?;
     }
@@ -381,8 +390,8 @@ pub(super) fn demo(a: DemoArgs, out: &mut dyn Write) -> Result<()> {
     )?;
     // the line's memory: what the store now holds of this unit
     let db = a.out.join(crate::demo::STORE);
-    let store = crate::store::Store::open_existing(&db)?;
-    let h = crate::store::history::history(&store, &oc.recording.unit)?;
+    let mut store = crate::store::Store::open_existing(&db)?;
+    let h = crate::store::history::history(&mut store, &oc.recording.unit)?;
     w(
         out,
         format!(

@@ -2,7 +2,7 @@
 //! with `--db` (one record per run, written before any file, so that no blob leaves the
 //! tool without its record), `history` and `trend`, and how the tool was run (every
 //! option with its value, defaults included, read from the parser's matches).
-use super::args::{Cli, Command, HistoryArgs, RecordArgs, TrendArgs};
+use super::args::{Cli, Command, HistoryArgs, RecordArgs, StoreAction, StoreArgs, TrendArgs};
 use super::common::w;
 use crate::acceptance::Acceptance;
 use crate::blob::Inspection;
@@ -14,9 +14,10 @@ use crate::fit::pipeline::FitOutcome;
 use crate::fit::predict::coefficient_sigma;
 use crate::output::{check_writable, json, write_atomic};
 use crate::store::history::{history as unit_history, stored_blob};
-use crate::store::record::{sha256_file, stamp, AtT0, Command as Recorded, Record};
+use crate::store::record::{sha256_file, stamp, AtT0, Command as Recorded, Record, Trace};
+use crate::store::schema::Mode;
 use crate::store::trend::{parse_rules, trend as make_trend, Reference};
-use crate::store::{clock, Invocation, Store, Target};
+use crate::store::{clock, Filter, Invocation, Location, Store, Target};
 use crate::verify::Verification;
 use clap::{ArgMatches, CommandFactory, FromArgMatches};
 use firmware_core::blob::Blob;
@@ -27,8 +28,11 @@ use std::path::Path;
 /// Default reference of `trend`: the first this many units.
 pub const DEFAULT_REFERENCE: usize = 50;
 
+/// The options that name a record store: their values are recorded without a password.
+const STORE_OPTIONS: [&str; 3] = ["db", "src", "dst"];
+
 /// Every option of the subcommand in `m`, with its value (`null` when not given and
-/// without a default; flags as booleans).
+/// without a default; flags as booleans); a store's URL without its password.
 fn options(name: &str, m: &ArgMatches) -> serde_json::Map<String, serde_json::Value> {
     use serde_json::Value;
     let mut out = serde_json::Map::new();
@@ -50,6 +54,9 @@ fn options(name: &str, m: &ArgMatches) -> serde_json::Map<String, serde_json::Va
         let v = match raw.as_slice() {
             [] => Value::Null,
             [one] if !arg.get_action().takes_values() => Value::Bool(one == "true"),
+            [one] if STORE_OPTIONS.contains(&id) => Value::String(
+                Location::parse(one).map_or_else(|_| "(not a store)".into(), |l| l.to_string()),
+            ),
             [one] => Value::String(one.clone()),
             many => Value::Array(many.iter().cloned().map(Value::String).collect()),
         };
@@ -89,13 +96,30 @@ where
     Ok(cli)
 }
 
+/// Where and by whom, from the flags (and their environment variables); the operator
+/// else the login name.
+fn trace(a: &RecordArgs) -> Trace {
+    let login = || std::env::var("USER").ok().filter(|u| !u.is_empty());
+    Trace {
+        station: a.station.clone(),
+        chamber: a.chamber.clone(),
+        tilter: a.tilter.clone(),
+        operator: a.operator.clone().or_else(login),
+    }
+}
+
 /// Where to record, when `--db` is given.
-pub(super) fn target(a: &RecordArgs) -> Option<Target> {
-    a.db.as_ref().map(|db| Target {
-        db: db.clone(),
-        lot: a.lot.clone(),
-        invocation: a.invocation.clone(),
-    })
+pub(super) fn target(a: &RecordArgs) -> Result<Option<Target>> {
+    a.db.as_deref()
+        .map(|db| {
+            Ok(Target {
+                db: Location::parse(db)?,
+                lot: a.lot.clone(),
+                trace: trace(a),
+                invocation: a.invocation.clone(),
+            })
+        })
+        .transpose()
 }
 
 /// A run being recorded: where, the unit, its recording, where notes go.
@@ -118,7 +142,7 @@ impl Run<'_> {
         command: Recorded,
         fill: impl FnOnce(&mut Record) -> Result<()>,
     ) -> Result<Option<Record>> {
-        let Some(t) = target(self.args) else {
+        let Some(t) = target(self.args)? else {
             return Ok(None);
         };
         // opened (and checked) before the record is made: a bad store is reported
@@ -132,10 +156,7 @@ impl Run<'_> {
         let _ = writeln!(
             self.err,
             "note: recorded as run {} in {} (host-fit history {} --db {})",
-            r.run_id,
-            t.db.display(),
-            self.serial,
-            t.db.display()
+            r.run_id, t.db, self.serial, t.db
         );
         Ok(Some(r))
     }
@@ -213,7 +234,8 @@ pub(super) fn verify(
         });
         r.blob = Some(bytes.to_vec());
         r.worst_dg_mg = worst_dg(v);
-        r.with_verdict(&acc.acceptance, &acc.reason)
+        r.with_verdict(acc.acceptance, &acc.reason);
+        Ok(())
     })?;
     Ok(())
 }
@@ -255,9 +277,9 @@ pub(super) fn history(a: HistoryArgs, out: &mut dyn Write) -> Result<()> {
     if let Some(o) = &a.out {
         check_writable(o, a.force)?;
     }
-    let store = Store::open_existing(&a.db)?;
+    let mut store = Store::open_existing(Location::parse(&a.db)?)?;
     if let (Some(run), Some(o)) = (&a.blob, &a.out) {
-        let (id, bytes) = stored_blob(&store, &a.serial, run)?;
+        let (id, bytes) = stored_blob(&mut store, &a.serial, run)?;
         write_atomic(o, &bytes, a.force)?;
         return w(
             out,
@@ -270,11 +292,71 @@ pub(super) fn history(a: HistoryArgs, out: &mut dyn Write) -> Result<()> {
             ),
         );
     }
-    let h = unit_history(&store, &a.serial)?;
+    if a.test_record {
+        return w(out, test_record(&mut store, &a.serial, a.run.as_deref())?);
+    }
+    let h = unit_history(&mut store, &a.serial)?;
     if a.json {
         w(out, json(&h)?)
     } else {
         w(out, h.text())
+    }
+}
+
+/// The test record (JSON) of `serial`'s newest record that has one, or of run `run`.
+fn test_record(store: &mut Store, serial: &str, run: Option<&str>) -> Result<String> {
+    let records = store.records(&Filter::serial(serial))?;
+    let run = run.map(str::to_ascii_lowercase);
+    let hit = records.iter().rev().find(|r| {
+        r.test_record.is_some()
+            && run
+                .as_deref()
+                .is_none_or(|p| r.run_id.to_string().starts_with(p))
+    });
+    match hit {
+        Some(r) => json(&r.test_record),
+        None => Err(HostError::in_file(
+            store.path(),
+            format!(
+                "unit `{serial}` has no test record{} (batch units have one; serials are matched exactly)",
+                run.map(|p| format!(" of run {p}")).unwrap_or_default()
+            ),
+        )),
+    }
+}
+
+/// `store migrate` and `store copy`.
+pub(super) fn store(a: StoreArgs, out: &mut dyn Write) -> Result<()> {
+    match a.action {
+        StoreAction::Migrate { db } => {
+            let l = Location::parse(&db)?;
+            Store::open_as(l.clone(), Mode::Migrate)?;
+            w(
+                out,
+                format!(
+                    "{l}: a record store of schema version {}",
+                    crate::store::schema::SCHEMA_VERSION
+                ),
+            )
+        }
+        StoreAction::Copy { src, dst } => {
+            let (s, d) = (Location::parse(&src)?, Location::parse(&dst)?);
+            if s == d {
+                return Err(HostError::msg(format!(
+                    "store copy: {s} is both source and destination"
+                )));
+            }
+            let mut from = Store::open_existing(s.clone())?;
+            let mut to = Store::open(d.clone())?;
+            let c = crate::store::copy::copy(&mut from, &mut to)?;
+            w(
+                out,
+                format!(
+                    "copied {} records of {s} into {d} ({} there already; every record of the source is in the copy)",
+                    c.written, c.already
+                ),
+            )
+        }
     }
 }
 
@@ -293,8 +375,8 @@ pub(super) fn trend(a: TrendArgs, out: &mut dyn Write) -> Result<()> {
         }
         (_, _, n) => Reference::First(n.unwrap_or(DEFAULT_REFERENCE)),
     };
-    let store = Store::open_existing(&a.db)?;
-    let t = make_trend(&store, reference, &rules)?;
+    let mut store = Store::open_existing(Location::parse(&a.db)?)?;
+    let t = make_trend(&mut store, reference, &rules)?;
     let html = crate::report::trend::trend_report(&t)?;
     write_atomic(&a.out, html.as_bytes(), a.force)?;
     if a.json {
@@ -307,12 +389,21 @@ pub(super) fn trend(a: TrendArgs, out: &mut dyn Write) -> Result<()> {
 
 /// The store a batch records into: `--db`, else records.sqlite in its output folder
 /// (none with `--no-db`); the lot: `--lot`, else the folder's name.
-pub(super) fn batch_store(dir: &Path, out: &Path, a: &RecordArgs, no_db: bool) -> Option<Target> {
+pub(super) fn batch_store(
+    dir: &Path,
+    out: &Path,
+    a: &RecordArgs,
+    no_db: bool,
+) -> Result<Option<Target>> {
     if no_db {
-        return None;
+        return Ok(None);
     }
-    Some(Target {
-        db: a.db.clone().unwrap_or_else(|| out.join("records.sqlite")),
+    let db = match &a.db {
+        Some(db) => Location::parse(db)?,
+        None => Location::Sqlite(out.join("records.sqlite")),
+    };
+    Ok(Some(Target {
+        db,
         lot: a.lot.clone().or_else(|| {
             dir.canonicalize()
                 .ok()
@@ -320,6 +411,7 @@ pub(super) fn batch_store(dir: &Path, out: &Path, a: &RecordArgs, no_db: bool) -
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
         }),
+        trace: trace(a),
         invocation: a.invocation.clone(),
-    })
+    }))
 }

@@ -13,7 +13,7 @@ use serde::Serialize;
 use std::fmt;
 
 /// What the diagnosis concludes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
     /// At the floor, nothing found: the model fits to the noise.

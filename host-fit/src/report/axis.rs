@@ -130,6 +130,20 @@ pub fn linear_ticks(lo: f64, hi: f64, len_px: f64, px_per_tick: f64) -> Vec<(f64
         .collect()
 }
 
+/// Ticks of a linear scale of counted things (units, runs): as [`linear_ticks`], but
+/// never a step below 1, so that every label is a whole number.
+pub fn integer_ticks(lo: f64, hi: f64, len_px: f64, px_per_tick: f64) -> Vec<(f64, String)> {
+    let step = nice_step(hi - lo, len_px / px_per_tick).max(1.0);
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    (first..=last)
+        .map(|k| {
+            let v = k as f64 * step;
+            (v, format!("{v:.0}"))
+        })
+        .collect()
+}
+
 /// The largest of 1, 2 or 5 times a power of ten at or below `v` (> 0).
 pub fn round_down_125(v: f64) -> f64 {
     if !(v.is_finite() && v > 0.0) {
@@ -220,6 +234,18 @@ pub fn text_px(s: &str, size: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn counted_axes_have_whole_ticks() {
+        // six units on a wide axis: linear ticks would fall at 0.5, 1.5, ...
+        let t = integer_ticks(0.5, 6.5, 1200.0, 70.0);
+        assert_eq!(
+            t.iter().map(|x| x.1.as_str()).collect::<Vec<_>>(),
+            ["1", "2", "3", "4", "5", "6"]
+        );
+        let t = integer_ticks(0.5, 100_000.5, 1200.0, 70.0);
+        assert!(t.iter().all(|x| x.0.fract() == 0.0 && !x.1.contains('.')));
+    }
 
     #[test]
     fn ticks_are_round_and_never_negative_zero() {

@@ -241,6 +241,8 @@ pub struct Plot {
     pub x_names: Vec<String>,
     /// Fixed x range (plots that must align in time share it).
     pub x_range: Option<(f64, f64)>,
+    /// The x axis counts things (units, runs): whole-number ticks only.
+    pub x_integer: bool,
     /// Fixed y range (plots compared side by side share it).
     pub y_range: Option<(f64, f64)>,
     /// log10 y axis.

@@ -3,7 +3,7 @@
 //! `line`, `errors` and `markers`, `legend-entry`), coordinates to 0.1 px, text left to
 //! the browser (no fonts needed here). A series' markers are one path through their
 //! centres with an SVG `<marker>` at every vertex.
-use crate::report::axis::{category_stride, linear_ticks, log_ticks, text_px};
+use crate::report::axis::{category_stride, integer_ticks, linear_ticks, log_ticks, text_px};
 use crate::report::plot::{
     Band, Legend, Marker, Prepared, Series, BELOW, LEFT, LEGEND_FONT, RIGHT, TOP,
 };
@@ -128,7 +128,11 @@ fn ticks(p: &Prepared, o: &mut String) {
     let names = &p.plot.x_names;
     let xt: Vec<(f64, String)> = if names.is_empty() {
         let widest = text_px(&format!("{:.3}", p.x.hi.abs().max(p.x.lo.abs())), 11.0);
-        linear_ticks(p.x.lo, p.x.hi, x1 - x0, (widest + 24.0).max(70.0))
+        if p.plot.x_integer {
+            integer_ticks(p.x.lo, p.x.hi, x1 - x0, (widest + 24.0).max(70.0))
+        } else {
+            linear_ticks(p.x.lo, p.x.hi, x1 - x0, (widest + 24.0).max(70.0))
+        }
     } else {
         let widest = names.iter().map(|n| text_px(n, 11.0)).fold(0.0, f64::max);
         let k = category_stride(names.len(), x1 - x0, widest);

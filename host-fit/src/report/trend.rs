@@ -7,7 +7,9 @@ use crate::error::Result;
 use crate::report::axis::prefixed;
 use crate::report::page::{esc, html, Section};
 use crate::report::plot::{Band, Dash, Marker, Plot, Rgb, Series, ACCEPT, FLOOR, PALETTE};
-use crate::store::trend::{Chart, Rule, Trend, ALL_RULES_BY_REFERENCE, ALL_RULES_FALSE_ALARM_RATE};
+use crate::store::trend::{
+    Chart, Limits, Quantity, Rule, Trend, ALL_RULES_BY_REFERENCE, ALL_RULES_FALSE_ALARM_RATE,
+};
 
 /// Flagged units listed per chart in the page (all of them: `host-fit trend --json`).
 const LISTED_FLAGS: usize = 12;
@@ -15,9 +17,8 @@ const LISTED_FLAGS: usize = 12;
 /// Lot spans shaded (beyond it, lots interleave too finely to shade).
 const SHADED_LOTS: usize = 400;
 
-/// The bands: the reference period, every other lot, the 3-sigma limits (scaled by `k`
-/// around `centre`).
-fn bands(t: &Trend, centre: f64, sigma: Option<f64>) -> Vec<Band> {
+/// The bands: the reference period, every other lot, the control limits (through `y`).
+fn bands(t: &Trend, limits: Option<Limits>, y: &dyn Fn(f64) -> f64) -> Vec<Band> {
     let mut b = Vec::new();
     if let (Some(a), Some(z)) = (t.reference_units.first(), t.reference_units.last()) {
         b.push(Band {
@@ -45,18 +46,26 @@ fn bands(t: &Trend, centre: f64, sigma: Option<f64>) -> Vec<Band> {
             });
         }
     }
-    if let Some(s) = sigma {
+    if let Some(l) = limits {
+        let clipped = l.lower > l.centre - 3.0 * l.sigma;
         b.push(Band {
-            lo: centre - 3.0 * s,
-            hi: centre + 3.0 * s,
+            lo: y(l.lower),
+            hi: y(l.upper),
             x: None,
-            label: "control limits: centre ± 3 sigma".into(),
+            label: if clipped {
+                "control limits: centre ± 3 sigma, the lower at the bound".into()
+            } else {
+                "control limits: centre ± 3 sigma".into()
+            },
             color: ACCEPT,
             fit: true,
         });
     }
     b
 }
+
+/// The recalibrations' colour.
+const RECALIBRATED: Rgb = Rgb(200, 120, 0);
 
 /// The lots' colour (apart from the palette's, which the rules use).
 const LOT_MEANS: Rgb = Rgb(110, 60, 160);
@@ -71,9 +80,9 @@ fn lot_means(t: &Trend, c: &Chart, y: &dyn Fn(f64) -> f64) -> Option<Series> {
     let mut k = 0;
     for l in &t.lots {
         let (mut sum, mut n) = (0.0, 0usize);
-        while k < c.points.len() && c.points[k].0 <= l.last {
-            if c.points[k].0 >= l.first {
-                sum += c.points[k].1;
+        while k < c.points.len() && c.points[k].place <= l.last {
+            if c.points[k].place >= l.first {
+                sum += c.points[k].value;
                 n += 1;
             }
             k += 1;
@@ -118,13 +127,13 @@ fn flag_series(c: &Chart, y: &dyn Fn(f64) -> f64) -> Vec<Series> {
 /// One chart as a plot. Coefficients are drawn as their departure from the centre line
 /// in a prefixed unit (their digits differ far behind the point); |dg| as it is.
 fn plot(t: &Trend, c: &Chart, wide: bool) -> Plot {
-    let dg = c.quantity == "worst_dg";
+    let dg = c.quantity == Quantity::WorstDg;
     let centre = c.limits.map_or(0.0, |l| l.centre);
     let shift = if dg { 0.0 } else { centre };
     let max_dev = c
         .points
         .iter()
-        .map(|p| (p.1 - shift).abs())
+        .map(|p| (p.value - shift).abs())
         .chain(c.limits.map(|l| 3.0 * l.sigma))
         .fold(0.0, f64::max);
     let (k, unit) = if dg {
@@ -136,11 +145,17 @@ fn plot(t: &Trend, c: &Chart, wide: bool) -> Plot {
     let pts: Vec<(f64, f64)> = c
         .points
         .iter()
-        .map(|p| (p.0 as f64 + 1.0, y(p.1)))
+        .map(|p| (p.place as f64 + 1.0, y(p.value)))
+        .collect();
+    let recal: Vec<(f64, f64)> = c
+        .points
+        .iter()
+        .filter(|p| t.units[p.place].recalibration)
+        .map(|p| (p.place as f64 + 1.0, y(p.value)))
         .collect();
     let n = pts.len();
     let mut units = Series::line(
-        "units in time order",
+        "calibrations in time order",
         PALETTE[0],
         Dash::Solid,
         Marker::Circle,
@@ -150,6 +165,14 @@ fn plot(t: &Trend, c: &Chart, wide: bool) -> Plot {
         units.marker_every = 1;
     }
     let mut series = vec![units];
+    if !recal.is_empty() {
+        series.push(Series::markers(
+            format!("recalibrations: a unit calibrated again ({})", recal.len()),
+            RECALIBRATED,
+            Marker::Square,
+            recal,
+        ));
+    }
     let x_end = t.unit_count as f64;
     if c.limits.is_some() {
         series.push(Series::line(
@@ -172,10 +195,12 @@ fn plot(t: &Trend, c: &Chart, wide: bool) -> Plot {
         .collect();
     let mut note = match c.limits {
         Some(l) => format!(
-            "Centre {:.9} {u}, sigma {:.3e} {u} from {} reference units; flagged {}.",
+            "Centre {:.9} {u}, sigma {:.3e} {u} from {} reference calibrations, limits {:.6} to {:.6} {u}; flagged {}.",
             l.centre,
             l.sigma,
             l.points,
+            l.lower,
+            l.upper,
             if flagged.is_empty() {
                 "none".to_string()
             } else {
@@ -194,12 +219,13 @@ fn plot(t: &Trend, c: &Chart, wide: bool) -> Plot {
         note.push_str(&format!(" {first}{}.", c.as_str()));
     }
     Plot {
-        id: format!("trend-{}", c.quantity.replace('_', "-")),
+        id: format!("trend-{}", c.quantity.name().replace('_', "-")),
         title: match (dg, c.limits) {
             (false, Some(l)) => format!("{} (centre {:.9} {})", c.title(), l.centre, c.unit),
             _ => c.title(),
         },
-        x_label: "calibration order, units".into(),
+        x_label: "calibration, in time order (number)".into(),
+        x_integer: true,
         y_label: if dg {
             format!("{}, {unit}", c.title())
         } else if c.limits.is_some() {
@@ -209,7 +235,7 @@ fn plot(t: &Trend, c: &Chart, wide: bool) -> Plot {
         },
         x_range: Some((0.5, x_end + 0.5)),
         series,
-        bands: bands(t, y(centre), c.limits.map(|l| l.sigma * k)),
+        bands: bands(t, c.limits, &y),
         width: if wide { 1300 } else { 620 },
         height: if wide { 240 } else { 220 },
         wide,
@@ -269,9 +295,10 @@ pub fn trend_report(t: &Trend) -> Result<String> {
         .map(|l| format!("{} (units {}-{})", l.lot, l.first + 1, l.last + 1))
         .collect();
     let intro = format!(
-        "<p>Record store {}: {} units, each serial's latest calibration, in the order they were calibrated. Lots in that order: {}{}. Centre line and limits from {} ({} units): the centre is their mean, sigma their mean moving range / 1.128. Points are flagged by Nelson's run rules {}; on a stable process with its limits known each flags a point with probability {} (all eight together {:.2}%); limits estimated from 20, 50 or 100 reference units flag more: all eight together {}.</p>\n<pre>{}</pre>\n{}",
+        "<p>Record store {}: {} calibrations in the order they were made, every one of each unit ({} recalibrations of a unit calibrated before, marked). Lots in that order: {}{}. Centre line and limits from {} ({} units): the centre is their mean, sigma their mean moving range / 1.128. Points are flagged by Nelson's run rules {}; on a stable process with its limits known each flags a point with probability {} (all eight together {:.2}%); limits estimated from 20, 50 or 100 reference units flag more: all eight together {}.</p>\n<pre>{}</pre>\n{}",
         esc(&t.store),
         t.unit_count,
+        t.recalibrations,
         esc(&lots.join(", ")),
         if t.lots.len() > lots.len() {
             format!(" and {} more", t.lots.len() - lots.len())
@@ -295,9 +322,11 @@ pub fn trend_report(t: &Trend) -> Result<String> {
         esc(&t.text()),
         flag_table(t)
     );
-    let (coeffs, dg): (Vec<&Chart>, Vec<&Chart>) =
-        t.charts.iter().partition(|c| c.quantity != "worst_dg");
-    let dg_text = "The worst compensated |dg| over each unit's verification dwells (formula (13)), from its newest record that verified it (batch or verify).";
+    let (coeffs, dg): (Vec<&Chart>, Vec<&Chart>) = t
+        .charts
+        .iter()
+        .partition(|c| c.quantity != Quantity::WorstDg);
+    let dg_text = "The worst compensated |dg| over each calibration's verification dwells (formula (13)): a batch's own, or the first `verify` of that unit after it. |dg| is never below 0: no lower limit below 0 is drawn.";
     let drawn = |c: &&&Chart| !c.points.is_empty();
     let sections = [
         Section {

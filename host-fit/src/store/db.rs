@@ -1,275 +1,262 @@
-//! The store itself: opening (a new store made whole beside its name; an existing file
-//! checked before SQLite reads it), appending records in one transaction, a writer
-//! thread that appends in chunks.
-use super::fault::{db_error, BUSY_TIMEOUT};
-use super::record::{coefficient_columns, Command, Invocation, Record, COEFFS};
-use super::schema;
+//! The store itself, on either backend: opening (as [`Mode`] allows), appending records
+//! in one transaction, reading them by a typed [`Filter`], a writer thread that appends
+//! in chunks. Every statement is parameterised: no value ever becomes SQL text.
+use super::columns::{columns, record_select, Column, Row, SqlType, Value};
+use super::location::Location;
+use super::record::{Command, Invocation, Record, RunId, Trace};
+use super::schema::{Dialect, Mode, CALIBRATION};
+use super::{pg, sqlite};
 use crate::error::{HostError, Result};
-use rusqlite::{params_from_iter, Connection, OpenFlags, TransactionBehavior};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+/// The connection of a store.
+enum Conn {
+    Sqlite(rusqlite::Connection),
+    Postgres(Box<postgres::Client>),
+}
+
 /// An open record store.
 pub struct Store {
-    conn: Connection,
-    path: PathBuf,
+    conn: Conn,
+    location: Location,
+    /// The name errors give (the SQLite file, or the URL without its password).
+    at: PathBuf,
 }
 
-/// What the bytes of an existing file say before SQLite opens it: an SQLite database of
-/// the length its header states, or why not. A store in use by another process (its
-/// `-wal` file not empty) may be longer in the log than in the file: only the magic is
-/// checked then.
-fn check_file(path: &Path) -> Result<()> {
-    use std::io::Read;
-    let mut f = std::fs::File::open(path).map_err(|e| HostError::io(path, &e))?;
-    let len = f.metadata().map_err(|e| HostError::io(path, &e))?.len();
-    if len == 0 {
-        return Err(HostError::in_file(
-            path,
-            "is empty (0 bytes): not a record store (a store cut to nothing?); it is left as it is: restore it, or give a path that does not exist yet for a new store",
-        ));
-    }
-    let mut head = [0u8; 100];
-    if len < 100 || f.read_exact(&mut head).is_err() {
-        return Err(HostError::in_file(
-            path,
-            format!("is {len} bytes: too short for an SQLite database header (100 bytes), not a record store or one cut short; it is left as it is"),
-        ));
-    }
-    if &head[..16] != b"SQLite format 3\0" {
-        return Err(HostError::in_file(
-            path,
-            "is not a record store (not an SQLite database); it is left as it is",
-        ));
-    }
-    let be = |r: std::ops::Range<usize>| head[r].iter().fold(0u64, |a, b| a << 8 | u64::from(*b));
-    let page = match be(16..18) {
-        1 => 65_536,
-        p => p,
-    };
-    let pages = be(28..32);
-    let valid = head[24..28] == head[92..96];
-    let wal = PathBuf::from(format!("{}-wal", path.display()));
-    let in_use = std::fs::metadata(&wal).is_ok_and(|m| m.len() > 0);
-    if valid && !in_use && len < page * pages {
-        return Err(HostError::in_file(
-            path,
-            format!("the record store is cut short: its header states {pages} pages of {page} bytes ({} bytes), the file has {len}; it is left as it is: restore it from a copy", page * pages),
-        ));
-    }
-    Ok(())
+/// The order of the records read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Order {
+    /// The order of writing (`id`).
+    #[default]
+    Written,
+    /// None (an aggregate).
+    None,
+    /// Calibration time, then input file, then writing (a batch's units share its start
+    /// time: in the order of their files, not of which job finished first).
+    Time,
 }
 
-/// Make a new store at `path` whole before it has its name: built in a temporary file
-/// beside it and linked into place only if no other process made one meanwhile (then
-/// that one is used), so that a store is never seen half-made and an empty file is
-/// never a store.
-fn create_new(path: &Path) -> Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let io = |e: std::io::Error| HostError::io(path, &e);
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(io)?;
-    {
-        let e = |e| db_error(tmp.path(), e);
-        let mut c = Connection::open(tmp.path()).map_err(e)?;
-        c.query_row("PRAGMA journal_mode = WAL", [], |r| r.get::<_, String>(0))
-            .map_err(e)?;
-        schema::prepare(&mut c, tmp.path(), true, &schema::migrations())?;
-        // closed here: its log is folded into the file and removed
+/// Which records to read: every field given must match (typed values, bound as
+/// parameters).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Filter {
+    /// The unit's serial, exactly.
+    pub serial: Option<String>,
+    /// The run id.
+    pub run: Option<RunId>,
+    /// Run ids starting with these hex digits (lowercase).
+    pub run_prefix: Option<String>,
+    /// The lot.
+    pub lot: Option<String>,
+    /// The command.
+    pub command: Option<Command>,
+    /// Only calibrations (see [`CALIBRATION`]).
+    pub calibrations: bool,
+    /// Only records written after the record of this id.
+    pub after_id: Option<i64>,
+    /// The order.
+    pub order: Order,
+    /// At most this many records.
+    pub limit: Option<i64>,
+}
+
+impl Filter {
+    /// The records of unit `serial`.
+    pub fn serial(serial: &str) -> Filter {
+        Filter {
+            serial: Some(serial.to_string()),
+            ..Filter::default()
+        }
     }
-    match tmp.persist_noclobber(path) {
-        Ok(_) => Ok(()),
-        Err(e) if e.error.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
-        Err(e) => Err(io(e.error)),
+
+    /// The `WHERE ... ORDER BY ...` of the filter in dialect `d`, and its parameters.
+    fn sql(&self, d: Dialect) -> (String, Vec<Value>) {
+        let mut cond: Vec<String> = Vec::new();
+        let mut params: Vec<Value> = Vec::new();
+        let mut bind = |c: &mut Vec<String>, sql: &str, v: Value| {
+            params.push(v);
+            c.push(sql.replace('#', &d.placeholder(params.len())));
+        };
+        if let Some(s) = &self.serial {
+            bind(&mut cond, "serial = #", Value::Text(s.clone()));
+        }
+        if let Some(r) = &self.run {
+            bind(&mut cond, "run_id = #", Value::Text(r.to_string()));
+        }
+        if let Some(p) = &self.run_prefix {
+            // every id starting with the prefix lies in [prefix, prefix + "g")
+            bind(&mut cond, "run_id >= #", Value::Text(p.clone()));
+            bind(&mut cond, "run_id < #", Value::Text(format!("{p}g")));
+        }
+        if let Some(l) = &self.lot {
+            bind(&mut cond, "lot = #", Value::Text(l.clone()));
+        }
+        if let Some(c) = self.command {
+            bind(&mut cond, "command = #", Value::Text(c.name()));
+        }
+        if let Some(id) = self.after_id {
+            bind(&mut cond, "id > #", Value::Integer(id));
+        }
+        if self.calibrations {
+            cond.push(format!("({CALIBRATION})"));
+        }
+        let mut sql = String::new();
+        if !cond.is_empty() {
+            sql.push_str(" WHERE ");
+            sql.push_str(&cond.join(" AND "));
+        }
+        sql.push_str(match self.order {
+            Order::None => "",
+            Order::Written => " ORDER BY id",
+            Order::Time => " ORDER BY time_utc, input, id",
+        });
+        if let Some(n) = self.limit {
+            params.push(Value::Integer(n));
+            sql.push_str(&format!(" LIMIT {}", d.placeholder(params.len())));
+        }
+        (sql, params)
     }
 }
 
-/// The record's values in the order of [`INSERT`]'s columns.
-fn values(r: &Record) -> Vec<rusqlite::types::Value> {
-    use rusqlite::types::Value as V;
-    let text = |s: &str| V::Text(s.to_string());
-    let opt_text = |s: Option<&str>| s.map_or(V::Null, text);
-    let real = |v: Option<f64>| v.filter(|v| v.is_finite()).map_or(V::Null, V::Real);
-    let mut v = vec![
-        text(&r.run_id.to_string()),
-        text(&r.serial),
-        text(&r.time_utc),
-        text(&r.version),
-        text(&r.commit),
-        text(r.command.name()),
-        text(&r.options.to_string()),
-        opt_text(r.lot.as_deref()),
-        text(&r.input),
-        opt_text(r.input_sha256.as_deref()),
-        opt_text(r.output_unit.as_deref()),
-        opt_text(r.model.as_deref()),
-        real(r.at_t0.map(|a| a.t0_c)),
-    ];
-    for c in 0..COEFFS {
-        v.push(real(r.at_t0.map(|a| a.values[c])));
-    }
-    for c in 0..COEFFS {
-        v.push(real(r.at_t0.and_then(|a| a.sigma).map(|s| s[c])));
-    }
-    v.push(r.blob.clone().map_or(V::Null, V::Blob));
-    v.push(r.blob_crc().map_or(V::Null, |c| V::Integer(i64::from(c))));
-    v.push(opt_text(
-        r.judged
-            .as_ref()
-            .map(|j| j.verdict.as_str())
-            .filter(|v| *v != super::record::NOT_JUDGED),
-    ));
-    v.push(opt_text(r.judged.as_ref().map(|j| j.reason.as_str())));
-    v.push(real(r.worst_dg_mg));
-    v.push(opt_text(r.diagnosis_verdict.as_deref()));
-    v.push(
-        r.findings
-            .as_ref()
-            .map_or(V::Null, |f| V::Text(f.to_string())),
-    );
-    v
-}
-
-/// Every column of a record but `id`, in the order [`values`] gives them.
+/// Every column of a record but `id`.
 pub fn record_columns() -> Vec<String> {
-    [
-        "run_id",
-        "serial",
-        "time_utc",
-        "host_fit_version",
-        "host_fit_commit",
-        "command",
-        "options",
-        "lot",
-        "input",
-        "input_sha256",
-        "output_unit",
-        "model",
-        "t0_c",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .chain(coefficient_columns())
-    .chain(
-        [
-            "blob",
-            "blob_crc",
-            "acceptance",
-            "reason",
-            "worst_dg_mg",
-            "diagnosis_verdict",
-            "findings",
-        ]
-        .iter()
-        .map(|s| s.to_string()),
-    )
-    .collect()
+    columns().into_iter().map(|c| c.name).collect()
 }
 
 impl Store {
-    /// Open the store at `path`, creating it (and its schema) when the file does not
-    /// exist; an existing file must be a record store this host-fit can read.
-    pub fn open(path: &Path) -> Result<Store> {
-        Self::open_with(path, true)
+    /// Open the store at `location`, making it when the file does not exist (SQLite) or
+    /// the database is empty (PostgreSQL); an existing store must be of this version.
+    pub fn open(location: impl Into<Location>) -> Result<Store> {
+        Self::open_as(location.into(), Mode::Create)
     }
 
     /// Open an existing store (`history`, `trend`): a missing file is an error.
-    pub fn open_existing(path: &Path) -> Result<Store> {
-        Self::open_with(path, false)
+    pub fn open_existing(location: impl Into<Location>) -> Result<Store> {
+        Self::open_as(location.into(), Mode::Existing)
     }
 
-    fn open_with(path: &Path, create: bool) -> Result<Store> {
-        if path.is_dir() {
-            return Err(HostError::in_file(
-                path,
-                "is a folder: give the record store's file (e.g. this folder/records.sqlite)",
-            ));
-        }
-        let exists = path.exists();
-        if !exists && !create {
-            return Err(HostError::in_file(
-                path,
-                "no record store here: give the --db of a fit, verify, diagnose or batch (a batch writes records.sqlite in its output folder)",
-            ));
-        }
-        if !exists {
-            create_new(path)?;
-        }
-        check_file(path)?;
-        // never SQLite's own create: a store that vanished is not quietly made anew
-        let flags = OpenFlags::SQLITE_OPEN_READ_WRITE | OpenFlags::SQLITE_OPEN_NO_MUTEX;
-        let mut conn = Connection::open_with_flags(path, flags).map_err(|e| db_error(path, e))?;
-        conn.busy_timeout(BUSY_TIMEOUT)
-            .map_err(|e| db_error(path, e))?;
-        let mode: String = conn
-            .query_row("PRAGMA journal_mode", [], |r| r.get(0))
-            .map_err(|e| db_error(path, e))?;
-        if !mode.eq_ignore_ascii_case("wal") {
-            conn.query_row("PRAGMA journal_mode = WAL", [], |r| r.get::<_, String>(0))
-                .map_err(|e| db_error(path, e))?;
-        }
-        conn.execute_batch("PRAGMA synchronous = FULL;")
-            .map_err(|e| db_error(path, e))?;
-        schema::prepare(&mut conn, path, create, &schema::migrations())?;
-        Ok(Store {
-            conn,
-            path: path.to_path_buf(),
-        })
+    /// Open the store as `mode` allows (`store migrate`: [`Mode::Migrate`]).
+    pub fn open_as(location: Location, mode: Mode) -> Result<Store> {
+        let at = location.error_path();
+        let conn = match &location {
+            Location::Sqlite(p) => Conn::Sqlite(sqlite::open(p, mode)?),
+            Location::Postgres(u) => Conn::Postgres(Box::new(pg::open(u, mode)?)),
+        };
+        Ok(Store { conn, location, at })
     }
 
-    /// The store's file.
+    /// Where the store is.
+    pub fn location(&self) -> &Location {
+        &self.location
+    }
+
+    /// The store's name in messages (the SQLite file, or the URL without password).
     pub fn path(&self) -> &Path {
-        &self.path
+        &self.at
     }
 
-    /// The connection (for the queries of [`history`] and [`trend`]).
-    pub fn conn(&self) -> &Connection {
-        &self.conn
+    fn dialect(&self) -> Dialect {
+        match self.conn {
+            Conn::Sqlite(_) => Dialect::Sqlite,
+            Conn::Postgres(_) => Dialect::Postgres,
+        }
     }
 
     /// Append `records` in one transaction: all of them are written, or none (and the
     /// error names the store). Their `id`s are set.
     pub fn append(&mut self, records: &mut [Record]) -> Result<()> {
-        let path = self.path.clone();
-        let e = |e| db_error(&path, e);
-        let cols = record_columns();
-        let sql = format!(
+        if records.is_empty() {
+            return Ok(());
+        }
+        // the columns by the names the record gives them (every column of `columns`)
+        let cols: Vec<Column> = columns();
+        let d = self.dialect();
+        let mut rows: Vec<Vec<Value>> = Vec::with_capacity(records.len());
+        for r in records.iter() {
+            let mut named: std::collections::HashMap<String, Value> =
+                r.to_row().into_iter().collect();
+            rows.push(
+                cols.iter()
+                    .map(|c| named.remove(&c.name).unwrap_or(Value::Null))
+                    .collect(),
+            );
+        }
+        let mut sql = format!(
             "INSERT INTO runs ({}) VALUES ({})",
-            cols.join(", "),
+            cols.iter()
+                .map(|c| c.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
             (1..=cols.len())
-                .map(|i| format!("?{i}"))
+                .map(|i| d.placeholder(i))
                 .collect::<Vec<_>>()
                 .join(", ")
         );
-        let tx = self
-            .conn
-            .transaction_with_behavior(TransactionBehavior::Immediate)
-            .map_err(e)?;
-        {
-            let mut st = tx.prepare_cached(&sql).map_err(e)?;
-            for r in records.iter_mut() {
-                st.execute(params_from_iter(values(r))).map_err(e)?;
-                r.id = tx.last_insert_rowid();
+        let ids = match &mut self.conn {
+            Conn::Sqlite(c) => sqlite::insert(c, &self.at, &sql, &rows)?,
+            Conn::Postgres(c) => {
+                sql.push_str(" RETURNING id");
+                let types: Vec<SqlType> = cols.iter().map(|c| c.ty).collect();
+                pg::insert(c, &self.at, &sql, &types, &rows)?
             }
+        };
+        for (r, id) in records.iter_mut().zip(ids) {
+            r.id = id;
         }
-        tx.commit().map_err(e)
+        Ok(())
+    }
+
+    /// The columns `names` of the records `filter` selects.
+    pub fn select(&mut self, names: &[String], filter: &Filter) -> Result<Vec<Row>> {
+        let (cond, params) = filter.sql(self.dialect());
+        let sql = format!("SELECT {} FROM runs{cond}", names.join(", "));
+        match &mut self.conn {
+            Conn::Sqlite(c) => sqlite::select(c, &self.at, &sql, names, &params),
+            Conn::Postgres(c) => pg::select(c, &self.at, &sql, names, &params),
+        }
+    }
+
+    /// The whole records `filter` selects.
+    pub fn records(&mut self, filter: &Filter) -> Result<Vec<Record>> {
+        let rows = self.select(&record_select(), filter)?;
+        rows.iter()
+            .map(|r| {
+                Record::from_row(r).map_err(|m| {
+                    HostError::in_file(
+                        &self.at,
+                        format!("record #{}: {m}", r.integer("id").unwrap_or(0)),
+                    )
+                })
+            })
+            .collect()
+    }
+
+    /// The record of run `run`.
+    pub fn record(&mut self, run: RunId) -> Result<Option<Record>> {
+        let f = Filter {
+            run: Some(run),
+            ..Filter::default()
+        };
+        self.records(&f).map(|mut v| v.pop())
+    }
+
+    /// Every record, in the order written (for tools; a large store is read whole).
+    pub fn all(&mut self) -> Result<Vec<Record>> {
+        self.records(&Filter::default())
     }
 
     /// How many records the store holds.
-    pub fn count(&self) -> Result<i64> {
-        self.conn
-            .query_row("SELECT count(*) FROM runs", [], |r| r.get(0))
-            .map_err(|e| db_error(&self.path, e))
+    pub fn count(&mut self) -> Result<i64> {
+        let f = Filter {
+            order: Order::None,
+            ..Filter::default()
+        };
+        let rows = self.select(&["count(*)".to_string()], &f)?;
+        Ok(rows
+            .first()
+            .and_then(|r| r.integer("count(*)"))
+            .unwrap_or(0))
     }
 }
 
@@ -343,25 +330,62 @@ impl Store {
     }
 }
 
-/// What a command was asked to record into: the store's path, the lot, and how the
-/// tool was run (filled by the command line).
-#[derive(Debug, Clone, Default)]
+/// What a command was asked to record into: the store, the lot, where and by whom, and
+/// how the tool was run (filled by the command line).
+#[derive(Debug, Clone)]
 pub struct Target {
-    /// The store's file.
-    pub db: PathBuf,
+    /// The store.
+    pub db: Location,
     /// The lot, if given.
     pub lot: Option<String>,
+    /// Station, chamber, tilter, operator.
+    pub trace: Trace,
     /// How the tool was run.
     pub invocation: Option<Invocation>,
 }
 
 impl Target {
-    /// A record of `command` on `serial` from `input`, with this target's lot and the
-    /// invocation's options.
+    /// A target of the store at `db`, nothing else given.
+    pub fn new(db: impl Into<Location>) -> Target {
+        Target {
+            db: db.into(),
+            lot: None,
+            trace: Trace::default(),
+            invocation: None,
+        }
+    }
+
+    /// A record of `command` on `serial` from `input`, with this target's lot and trace
+    /// and the invocation's options.
     pub fn record(&self, command: Command, serial: &str, input: &Path) -> Result<Record> {
         let mut r = Record::new(command, self.invocation.as_ref(), serial, input)?;
         r.lot.clone_from(&self.lot);
+        r.trace = self.trace.clone();
         Ok(r)
+    }
+}
+
+impl From<&Path> for Location {
+    fn from(p: &Path) -> Location {
+        Location::Sqlite(p.to_path_buf())
+    }
+}
+
+impl From<PathBuf> for Location {
+    fn from(p: PathBuf) -> Location {
+        Location::Sqlite(p)
+    }
+}
+
+impl From<&PathBuf> for Location {
+    fn from(p: &PathBuf) -> Location {
+        Location::Sqlite(p.clone())
+    }
+}
+
+impl From<&Location> for Location {
+    fn from(l: &Location) -> Location {
+        l.clone()
     }
 }
 
@@ -397,9 +421,28 @@ mod tests {
         assert!(s.append(&mut odd).is_err());
         assert_eq!(s.count().unwrap(), 2);
         let back = s.record(ok[1].run_id).unwrap().unwrap();
-        assert_eq!(back.serial, "B");
-        assert_eq!(back.blob, ok[1].blob);
-        assert_eq!(back.time_utc, ok[1].time_utc);
+        assert_eq!(back, ok[1]);
+    }
+
+    #[test]
+    fn filters_are_parameters_never_sql() {
+        let f = Filter {
+            serial: Some("X'); DROP TABLE runs;--".into()),
+            lot: Some("L1".into()),
+            command: Some(Command::Batch),
+            calibrations: true,
+            ..Filter::default()
+        };
+        let (sql, params) = f.sql(Dialect::Postgres);
+        assert_eq!(
+            sql,
+            format!(
+                " WHERE serial = $1 AND lot = $2 AND command = $3 AND ({CALIBRATION}) ORDER BY id"
+            )
+        );
+        assert_eq!(params[0], Value::Text("X'); DROP TABLE runs;--".into()));
+        let (sql, _) = f.sql(Dialect::Sqlite);
+        assert!(sql.starts_with(" WHERE serial = ?1 AND lot = ?2"), "{sql}");
     }
 
     #[test]

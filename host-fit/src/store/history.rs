@@ -1,119 +1,10 @@
 //! Reading records back: every record of a unit in the order written, its latest
 //! calibration marked (`host-fit history`), and a stored blob re-issued bit for bit
 //! after its CRC is checked (`--blob RUN`).
-use super::db::{record_columns, Store};
-use super::fault::db_error;
-use super::record::{AtT0, Command, Judged, Record, RunId, COEFFS};
+use super::db::{Filter, Store};
+use super::record::{name_of, Record, RunId};
 use crate::error::{HostError, Result};
-use rusqlite::types::ValueRef;
-use rusqlite::{Row, ToSql};
 use serde::Serialize;
-
-/// A record from a row of `SELECT id, <record_columns()>`.
-fn from_row(row: &Row) -> rusqlite::Result<Record> {
-    let text = |i: usize| -> rusqlite::Result<Option<String>> { row.get(i) };
-    let real = |i: usize| -> rusqlite::Result<Option<f64>> { row.get(i) };
-    let bad = |i: usize, what: &str| {
-        rusqlite::Error::FromSqlConversionFailure(
-            i,
-            rusqlite::types::Type::Text,
-            format!("{what} in column {i}").into(),
-        )
-    };
-    let run: String = row.get(1)?;
-    let command: String = row.get(6)?;
-    let json = |i: usize| -> rusqlite::Result<Option<serde_json::Value>> {
-        text(i)?
-            .map(|s| serde_json::from_str(&s).map_err(|_| bad(i, "not JSON")))
-            .transpose()
-    };
-    // columns: 0 id, 1..=13 run_id .. t0_c, 14.. the coefficients, their sigmas, then
-    // blob, blob_crc, acceptance, reason, worst_dg_mg, diagnosis_verdict, findings
-    let c0 = 14;
-    let mut values = [0.0; COEFFS];
-    let mut sigma = [0.0; COEFFS];
-    let (mut have, mut have_sigma) = (true, true);
-    for k in 0..COEFFS {
-        match real(c0 + k)? {
-            Some(v) => values[k] = v,
-            None => have = false,
-        }
-        match real(c0 + COEFFS + k)? {
-            Some(v) => sigma[k] = v,
-            None => have_sigma = false,
-        }
-    }
-    let t0 = real(13)?;
-    let after = c0 + 2 * COEFFS;
-    let acceptance = text(after + 2)?;
-    Ok(Record {
-        id: row.get(0)?,
-        run_id: RunId::parse(&run).ok_or_else(|| bad(1, "a run id that is not 32 hex digits"))?,
-        serial: row.get(2)?,
-        time_utc: row.get(3)?,
-        version: row.get(4)?,
-        commit: row.get(5)?,
-        command: Command::from_name(&command).ok_or_else(|| bad(6, "an unknown command"))?,
-        options: json(7)?.unwrap_or_default(),
-        lot: text(8)?,
-        input: row.get(9)?,
-        input_sha256: text(10)?,
-        output_unit: text(11)?,
-        model: text(12)?,
-        at_t0: match (t0, have) {
-            (Some(t0_c), true) => Some(AtT0 {
-                t0_c,
-                values,
-                sigma: have_sigma.then_some(sigma),
-            }),
-            _ => None,
-        },
-        blob: match row.get_ref(after)? {
-            ValueRef::Blob(b) => Some(b.to_vec()),
-            _ => None,
-        },
-        judged: match (acceptance, text(after + 3).ok().flatten()) {
-            (Some(verdict), reason) => Some(Judged {
-                verdict,
-                reason: reason.unwrap_or_default(),
-            }),
-            // a reason without a verdict: judged, and a band had nothing to judge
-            (None, Some(reason)) => Some(Judged {
-                verdict: super::record::NOT_JUDGED.to_string(),
-                reason,
-            }),
-            (None, None) => None,
-        },
-        worst_dg_mg: real(after + 4)?,
-        diagnosis_verdict: text(after + 5)?,
-        findings: json(after + 6)?,
-    })
-}
-
-/// The records matching `filter` (an SQL `WHERE ...` on `runs`, or empty), in the order
-/// written.
-pub fn read(store: &Store, filter: &str, params: &[&dyn ToSql]) -> Result<Vec<Record>> {
-    let sql = format!(
-        "SELECT id, {} FROM runs {filter} ORDER BY id",
-        record_columns().join(", ")
-    );
-    let e = |e| db_error(store.path(), e);
-    let mut st = store.conn().prepare(&sql).map_err(e)?;
-    let rows = st.query_map(params, from_row).map_err(e)?;
-    rows.collect::<rusqlite::Result<Vec<_>>>().map_err(e)
-}
-
-impl Store {
-    /// The record of run `run`.
-    pub fn record(&self, run: RunId) -> Result<Option<Record>> {
-        read(self, "WHERE run_id = ?1", &[&run.to_string()]).map(|mut v| v.pop())
-    }
-
-    /// Every record, in the order written (for tools; a large store is read whole).
-    pub fn all(&self) -> Result<Vec<Record>> {
-        read(self, "", &[])
-    }
-}
 
 /// One record in a unit's history.
 #[derive(Debug, Clone, Serialize)]
@@ -145,8 +36,8 @@ pub struct History {
 }
 
 /// Every record of `serial`, oldest first, its latest calibration marked.
-pub fn history(store: &Store, serial: &str) -> Result<History> {
-    let records = read(store, "WHERE serial = ?1", &[&serial])?;
+pub fn history(store: &mut Store, serial: &str) -> Result<History> {
+    let records = store.records(&Filter::serial(serial))?;
     let latest = records
         .iter()
         .filter(|r| r.is_calibration())
@@ -154,7 +45,7 @@ pub fn history(store: &Store, serial: &str) -> Result<History> {
         .max();
     Ok(History {
         serial: serial.to_string(),
-        store: store.path().display().to_string(),
+        store: store.location().to_string(),
         records: records
             .into_iter()
             .map(|r| Entry {
@@ -222,14 +113,28 @@ impl History {
                     _ => String::new(),
                 }
             ));
+            let t = &r.trace;
+            if t.station.is_some()
+                || t.chamber.is_some()
+                || t.tilter.is_some()
+                || t.operator.is_some()
+            {
+                s.push(format!(
+                    "    station {}, chamber {}, tilter {}, operator {}",
+                    opt(t.station.as_deref()),
+                    opt(t.chamber.as_deref()),
+                    opt(t.tilter.as_deref()),
+                    opt(t.operator.as_deref())
+                ));
+            }
             let mut third = Vec::new();
             if let Some(j) = &r.judged {
-                third.push(format!("acceptance {}: {}", j.verdict, j.reason));
+                third.push(format!("acceptance {}: {}", name_of(&j.verdict), j.reason));
             }
             if let Some(dg) = r.worst_dg_mg {
                 third.push(format!("worst verification |dg| {dg:.4} mg"));
             }
-            if let Some(v) = &r.diagnosis_verdict {
+            if let Some(v) = r.diagnosis_verdict.map(|v| name_of(&v)) {
                 let effects: Vec<&str> = r
                     .findings
                     .as_ref()
@@ -259,32 +164,36 @@ impl History {
 
 /// The blob of the run of `serial` whose id is or starts with `run` (at least 6 hex
 /// digits), its CRC checked against the stored one and its own trailer.
-pub fn stored_blob(store: &Store, serial: &str, run: &str) -> Result<(RunId, Vec<u8>)> {
+pub fn stored_blob(store: &mut Store, serial: &str, run: &str) -> Result<(RunId, Vec<u8>)> {
     let run = run.to_ascii_lowercase();
     if run.len() < 6 || run.len() > 32 || !run.bytes().all(|c| c.is_ascii_hexdigit()) {
         return Err(HostError::msg(format!(
             "--blob `{run}` is not a run id (32 hex digits, or the first 6 or more of them)"
         )));
     }
-    let e = |e| db_error(store.path(), e);
-    let mut st = store
-        .conn()
-        .prepare("SELECT run_id, serial, blob, blob_crc FROM runs WHERE run_id >= ?1 AND run_id < ?2 ORDER BY id")
-        .map_err(e)?;
-    // every id starting with the prefix lies in [prefix, prefix + 1 at its last digit)
-    let upper = format!("{run}g");
-    let hits = st
-        .query_map([&run, &upper], |r| {
-            Ok((
-                r.get::<_, String>(0)?,
-                r.get::<_, String>(1)?,
-                r.get::<_, Option<Vec<u8>>>(2)?,
-                r.get::<_, Option<i64>>(3)?,
-            ))
+    let f = Filter {
+        run_prefix: Some(run.clone()),
+        ..Filter::default()
+    };
+    let names: Vec<String> = ["run_id", "serial", "blob", "blob_crc"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let hits: Vec<(String, String, Option<Vec<u8>>, Option<i64>)> = store
+        .select(&names, &f)?
+        .iter()
+        .map(|r| {
+            (
+                r.text("run_id").unwrap_or_default(),
+                r.text("serial").unwrap_or_default(),
+                match r.get("blob") {
+                    super::columns::Value::Blob(b) => Some(b.clone()),
+                    _ => None,
+                },
+                r.integer("blob_crc"),
+            )
         })
-        .map_err(e)?
-        .collect::<rusqlite::Result<Vec<_>>>()
-        .map_err(e)?;
+        .collect();
     let (id, unit, blob, crc) = match hits.as_slice() {
         [] => {
             return Err(HostError::in_file(

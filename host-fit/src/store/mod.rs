@@ -1,13 +1,15 @@
-//! The line's memory: a record store in SQLite (one file, the SQLite compiled into
-//! host-fit), written by `fit`, `verify` and `diagnose` with `--db PATH`, by `batch` (into
-//! its output folder unless told otherwise) and by `demo` (into its folder), read by
-//! `history` and `trend`.
+//! The line's memory: a record store, one interface on two backends chosen by `--db`: a
+//! path is an SQLite file (the SQLite compiled into host-fit; a station's own store),
+//! `postgresql://user@host:port/database` a database on a PostgreSQL server that every
+//! station of a line writes to ([`location`]). Written by `fit`, `verify` and
+//! `diagnose` with `--db`, by `batch` (into its output folder unless told otherwise) and
+//! by `demo` (into its folder); read by `history`, `trend` and `store copy`.
 //!
 //! One record per run and unit, never changed or deleted (triggers refuse it): a unit
 //! calibrated again keeps every record, and the view `latest_calibrations` (a query, no
 //! flag that an update could lose) names each unit's newest calibration.
 //!
-//! # Schema (version 1, `PRAGMA user_version = 1`, `PRAGMA application_id = 0x41544352`)
+//! # Schema (version 2; see [`schema`] for where each backend keeps its version)
 //!
 //! Table `runs`, one row per record:
 //!
@@ -31,16 +33,23 @@
 //! | `acceptance`, `reason` | TEXT | `pass`, `fail` or `error` (a batch unit that could not be processed) against the acceptance specification, and why |
 //! | `worst_dg_mg` | REAL | the worst compensated \|dg\| over the verification dwells, mg |
 //! | `diagnosis_verdict`, `findings` | TEXT, TEXT (JSON) | the diagnosis' verdict and findings, as in its JSON contract |
+//! | `station`, `chamber`, `tilter`, `operator` | TEXT | where and by whom (version 2; see [`record::Trace`]) |
+//! | `test_record` | TEXT (JSON) | the unit's test record for the line's systems (version 2, batch units; see [`test_record`]) |
 //!
-//! Indexes `runs_by_serial (serial, id)` and `runs_by_time (time_utc, id)`; view
+//! The columns are defined once, in [`columns`]; PostgreSQL spells the types its way
+//! (DOUBLE PRECISION, BIGINT, BYTEA, text in byte order).
+//!
+//! Indexes `runs_by_serial (serial, id)`, `runs_by_time (time_utc, id)` and
+//! `runs_by_lot (lot, id)`; view
 //! `latest_calibrations` (the newest record per serial that made a blob and did not end in
 //! an error; `verify` records are checks of a blob, not calibrations).
 //!
 //! # Many writers, no half records
-//! The store runs in WAL mode with `synchronous = FULL`; every write is one transaction
-//! (`BEGIN IMMEDIATE`: a writer waits for another up to [`BUSY_TIMEOUT`]), one per
-//! record or per chunk of a batch, so two batches writing one store at once lose
-//! nothing, and a writer killed mid-way leaves the records it committed, whole.
+//! Every write is one transaction, one per record or per chunk of a batch, so batches
+//! writing one store at once lose nothing, and a writer killed mid-way leaves the
+//! records it committed, whole. SQLite runs in WAL mode with `synchronous = FULL`
+//! (`BEGIN IMMEDIATE`: a writer waits for another up to [`BUSY_TIMEOUT`]); PostgreSQL
+//! takes each station's transactions side by side.
 //!
 //! # Bad stores
 //! A store of a newer schema is refused with its version named; a file that is not an
@@ -48,13 +57,20 @@
 //! another program's database is reported, naming the file, and never re-created or
 //! altered.
 pub mod clock;
+pub mod columns;
+pub mod copy;
 pub mod db;
 pub mod fault;
 pub mod history;
+pub mod location;
+pub mod pg;
 pub mod record;
 pub mod schema;
+pub mod sqlite;
+pub mod test_record;
 pub mod trend;
 
-pub use db::{record_columns, Store, Target, Writer, FLUSH_AFTER};
+pub use db::{record_columns, Filter, Order, Store, Target, Writer, FLUSH_AFTER};
 pub use fault::{db_error, BUSY_TIMEOUT};
+pub use location::Location;
 pub use record::Invocation;

@@ -1,10 +1,13 @@
 //! One record of the store: what a run of `fit`, `verify`, `diagnose`, `batch` (one per
 //! unit) or `demo` (one per model) made of one unit, with where it came from (the run
 //! id, the tool's version and commit, the command and its options, the input's SHA-256).
+use crate::batch::UnitStatus;
+use crate::diagnose::contract::Verdict as DiagnosisVerdict;
 use crate::error::{HostError, Result};
 use firmware_core::model::{COEFF_NAMES, N_COEFFS};
+use serde::de::DeserializeOwned;
 use serde::ser::SerializeStruct;
-use serde::{Serialize, Serializer};
+use serde::{Deserialize, Serialize, Serializer};
 use sha2::{Digest, Sha256};
 use std::io::Read;
 use std::path::Path;
@@ -45,8 +48,9 @@ impl std::fmt::Display for RunId {
     }
 }
 
-/// The command that made a record (a closed set; the store's `command` column).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// The command that made a record (a closed set; the store's `command` column holds its
+/// serde name).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Command {
     /// `host-fit fit`.
@@ -71,21 +75,40 @@ impl Command {
         Command::Demo,
     ];
 
-    /// Its name on the command line and in the store.
-    pub fn name(self) -> &'static str {
-        match self {
-            Command::Fit => "fit",
-            Command::Verify => "verify",
-            Command::Diagnose => "diagnose",
-            Command::Batch => "batch",
-            Command::Demo => "demo",
-        }
+    /// Its name on the command line and in the store (its serde name).
+    pub fn name(self) -> String {
+        name_of(&self)
     }
+}
 
-    /// The command of a name in the store.
-    pub fn from_name(s: &str) -> Option<Command> {
-        Command::ALL.into_iter().find(|c| c.name() == s)
+/// The name a closed set's value serialises to (`pass`, `not_judged`, `batch`, ...): the
+/// one spelling of it, in the store as in the JSON.
+pub fn name_of<T: Serialize>(v: &T) -> String {
+    match serde_json::to_value(v) {
+        Ok(serde_json::Value::String(s)) => s,
+        other => format!("{other:?}"),
     }
+}
+
+/// The value of a closed set whose serde name is `s` (None for a name it does not have).
+pub fn from_name<T: DeserializeOwned>(s: &str) -> Option<T> {
+    serde_json::from_value(serde_json::Value::String(s.to_string())).ok()
+}
+
+/// Where and by whom a unit was calibrated: the station (the bench computer), the
+/// chamber and the tilter it ran in, and the operator. From `--station`, `--chamber`,
+/// `--tilter`, `--operator`, else `HOSTFIT_STATION`, `HOSTFIT_CHAMBER`, `HOSTFIT_TILTER`,
+/// `HOSTFIT_OPERATOR` (the operator else the login name, `USER`).
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Trace {
+    /// The station.
+    pub station: Option<String>,
+    /// The climatic chamber.
+    pub chamber: Option<String>,
+    /// The tilter (rate table, dividing head).
+    pub tilter: Option<String>,
+    /// The operator.
+    pub operator: Option<String>,
 }
 
 /// How the tool was run: the command and every option with its value (the defaults
@@ -215,19 +238,14 @@ impl Serialize for AtT0 {
 /// The verdict against the acceptance specification (the store's `acceptance` column).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Judged {
-    /// `pass`, `fail`, `not_judged` (the acceptance's own verdict, as it serialises) or
-    /// `error` (a batch unit that could not be processed). The store's `acceptance`
-    /// column holds `pass`, `fail` or `error`, and NULL for [`NOT_JUDGED`] (with its
-    /// reason), as for a run that judged nothing.
-    pub verdict: String,
+    /// `pass`, `fail`, `not_judged` (the acceptance's own verdict) or `error` (a batch
+    /// unit that could not be processed). The store's `acceptance` column holds `pass`,
+    /// `fail` or `error`, and NULL for `not_judged` (with its reason), as for a run that
+    /// judged nothing.
+    pub verdict: UnitStatus,
     /// Why, in one sentence (the acceptance's reason, or the error).
     pub reason: String,
 }
-
-/// The verdict of a specification band with no judged dwell: stored as a NULL
-/// `acceptance` with its reason (the schema's column predates it, and NULL is what it
-/// says: not judged).
-pub const NOT_JUDGED: &str = "not_judged";
 
 /// One record, as written and as read back.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -267,10 +285,16 @@ pub struct Record {
     pub judged: Option<Judged>,
     /// The worst |dg| over the verification dwells, compensated, mg.
     pub worst_dg_mg: Option<f64>,
-    /// The diagnosis' verdict (as the diagnosis contract writes it).
-    pub diagnosis_verdict: Option<String>,
+    /// The diagnosis' verdict.
+    pub diagnosis_verdict: Option<DiagnosisVerdict>,
     /// The diagnosis' findings (the contract's `findings`, JSON).
     pub findings: Option<serde_json::Value>,
+    /// Where and by whom.
+    #[serde(flatten)]
+    pub trace: Trace,
+    /// The unit's test record for the line's systems (see [`super::test_record`]).
+    #[serde(skip)]
+    pub test_record: Option<serde_json::Value>,
 }
 
 impl Record {
@@ -306,32 +330,26 @@ impl Record {
             worst_dg_mg: None,
             diagnosis_verdict: None,
             findings: None,
+            trace: Trace::default(),
+            test_record: None,
         })
     }
 
-    /// Fill the diagnosis columns from a diagnosis' JSON contract (its `verdict` and
-    /// `findings`, as the contract itself serialises them).
-    pub fn with_diagnosis(&mut self, contract: &impl Serialize) -> Result<()> {
+    /// Fill the diagnosis columns from a diagnosis' JSON contract.
+    pub fn with_diagnosis(&mut self, contract: &crate::diagnose::contract::Contract) -> Result<()> {
         let v = serde_json::to_value(contract)
             .map_err(|e| HostError::msg(format!("cannot encode the diagnosis: {e}")))?;
-        self.diagnosis_verdict = v["verdict"].as_str().map(String::from);
+        self.diagnosis_verdict = Some(contract.verdict);
         self.findings = Some(v["findings"].clone());
         Ok(())
     }
 
-    /// Fill the acceptance from a typed verdict (serialised as it is everywhere) and its
-    /// reason.
-    pub fn with_verdict(&mut self, verdict: &impl Serialize, reason: &str) -> Result<()> {
-        let v = serde_json::to_value(verdict)
-            .map_err(|e| HostError::msg(format!("cannot encode the verdict: {e}")))?;
-        let name = v
-            .as_str()
-            .ok_or_else(|| HostError::msg(format!("a verdict that is not a name: {v}")))?;
+    /// Fill the acceptance from a verdict and its reason.
+    pub fn with_verdict(&mut self, verdict: impl Into<UnitStatus>, reason: &str) {
         self.judged = Some(Judged {
-            verdict: name.to_string(),
+            verdict: verdict.into(),
             reason: reason.to_string(),
         });
-        Ok(())
     }
 
     /// Whether it is a calibration (see [`super::schema::CALIBRATION`]): it made a blob
@@ -339,22 +357,16 @@ impl Record {
     pub fn is_calibration(&self) -> bool {
         self.command != Command::Verify
             && self.blob.is_some()
-            && self.judged.as_ref().is_none_or(|j| j.verdict != "error")
+            && self
+                .judged
+                .as_ref()
+                .is_none_or(|j| j.verdict != UnitStatus::Error)
     }
 
     /// The blob's CRC (its last four bytes).
     pub fn blob_crc(&self) -> Option<u32> {
         self.blob.as_deref().and_then(blob_crc)
     }
-}
-
-/// The coefficient columns of the store: `kxx` .. `u0z`, then `sigma_kxx` .. `sigma_u0z`.
-pub fn coefficient_columns() -> Vec<String> {
-    COEFF_NAMES
-        .iter()
-        .map(|n| n.to_string())
-        .chain(COEFF_NAMES.iter().map(|n| format!("sigma_{n}")))
-        .collect()
 }
 
 #[cfg(test)]
@@ -395,18 +407,24 @@ mod tests {
     }
 
     #[test]
-    fn verdicts_and_diagnoses_are_taken_as_they_serialise() {
+    fn closed_sets_are_named_once_and_read_back() {
+        for c in Command::ALL {
+            assert_eq!(from_name::<Command>(&c.name()), Some(c));
+        }
+        assert_eq!(Command::Batch.name(), "batch");
+        for v in [
+            UnitStatus::Pass,
+            UnitStatus::Fail,
+            UnitStatus::NotJudged,
+            UnitStatus::Error,
+        ] {
+            assert_eq!(from_name::<UnitStatus>(&name_of(&v)), Some(v));
+        }
+        assert_eq!(name_of(&UnitStatus::NotJudged), "not_judged");
+        assert_eq!(from_name::<Command>("refit"), None);
         let mut r = Record::new(Command::Verify, None, "SN", Path::new("r.csv")).unwrap();
-        r.with_verdict(&crate::acceptance::Verdict::Fail, "over")
-            .unwrap();
-        assert_eq!(r.judged.as_ref().unwrap().verdict, "fail");
-        r.with_diagnosis(
-            &serde_json::json!({"verdict": "explained", "findings": [{"effect": "temp_rate"}]}),
-        )
-        .unwrap();
-        assert_eq!(r.diagnosis_verdict.as_deref(), Some("explained"));
-        assert_eq!(r.findings.as_ref().unwrap()[0]["effect"], "temp_rate");
-        assert!(r.with_verdict(&3, "").is_err());
+        r.with_verdict(crate::acceptance::Verdict::Fail, "over");
+        assert_eq!(r.judged.as_ref().unwrap().verdict, UnitStatus::Fail);
         assert_eq!(blob_crc(&[1, 2, 0x78, 0x56, 0x34, 0x12]), Some(0x1234_5678));
     }
 }

@@ -1,222 +1,275 @@
-//! The store's schema, its version (`PRAGMA user_version`) and the migrations that bring
-//! an older store up to it. A store is marked as host-fit's by `PRAGMA application_id`;
-//! one of a newer version is refused (with its version named), never altered; a
-//! migration runs in one transaction, so a store is at one version or the next, never
-//! between.
-use super::record::{coefficient_columns, Command};
-use crate::error::{HostError, Result};
-use rusqlite::{Connection, TransactionBehavior};
-use std::path::Path;
+//! The store's schema, its version and the migrations that bring an older store up to
+//! it, one list per backend that make the same tables (the i-th brings a store from
+//! version i to i + 1). A migration runs in one transaction (both backends' DDL is
+//! transactional), so a store is at one version or the next, never between; it runs
+//! under a lock (SQLite's write lock, a PostgreSQL advisory lock), so stations starting
+//! at once on a new database make it once.
+//!
+//! Where the version is kept: SQLite `PRAGMA user_version` (and `PRAGMA application_id`
+//! marks the file as a record store); PostgreSQL the table `store_schema`, one row per
+//! migration applied (version, when, by which host-fit).
+//!
+//! An older store is upgraded by `host-fit store migrate --db ...` (never silently: a
+//! plant backs its store up first); a newer one is refused with its version named.
+use super::columns::SqlType;
+use super::record::Command;
+use firmware_core::model::COEFF_NAMES;
 
 /// The schema version this host-fit writes and reads.
-pub const SCHEMA_VERSION: i64 = 1;
+pub const SCHEMA_VERSION: i64 = 2;
 
-/// `PRAGMA application_id` of a record store: "ATCR" (accelerometer temperature
-/// calibration records).
+/// `PRAGMA application_id` of an SQLite record store, and the key of the PostgreSQL
+/// advisory lock migrations take: "ATCR" (accelerometer temperature calibration records).
 pub const APPLICATION_ID: i64 = 0x4154_4352;
 
-/// Which records are calibrations (SQL): those that made a blob that was judged or not
-/// judged, but did not end in an error, and are not a verification of another's blob.
+/// Which records are calibrations (SQL, both backends): those that made a blob that was
+/// judged or not judged, but did not end in an error, and are not a verification of
+/// another's blob.
 pub const CALIBRATION: &str =
     "command <> 'verify' AND blob IS NOT NULL AND (acceptance IS NULL OR acceptance <> 'error')";
 
-/// The migrations: the i-th brings a store from version i to i + 1.
-pub fn migrations() -> Vec<String> {
+/// The two SQL dialects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dialect {
+    /// SQLite 3.
+    Sqlite,
+    /// PostgreSQL 12 or newer.
+    Postgres,
+}
+
+impl Dialect {
+    /// The SQL type of a column type.
+    pub fn ty(self, t: SqlType) -> &'static str {
+        match (self, t) {
+            (Dialect::Sqlite, SqlType::Text) => "TEXT",
+            (Dialect::Postgres, SqlType::Text) => "TEXT COLLATE \"C\"",
+            (Dialect::Sqlite, SqlType::Real) => "REAL",
+            (Dialect::Postgres, SqlType::Real) => "DOUBLE PRECISION",
+            (Dialect::Sqlite, SqlType::Integer) => "INTEGER",
+            (Dialect::Postgres, SqlType::Integer) => "BIGINT",
+            (Dialect::Sqlite, SqlType::Blob) => "BLOB",
+            (Dialect::Postgres, SqlType::Blob) => "BYTEA",
+        }
+    }
+
+    /// The i-th (1-based) placeholder of a statement.
+    pub fn placeholder(self, i: usize) -> String {
+        match self {
+            Dialect::Sqlite => format!("?{i}"),
+            Dialect::Postgres => format!("${i}"),
+        }
+    }
+}
+
+/// The view of each unit's newest calibration (its `*` is expanded when it is made on
+/// PostgreSQL: made again by a migration that adds columns).
+fn latest_view() -> String {
+    format!(
+        "CREATE VIEW latest_calibrations AS
+  SELECT * FROM runs r
+  WHERE r.id = (SELECT max(id) FROM runs WHERE serial = r.serial AND {CALIBRATION});
+"
+    )
+}
+
+/// Version 1: the table, its indexes, its append-only rule, the view.
+fn version_1(d: Dialect) -> String {
+    use SqlType::{Blob, Integer, Real, Text};
+    let t = |x| d.ty(x);
     let commands = Command::ALL
         .iter()
         .map(|c| format!("'{}'", c.name()))
         .collect::<Vec<_>>()
         .join(",");
-    let coefficients = coefficient_columns()
+    let coefficients = COEFF_NAMES
         .iter()
-        .map(|c| format!("  {c:<18} REAL,\n"))
+        .map(|n| n.to_string())
+        .chain(COEFF_NAMES.iter().map(|n| format!("sigma_{n}")))
+        .map(|c| format!("  {c:<18} {},\n", t(Real)))
         .collect::<String>();
-    vec![format!(
-        "CREATE TABLE runs (
-  id                INTEGER PRIMARY KEY,
-  run_id            TEXT    NOT NULL UNIQUE CHECK (length(run_id) = 32),
-  serial            TEXT    NOT NULL,
-  time_utc          TEXT    NOT NULL,
-  host_fit_version  TEXT    NOT NULL,
-  host_fit_commit   TEXT    NOT NULL,
-  command           TEXT    NOT NULL CHECK (command IN ({commands})),
-  options           TEXT    NOT NULL,
-  lot               TEXT,
-  input             TEXT    NOT NULL,
-  input_sha256      TEXT    CHECK (input_sha256 IS NULL OR length(input_sha256) = 64),
-  output_unit       TEXT,
-  model             TEXT,
-  t0_c              REAL,
-{coefficients}  blob              BLOB,
-  blob_crc          INTEGER,
-  acceptance        TEXT    CHECK (acceptance IS NULL OR acceptance IN ('pass','fail','error')),
-  reason            TEXT,
-  worst_dg_mg       REAL,
-  diagnosis_verdict TEXT,
-  findings          TEXT
-);
-CREATE INDEX runs_by_serial ON runs (serial, id);
-CREATE INDEX runs_by_time ON runs (time_utc, id);
-CREATE TRIGGER runs_append_only_update BEFORE UPDATE ON runs
+    let id = match d {
+        Dialect::Sqlite => "INTEGER PRIMARY KEY",
+        Dialect::Postgres => "BIGINT GENERATED ALWAYS AS IDENTITY PRIMARY KEY",
+    };
+    let append_only = match d {
+        Dialect::Sqlite => "CREATE TRIGGER runs_append_only_update BEFORE UPDATE ON runs
   BEGIN SELECT RAISE(ABORT, 'the record store is append-only: records are never changed'); END;
 CREATE TRIGGER runs_append_only_delete BEFORE DELETE ON runs
   BEGIN SELECT RAISE(ABORT, 'the record store is append-only: records are never deleted'); END;
-CREATE VIEW latest_calibrations AS
-  SELECT * FROM runs r
-  WHERE r.id = (SELECT max(id) FROM runs WHERE serial = r.serial AND {CALIBRATION});
 "
-    )]
+        .to_string(),
+        Dialect::Postgres => "CREATE FUNCTION runs_append_only() RETURNS trigger LANGUAGE plpgsql AS $$
+  BEGIN RAISE EXCEPTION 'the record store is append-only: records are never changed or deleted'; END $$;
+CREATE TRIGGER runs_append_only_rows BEFORE UPDATE OR DELETE ON runs
+  FOR EACH ROW EXECUTE FUNCTION runs_append_only();
+CREATE TRIGGER runs_append_only_truncate BEFORE TRUNCATE ON runs
+  FOR EACH STATEMENT EXECUTE FUNCTION runs_append_only();
+CREATE TABLE store_schema (
+  version           INTEGER PRIMARY KEY,
+  applied_utc       TEXT    NOT NULL,
+  host_fit_version  TEXT    NOT NULL
+);
+COMMENT ON TABLE runs IS 'host-fit record store: one record per run and unit, append-only';
+"
+        .to_string(),
+    };
+    format!(
+        "CREATE TABLE runs (
+  id                {id},
+  run_id            {text} NOT NULL UNIQUE CHECK (length(run_id) = 32),
+  serial            {text} NOT NULL,
+  time_utc          {text} NOT NULL,
+  host_fit_version  {text} NOT NULL,
+  host_fit_commit   {text} NOT NULL,
+  command           {text} NOT NULL CHECK (command IN ({commands})),
+  options           {text} NOT NULL,
+  lot               {text},
+  input             {text} NOT NULL,
+  input_sha256      {text} CHECK (input_sha256 IS NULL OR length(input_sha256) = 64),
+  output_unit       {text},
+  model             {text},
+  t0_c              {real},
+{coefficients}  blob              {blob},
+  blob_crc          {int},
+  acceptance        {text} CHECK (acceptance IS NULL OR acceptance IN ('pass','fail','error')),
+  reason            {text},
+  worst_dg_mg       {real},
+  diagnosis_verdict {text},
+  findings          {text}
+);
+CREATE INDEX runs_by_serial ON runs (serial, id);
+CREATE INDEX runs_by_time ON runs (time_utc, id);
+{append_only}{view}",
+        text = t(Text),
+        real = t(Real),
+        blob = t(Blob),
+        int = t(Integer),
+        view = latest_view(),
+    )
 }
 
-fn db(path: &Path, e: rusqlite::Error) -> HostError {
-    super::fault::db_error(path, e)
+/// Version 2: traceability (station, chamber, tilter, operator), the unit's test
+/// record, and an index by lot (a batch resumed after a crash finds its units by it).
+fn version_2(d: Dialect) -> String {
+    let text = d.ty(SqlType::Text);
+    let added = ["station", "chamber", "tilter", "operator", "test_record"]
+        .iter()
+        .map(|c| format!("ALTER TABLE runs ADD COLUMN {c} {text};\n"))
+        .collect::<String>();
+    format!(
+        "{added}CREATE INDEX runs_by_lot ON runs (lot, id);
+DROP VIEW latest_calibrations;
+{}",
+        latest_view()
+    )
 }
 
-/// The store's version, checked to be a record store this host-fit can read.
-fn version(conn: &Connection, path: &Path, known: i64) -> Result<(i64, bool)> {
-    let app: i64 = conn
-        .query_row("PRAGMA application_id", [], |r| r.get(0))
-        .map_err(|e| db(path, e))?;
-    let version: i64 = conn
-        .query_row("PRAGMA user_version", [], |r| r.get(0))
-        .map_err(|e| db(path, e))?;
-    let objects: i64 = conn
-        .query_row("SELECT count(*) FROM sqlite_schema", [], |r| r.get(0))
-        .map_err(|e| db(path, e))?;
-    let empty = app == 0 && version == 0 && objects == 0;
-    if !empty && app != APPLICATION_ID {
-        return Err(HostError::in_file(
-            path,
-            format!("is an SQLite database but not a host-fit record store (application id {app:#x}, {objects} tables and indexes): left as it is; give the path of a record store, or of a new file"),
-        ));
-    }
-    if version > known {
-        return Err(HostError::in_file(
-            path,
-            format!("is a record store of schema version {version}; this host-fit ({}) reads versions up to {known}: use a newer host-fit (the store is left as it is)", env!("CARGO_PKG_VERSION")),
-        ));
-    }
-    Ok((version, empty))
+/// The migrations of a dialect: the i-th brings a store from version i to i + 1.
+pub fn migrations(d: Dialect) -> Vec<String> {
+    vec![version_1(d), version_2(d)]
 }
 
-/// Bring the store at `conn` to [`SCHEMA_VERSION`] with `steps` (see [`migrations`]);
-/// `create`: an empty database may be made a store (else it is refused).
-pub fn prepare(conn: &mut Connection, path: &Path, create: bool, steps: &[String]) -> Result<()> {
-    let target = steps.len() as i64;
-    let (v, empty) = version(conn, path, target)?;
-    if v == target && !empty {
-        return Ok(());
+/// What opening a store may do to its schema.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Make a new store of an empty database; an older store is refused (with the
+    /// command that upgrades it).
+    Create,
+    /// Only an existing store of this version.
+    Existing,
+    /// Make a new store, or bring an older one up to this version (`store migrate`).
+    Migrate,
+}
+
+/// The refusal of an older store: which version, and the command that upgrades it.
+pub fn older(version: i64, shown: &str) -> String {
+    format!(
+        "is a record store of schema version {version}; this host-fit ({}) uses version {SCHEMA_VERSION}: back it up, then upgrade it with `host-fit store migrate --db {shown}` (it is left as it is)",
+        env!("CARGO_PKG_VERSION")
+    )
+}
+
+/// The refusal of a newer store.
+pub fn newer(version: i64, known: i64) -> String {
+    format!(
+        "is a record store of schema version {version}; this host-fit ({}) reads versions up to {known}: use a newer host-fit (the store is left as it is)",
+        env!("CARGO_PKG_VERSION")
+    )
+}
+
+/// What to do with a store at `version` (0: empty) in `mode`, `target` the newest
+/// version: Ok(true) migrate, Ok(false) use as it is, Err(why) refuse.
+pub fn decide(
+    version: i64,
+    empty: bool,
+    target: i64,
+    mode: Mode,
+    shown: &str,
+) -> Result<bool, String> {
+    if version > target {
+        return Err(newer(version, target));
     }
-    if empty && !create {
-        return Err(HostError::in_file(
-            path,
-            "is an empty database, not a record store (no fit, verify, diagnose or batch has written to it)",
-        ));
+    if empty {
+        return match mode {
+            Mode::Existing => Err("is an empty database, not a record store (no fit, verify, diagnose or batch has written to it)".into()),
+            Mode::Create | Mode::Migrate => Ok(true),
+        };
     }
-    // another process may be migrating at the same moment: decide inside the write lock
-    let tx = conn
-        .transaction_with_behavior(TransactionBehavior::Immediate)
-        .map_err(|e| db(path, e))?;
-    let (v, _) = version(&tx, path, target)?;
-    for (i, step) in steps.iter().enumerate().skip(v as usize) {
-        tx.execute_batch(step).map_err(|e| {
-            HostError::in_file(
-                path,
-                format!(
-                    "migration of the record store to version {} failed (nothing changed): {e}",
-                    i + 1
-                ),
-            )
-        })?;
+    if version == target {
+        return Ok(false);
     }
-    tx.execute_batch(&format!(
-        "PRAGMA application_id = {APPLICATION_ID}; PRAGMA user_version = {target};"
-    ))
-    .map_err(|e| db(path, e))?;
-    tx.commit().map_err(|e| db(path, e))
+    match mode {
+        Mode::Migrate => Ok(true),
+        Mode::Create | Mode::Existing => Err(older(version, shown)),
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::store::columns::columns;
 
-    fn open(p: &Path) -> Connection {
-        Connection::open(p).unwrap()
+    #[test]
+    fn both_dialects_make_every_column_of_the_record() {
+        for d in [Dialect::Sqlite, Dialect::Postgres] {
+            let all = migrations(d).join("\n");
+            // each column made once: `  name   TYPE ...` in the table, or added
+            let made: Vec<(String, String)> = all
+                .lines()
+                .filter_map(|l| {
+                    let l = l.strip_prefix("ALTER TABLE runs ADD COLUMN ").unwrap_or(l);
+                    let mut w = l.split_whitespace();
+                    Some((w.next()?.to_string(), w.collect::<Vec<_>>().join(" ")))
+                })
+                .collect();
+            for c in columns() {
+                let n = made
+                    .iter()
+                    .filter(|(name, ty)| *name == c.name && ty.starts_with(d.ty(c.ty)))
+                    .count();
+                assert_eq!(n, 1, "{d:?}: {}", c.name);
+            }
+            assert_eq!(migrations(d).len() as i64, SCHEMA_VERSION);
+        }
     }
 
     #[test]
-    fn migrations_run_in_order_and_all_or_nothing() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("s.sqlite");
-        let mut c = open(&p);
-        let v1 = migrations();
-        assert_eq!(v1.len() as i64, SCHEMA_VERSION);
-        prepare(&mut c, &p, true, &v1).unwrap();
-        c.execute(
-            "INSERT INTO runs (run_id, serial, time_utc, host_fit_version, host_fit_commit, command, options, input) VALUES (?1, 'A', 't', 'v', 'c', 'fit', '{}', 'r.csv')",
-            ["0".repeat(32)],
-        )
-        .unwrap();
-        // a version 2 that adds a column keeps the record; a broken version 3 changes
-        // nothing: the store stays at version 2
-        let mut v2 = v1.clone();
-        v2.push("ALTER TABLE runs ADD COLUMN operator TEXT;".into());
-        prepare(&mut c, &p, false, &v2).unwrap();
-        let mut v3 = v2.clone();
-        v3.push("ALTER TABLE runs ADD COLUMN x TEXT; SELECT * FROM no_such_table;".into());
-        let e = prepare(&mut c, &p, false, &v3).unwrap_err();
-        assert!(e.message.contains("version 3 failed"), "{e}");
-        let (v, _) = version(&c, &p, 3).unwrap();
-        assert_eq!(v, 2);
-        let cols: i64 = c
-            .query_row(
-                "SELECT count(*) FROM pragma_table_info('runs') WHERE name IN ('operator', 'x')",
-                [],
-                |r| r.get(0),
-            )
-            .unwrap();
-        assert_eq!(cols, 1);
-        let n: i64 = c
-            .query_row("SELECT count(*) FROM runs", [], |r| r.get(0))
-            .unwrap();
-        assert_eq!(n, 1);
-        // and this host-fit (version 1) refuses the version-2 store, naming the version
-        let e = prepare(&mut c, &p, false, &v1).unwrap_err();
-        assert!(e.message.contains("schema version 2"), "{e}");
-        assert!(e.message.contains("up to 1"), "{e}");
-    }
-
-    #[test]
-    fn append_only_and_closed_sets_are_the_databases_own_rules() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("s.sqlite");
-        let mut c = open(&p);
-        prepare(&mut c, &p, true, &migrations()).unwrap();
-        let insert = |cmd: &str, acc: &str| {
-            c.execute(
-                "INSERT INTO runs (run_id, serial, time_utc, host_fit_version, host_fit_commit, command, options, input, acceptance) VALUES (lower(hex(randomblob(16))), 'A', 't', 'v', 'c', ?1, '{}', 'r.csv', ?2)",
-                [cmd, acc],
-            )
-        };
-        insert("fit", "pass").unwrap();
-        assert!(insert("refit", "pass").is_err());
-        assert!(insert("fit", "maybe").is_err());
-        let e = c.execute("UPDATE runs SET serial = 'B'", []).unwrap_err();
-        assert!(e.to_string().contains("append-only"), "{e}");
-        assert!(c.execute("DELETE FROM runs", []).is_err());
-    }
-
-    #[test]
-    fn other_databases_are_left_alone() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("other.sqlite");
-        let mut c = open(&p);
-        c.execute_batch("CREATE TABLE notes (x TEXT);").unwrap();
-        let e = prepare(&mut c, &p, true, &migrations()).unwrap_err();
-        assert!(e.message.contains("not a host-fit record store"), "{e}");
-        let q = dir.path().join("empty.sqlite");
-        let mut c = open(&q);
-        let e = prepare(&mut c, &q, false, &migrations()).unwrap_err();
-        assert!(e.message.contains("empty database"), "{e}");
+    fn older_stores_wait_for_the_migrate_command_and_newer_ones_are_refused() {
+        assert_eq!(decide(2, false, 2, Mode::Existing, "s"), Ok(false));
+        assert_eq!(decide(0, true, 2, Mode::Create, "s"), Ok(true));
+        assert!(decide(0, true, 2, Mode::Existing, "s")
+            .unwrap_err()
+            .contains("empty database"));
+        let e = decide(1, false, 2, Mode::Create, "line.sqlite").unwrap_err();
+        assert!(
+            e.contains("version 1") && e.contains("store migrate --db line.sqlite"),
+            "{e}"
+        );
+        assert_eq!(decide(1, false, 2, Mode::Migrate, "s"), Ok(true));
+        let e = decide(7, false, 2, Mode::Migrate, "s").unwrap_err();
+        assert!(
+            e.contains("schema version 7") && e.contains("up to 2"),
+            "{e}"
+        );
     }
 }

@@ -1,9 +1,11 @@
-//! Control charts across lots (`host-fit trend`): every calibrated unit of the store
-//! (its latest calibration) in time order (the units of one batch, which share its
-//! start, in the order of their files: never in the order parallel jobs happened to
-//! finish them, which interleaves a lot's halves), each coefficient at T0 and the worst
-//! verification |dg| as an individuals chart whose centre line and limits come from a
-//! reference period, and the points flagged by Nelson's run rules (the first four of
+//! Control charts across lots (`host-fit trend`): every calibration of the store in
+//! time order, a unit calibrated again as a point of its own (marked as a
+//! recalibration), the calibrations of one batch, which share its start, in the order
+//! of their files (never in the order parallel jobs happened to finish them, which
+//! interleaves a lot's halves); each coefficient at T0 and the worst verification |dg|
+//! as an individuals chart whose centre line and limits come from a reference period
+//! (a limit never beyond what the quantity can reach: |dg| is never below 0), and the
+//! points flagged by Nelson's run rules (the first four of
 //! which include Western Electric's: Nelson 1 = WE 1, Nelson 5 = WE 2, Nelson 6 = WE 3).
 //!
 //! Centre: the reference points' mean; sigma: their mean moving range / 1.128 (the
@@ -13,10 +15,10 @@
 //! with probability [`ALL_RULES_FALSE_ALARM_RATE`], 2.5 %; with limits estimated from a
 //! reference of 20, 50 or 100 units, 5.4 %, 3.5 % or 3.0 % ([`ALL_RULES_BY_REFERENCE`]).
 //! Monte-Carlo tests hold every one of these rates.
-use super::db::Store;
-use super::fault::db_error;
+use super::db::{Filter, Order, Store};
+use super::record::Command;
 use crate::error::{HostError, Result};
-use firmware_core::model::COEFF_NAMES;
+use firmware_core::model::{COEFF_NAMES, U0_INDEX};
 use serde::Serialize;
 use std::collections::HashMap;
 
@@ -200,6 +202,23 @@ pub struct Limits {
     pub sigma: f64,
     /// How many reference points.
     pub points: usize,
+    /// The lower control limit: centre - 3 sigma, or the quantity's own lower bound
+    /// when that is higher (a worst |dg| is never below 0).
+    pub lower: f64,
+    /// The upper control limit: centre + 3 sigma.
+    pub upper: f64,
+}
+
+impl Limits {
+    /// The same limits within the bounds a quantity cannot cross.
+    pub fn bounded(self, q: Quantity) -> Limits {
+        let (lo, hi) = q.bounds();
+        Limits {
+            lower: lo.map_or(self.lower, |b| self.lower.max(b)),
+            upper: hi.map_or(self.upper, |b| self.upper.min(b)),
+            ..self
+        }
+    }
 }
 
 /// d2 of a moving range of two: the mean |x_i - x_(i-1)| of a normal process is
@@ -224,6 +243,8 @@ pub fn limits(reference: &[f64]) -> Option<Limits> {
         centre,
         sigma,
         points: n,
+        lower: centre - 3.0 * sigma,
+        upper: centre + 3.0 * sigma,
     })
 }
 
@@ -254,13 +275,56 @@ impl Reference {
     /// In words.
     pub fn text(&self) -> String {
         match self {
-            Reference::First(n) => format!("the first {n} units"),
-            Reference::Between(a, b) => format!("the units calibrated from {a} to {b}"),
+            Reference::First(n) => format!("the first {n} calibrations"),
+            Reference::Between(a, b) => format!("the calibrations from {a} to {b}"),
         }
     }
 }
 
-/// A unit on the charts: its latest calibration.
+/// What a chart plots.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    /// A coefficient at T0 ([`COEFF_NAMES`] index).
+    Coefficient(usize),
+    /// The worst compensated |dg| over the verification dwells.
+    WorstDg,
+}
+
+impl Quantity {
+    /// `kxx` .. `u0z`, or `worst_dg`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Quantity::Coefficient(c) => COEFF_NAMES.get(c).copied().unwrap_or("?"),
+            Quantity::WorstDg => "worst_dg",
+        }
+    }
+
+    /// The bounds the quantity cannot cross (lower, upper).
+    pub fn bounds(self) -> (Option<f64>, Option<f64>) {
+        match self {
+            Quantity::Coefficient(_) => (None, None),
+            // an absolute value
+            Quantity::WorstDg => (Some(0.0), None),
+        }
+    }
+
+    /// Its unit, the recordings' output unit being `out`.
+    pub fn unit(self, out: &str) -> String {
+        match self {
+            Quantity::Coefficient(c) if c < U0_INDEX[0] => format!("{out}/g"),
+            Quantity::Coefficient(_) => out.to_string(),
+            Quantity::WorstDg => "mg".into(),
+        }
+    }
+}
+
+impl Serialize for Quantity {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+/// A calibration on the charts (every calibration of the store, recalibrations too).
 #[derive(Debug, Clone, Serialize)]
 pub struct Unit {
     /// Serial.
@@ -271,12 +335,23 @@ pub struct Unit {
     pub time_utc: String,
     /// The calibration's run.
     pub run_id: String,
+    /// Whether the unit was calibrated before (an earlier point of the chart).
+    pub recalibration: bool,
+}
+
+/// A point of a chart.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Point {
+    /// The calibration's place on the chart (0-based, in time order).
+    pub place: usize,
+    /// Its value.
+    pub value: f64,
 }
 
 /// A flagged point.
 #[derive(Debug, Clone, Serialize)]
 pub struct Flag {
-    /// The unit's place on the chart (0-based, in time order).
+    /// The calibration's place on the chart (0-based, in time order).
     pub unit: usize,
     /// Its serial.
     pub serial: String,
@@ -290,12 +365,12 @@ pub struct Flag {
 #[derive(Debug, Clone, Serialize)]
 pub struct Chart {
     /// `kxx` .. `u0z`, or `worst_dg`.
-    pub quantity: String,
+    pub quantity: Quantity,
     /// The values' unit (`V/g`, `V`, `mg`).
     pub unit: String,
-    /// (unit's place, value), in time order.
+    /// In time order.
     #[serde(skip)]
-    pub points: Vec<(usize, f64)>,
+    pub points: Vec<Point>,
     /// The limits (None: too few reference points, or none spread).
     pub limits: Option<Limits>,
     /// The flagged points.
@@ -306,14 +381,14 @@ pub struct Chart {
     pub note: Option<String>,
 }
 
-/// Consecutive units of one lot.
+/// Consecutive calibrations of one lot.
 #[derive(Debug, Clone, Serialize)]
 pub struct LotSpan {
     /// The lot (`-` for none).
     pub lot: String,
-    /// First unit's place.
+    /// First calibration's place.
     pub first: usize,
-    /// Last unit's place.
+    /// Last calibration's place.
     pub last: usize,
 }
 
@@ -322,16 +397,18 @@ pub struct LotSpan {
 pub struct Trend {
     /// The store.
     pub store: String,
-    /// The units in time order.
+    /// The calibrations in time order.
     #[serde(skip)]
     pub units: Vec<Unit>,
-    /// How many units.
+    /// How many calibrations (points per chart at most).
     pub unit_count: usize,
+    /// How many of them are recalibrations of a unit calibrated before.
+    pub recalibrations: usize,
     /// The lots as they follow in time.
     pub lots: Vec<LotSpan>,
     /// The reference period.
     pub reference: Reference,
-    /// Its units' places.
+    /// Its calibrations' places.
     #[serde(skip)]
     pub reference_units: Vec<usize>,
     /// The rules applied (Nelson's numbers).
@@ -340,49 +417,107 @@ pub struct Trend {
     pub charts: Vec<Chart>,
 }
 
-/// The units (latest calibration per serial, in time order) with their coefficients and
-/// output unit, and each serial's newest worst |dg|.
-type Loaded = (
-    Vec<Unit>,
-    Vec<[Option<f64>; 12]>,
-    Vec<Option<String>>,
-    HashMap<String, f64>,
-);
+/// What the charts are made of: every calibration in time order with its coefficients,
+/// output unit and worst |dg|.
+struct Loaded {
+    units: Vec<Unit>,
+    coeffs: Vec<[Option<f64>; COEFF_COUNT]>,
+    out_units: Vec<Option<String>>,
+    worst_dg: Vec<Option<f64>>,
+}
 
-fn load(store: &Store) -> Result<Loaded> {
-    let e = |e| db_error(store.path(), e);
-    let sql = format!(
-        "SELECT serial, lot, time_utc, run_id, output_unit, {} FROM runs WHERE id IN (SELECT max(id) FROM runs WHERE {} GROUP BY serial) ORDER BY time_utc, input, id",
-        COEFF_NAMES.join(", "),
-        super::schema::CALIBRATION
-    );
-    let mut st = store.conn().prepare(&sql).map_err(e)?;
-    let mut rows = st.query([]).map_err(e)?;
-    let (mut units, mut coeffs, mut out_units) = (Vec::new(), Vec::new(), Vec::new());
-    while let Some(r) = rows.next().map_err(e)? {
-        units.push(Unit {
-            serial: r.get(0).map_err(e)?,
-            lot: r.get(1).map_err(e)?,
-            time_utc: r.get(2).map_err(e)?,
-            run_id: r.get(3).map_err(e)?,
-        });
-        out_units.push(r.get(4).map_err(e)?);
-        let mut c = [None; 12];
-        for (k, v) in c.iter_mut().enumerate() {
-            *v = r.get(5 + k).map_err(e)?;
+/// The coefficients per calibration.
+const COEFF_COUNT: usize = COEFF_NAMES.len();
+
+/// A calibration's worst |dg|: its own (a batch verifies what it makes), else that of
+/// the first `verify` of the same unit after it and before its next calibration.
+fn verified_after(
+    serial: &str,
+    id: i64,
+    next: Option<i64>,
+    verifies: &HashMap<String, Vec<(i64, f64)>>,
+) -> Option<f64> {
+    verifies.get(serial).and_then(|v| {
+        v.iter()
+            .find(|(vid, _)| *vid > id && next.is_none_or(|n| *vid < n))
+            .map(|(_, dg)| *dg)
+    })
+}
+
+fn load(store: &mut Store) -> Result<Loaded> {
+    let names: Vec<String> = [
+        "id",
+        "serial",
+        "lot",
+        "time_utc",
+        "run_id",
+        "output_unit",
+        "worst_dg_mg",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .chain(COEFF_NAMES.iter().map(|s| s.to_string()))
+    .collect();
+    let rows = store.select(
+        &names,
+        &Filter {
+            calibrations: true,
+            order: Order::Time,
+            ..Filter::default()
+        },
+    )?;
+    let verifies = store.select(
+        &["id".into(), "serial".into(), "worst_dg_mg".into()],
+        &Filter {
+            command: Some(Command::Verify),
+            ..Filter::default()
+        },
+    )?;
+    let mut by_serial: HashMap<String, Vec<(i64, f64)>> = HashMap::new();
+    for r in &verifies {
+        if let (Some(s), Some(id), Some(dg)) =
+            (r.text("serial"), r.integer("id"), r.real("worst_dg_mg"))
+        {
+            by_serial.entry(s).or_default().push((id, dg));
         }
-        coeffs.push(c);
     }
-    let mut dg = HashMap::new();
-    let mut st = store
-        .conn()
-        .prepare("SELECT serial, worst_dg_mg FROM runs WHERE id IN (SELECT max(id) FROM runs WHERE worst_dg_mg IS NOT NULL GROUP BY serial)")
-        .map_err(e)?;
-    let mut rows = st.query([]).map_err(e)?;
-    while let Some(r) = rows.next().map_err(e)? {
-        dg.insert(r.get(0).map_err(e)?, r.get(1).map_err(e)?);
+    // each serial's calibrations by id: the next one bounds a verify's reach
+    let mut cal_ids: HashMap<String, Vec<i64>> = HashMap::new();
+    for r in &rows {
+        if let (Some(s), Some(id)) = (r.text("serial"), r.integer("id")) {
+            cal_ids.entry(s).or_default().push(id);
+        }
     }
-    Ok((units, coeffs, out_units, dg))
+    cal_ids.values_mut().for_each(|v| v.sort_unstable());
+    let mut seen = std::collections::HashSet::new();
+    let mut l = Loaded {
+        units: Vec::with_capacity(rows.len()),
+        coeffs: Vec::with_capacity(rows.len()),
+        out_units: Vec::with_capacity(rows.len()),
+        worst_dg: Vec::with_capacity(rows.len()),
+    };
+    for r in &rows {
+        let serial = r.text("serial").unwrap_or_default();
+        let id = r.integer("id").unwrap_or(0);
+        let next = cal_ids
+            .get(&serial)
+            .and_then(|v| v.iter().find(|x| **x > id).copied());
+        l.worst_dg.push(
+            r.real("worst_dg_mg")
+                .or_else(|| verified_after(&serial, id, next, &by_serial)),
+        );
+        l.units.push(Unit {
+            recalibration: !seen.insert(serial.clone()),
+            serial,
+            lot: r.text("lot"),
+            time_utc: r.text("time_utc").unwrap_or_default(),
+            run_id: r.text("run_id").unwrap_or_default(),
+        });
+        l.out_units.push(r.text("output_unit"));
+        l.coeffs
+            .push(std::array::from_fn(|k| r.real(COEFF_NAMES[k])));
+    }
+    Ok(l)
 }
 
 fn lot_spans(units: &[Unit]) -> Vec<LotSpan> {
@@ -423,21 +558,21 @@ fn common_unit(out_units: &[Option<String>]) -> (String, Option<String>) {
     (best, note)
 }
 
-/// One chart of `points` (unit place, value) with the reference's limits.
+/// One chart of `points` with the reference's limits (within the quantity's bounds).
 fn chart(
-    quantity: &str,
+    quantity: Quantity,
     unit: String,
-    points: Vec<(usize, f64)>,
+    points: Vec<Point>,
     in_reference: &[bool],
     rules: &[Rule],
     units: &[Unit],
 ) -> Chart {
     let reference: Vec<f64> = points
         .iter()
-        .filter(|p| in_reference[p.0])
-        .map(|p| p.1)
+        .filter(|p| in_reference[p.place])
+        .map(|p| p.value)
         .collect();
-    let l = limits(&reference);
+    let l = limits(&reference).map(|l| l.bounded(quantity));
     let note = match (&l, reference.len()) {
         (None, n) if n < 2 => Some(format!(
             "{n} reference points: no limits (at least 2 needed)"
@@ -448,7 +583,7 @@ fn chart(
         )),
         _ => None,
     };
-    let values: Vec<f64> = points.iter().map(|p| p.1).collect();
+    let values: Vec<f64> = points.iter().map(|p| p.value).collect();
     let per_point = l
         .as_ref()
         .map(|l| flags(&values, l, rules))
@@ -458,9 +593,9 @@ fn chart(
         .enumerate()
         .filter(|(_, f)| !f.is_empty())
         .map(|(i, f)| Flag {
-            unit: points[i].0,
-            serial: units[points[i].0].serial.clone(),
-            value: points[i].1,
+            unit: points[i].place,
+            serial: units[points[i].place].serial.clone(),
+            value: points[i].value,
             rules: f.iter().map(|r| r.number()).collect(),
         })
         .collect();
@@ -477,7 +612,7 @@ fn chart(
         })
         .collect();
     Chart {
-        quantity: quantity.to_string(),
+        quantity,
         unit,
         points,
         limits: l,
@@ -487,16 +622,17 @@ fn chart(
     }
 }
 
-/// The charts of every calibrated unit in `store`, the limits from `reference`, the
-/// points flagged by `rules`.
-pub fn trend(store: &Store, reference: Reference, rules: &[Rule]) -> Result<Trend> {
-    let (units, coeffs, out_units, dg) = load(store)?;
-    if units.is_empty() {
+/// The charts of every calibration in `store` (recalibrations as points of their own),
+/// the limits from `reference`, the points flagged by `rules`.
+pub fn trend(store: &mut Store, reference: Reference, rules: &[Rule]) -> Result<Trend> {
+    let l = load(store)?;
+    if l.units.is_empty() {
         return Err(HostError::in_file(
             store.path(),
             "holds no calibration (no fit, diagnose --out, batch or demo record): nothing to chart",
         ));
     }
+    let units = l.units;
     let in_reference: Vec<bool> = match &reference {
         Reference::First(n) => (0..units.len()).map(|i| i < *n).collect(),
         Reference::Between(a, b) => units
@@ -504,41 +640,41 @@ pub fn trend(store: &Store, reference: Reference, rules: &[Rule]) -> Result<Tren
             .map(|u| u.time_utc.as_str() >= a.as_str() && u.time_utc.as_str() <= b.as_str())
             .collect(),
     };
-    let (unit, mixed) = common_unit(&out_units);
+    let (out_unit, mixed) = common_unit(&l.out_units);
     let mut charts = Vec::new();
-    for (c, name) in COEFF_NAMES.iter().enumerate() {
-        let points = coeffs
+    for c in 0..COEFF_COUNT {
+        let q = Quantity::Coefficient(c);
+        let points = l
+            .coeffs
             .iter()
             .enumerate()
-            .filter_map(|(i, v)| v[c].map(|x| (i, x)))
+            .filter_map(|(i, v)| v[c].map(|value| Point { place: i, value }))
             .collect();
-        let u = if c < 9 {
-            format!("{unit}/g")
-        } else {
-            unit.clone()
-        };
-        let mut ch = chart(name, u, points, &in_reference, rules, &units);
+        let mut ch = chart(q, q.unit(&out_unit), points, &in_reference, rules, &units);
         if let Some(m) = &mixed {
             ch.note = Some(ch.note.map_or(m.clone(), |n| format!("{n}; {m}")));
         }
         charts.push(ch);
     }
-    let points = units
+    let points = l
+        .worst_dg
         .iter()
         .enumerate()
-        .filter_map(|(i, u)| dg.get(&u.serial).map(|v| (i, *v)))
+        .filter_map(|(i, v)| v.map(|value| Point { place: i, value }))
         .collect();
+    let q = Quantity::WorstDg;
     charts.push(chart(
-        "worst_dg",
-        "mg".into(),
+        q,
+        q.unit(&out_unit),
         points,
         &in_reference,
         rules,
         &units,
     ));
     Ok(Trend {
-        store: store.path().display().to_string(),
+        store: store.location().to_string(),
         unit_count: units.len(),
+        recalibrations: units.iter().filter(|u| u.recalibration).count(),
         lots: lot_spans(&units),
         reference,
         reference_units: in_reference
@@ -556,10 +692,9 @@ pub fn trend(store: &Store, reference: Reference, rules: &[Rule]) -> Result<Tren
 impl Chart {
     /// What the chart plots, in words (`kxx at T0`, `worst verification |dg|`).
     pub fn title(&self) -> String {
-        if self.quantity == "worst_dg" {
-            "worst verification |dg|".into()
-        } else {
-            format!("{} at T0", self.quantity)
+        match self.quantity {
+            Quantity::WorstDg => "worst verification |dg|".into(),
+            Quantity::Coefficient(_) => format!("{} at T0", self.quantity.name()),
         }
     }
 }
@@ -568,8 +703,9 @@ impl Trend {
     /// As text: one line per chart (centre, sigma, flagged points by rule).
     pub fn text(&self) -> String {
         let mut s = vec![format!(
-            "{} units (each serial's latest calibration, in time order) in {} lot runs from {}; limits from {} ({} units): centre = their mean, sigma = their mean moving range / 1.128; rules: Nelson {}",
+            "{} calibrations ({} of them recalibrations of a unit calibrated before), in time order, in {} lot runs from {}; limits from {} ({} calibrations): centre = their mean, sigma = their mean moving range / 1.128; rules: Nelson {}",
             self.unit_count,
+            self.recalibrations,
             self.lots.len(),
             self.store,
             self.reference.text(),
@@ -640,6 +776,8 @@ mod tests {
             centre: 0.0,
             sigma: 1.0,
             points: 0,
+            lower: -3.0,
+            upper: 3.0,
         }
     }
 
@@ -746,6 +884,15 @@ mod tests {
         assert_eq!(l.centre, 2.0);
         assert!((l.sigma - 1.5 / 1.128).abs() < 1e-12);
         assert!(limits(&[1.0]).is_none() && limits(&[2.0, 2.0]).is_none());
+        // a |dg| near zero with a wide spread: the lower limit stops at zero, the
+        // coefficients' limits are centre -+ 3 sigma
+        let l = limits(&[0.05, 0.4, 0.1, 0.3]).unwrap();
+        assert!(l.lower < 0.0);
+        let dg = l.bounded(Quantity::WorstDg);
+        assert_eq!((dg.lower, dg.upper), (0.0, l.upper));
+        assert_eq!(l.bounded(Quantity::Coefficient(9)), l);
+        assert_eq!(Quantity::Coefficient(9).unit("V"), "V");
+        assert_eq!(Quantity::Coefficient(8).unit("V"), "V/g");
         assert_eq!(
             parse_rules("2,1, 2").unwrap(),
             [Rule::BeyondThree, Rule::NineOneSide]

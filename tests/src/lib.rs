@@ -7,6 +7,7 @@ use std::path::PathBuf;
 pub mod figures;
 pub mod four_stops;
 pub mod lab;
+pub mod pg;
 pub mod readme;
 pub mod run;
 pub mod sweep;

@@ -35,7 +35,16 @@ pub fn pg_error(at: &Path, e: &postgres::Error) -> HostError {
                 format!("record store: {}", db.message())
             }
         }
-        None => format!("cannot reach the record store's server: {e}"),
+        None => {
+            // the client's own words, with their causes (refused, timed out, no route)
+            let mut m = e.to_string();
+            let mut cause = std::error::Error::source(e);
+            while let Some(c) = cause {
+                m.push_str(&format!(": {c}"));
+                cause = c.source();
+            }
+            format!("cannot reach the record store's server: {m}")
+        }
     };
     HostError::in_file(at, m)
 }

@@ -1,142 +1,206 @@
-//! The record store under real processes (the release of `host-fit` this crate builds):
-//! two `batch` processes writing one store at once lose nothing, and a `batch` killed
-//! mid-way leaves a store that opens, passes SQLite's integrity check and holds only
-//! whole records, to which a new batch appends.
+//! The record store under real processes (the release of `host-fit` this crate builds),
+//! on SQLite and on a real PostgreSQL server (`tests/src/pg.rs`: `HOSTFIT_TEST_PG`, or
+//! a throwaway cluster of this binary's own): eight stations running `batch` on 50 units
+//! each at once lose and duplicate nothing; a station killed mid-lot and run again with
+//! the same command resumes (the units recorded are kept, not recomputed, never
+//! `error`; the rest are done; the summary is whole); a new store is readable by the
+//! group and others as the umask allows.
 use host_fit::simulate::{simulate, SimConfig};
-use host_fit::store::record::Command;
-use host_fit::store::Store;
+use host_fit::store::record::{blob_run_id, Command, Record};
+use host_fit::store::{Location, Store};
 use std::path::{Path, PathBuf};
 use std::process::{Command as Process, Stdio};
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-fn tempdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hf-store-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+#[path = "../../tests/src/pg.rs"]
+#[allow(dead_code)]
+mod pg;
+
+/// Units per station.
+const UNITS: usize = 50;
+/// Stations writing at once.
+const STATIONS: usize = 8;
+
+/// The recordings of 50 twin units (seeds 1..=50), fast ones (one row per dwell, as a
+/// voltmeter that averages each position), made once per test binary.
+fn recordings() -> &'static Vec<String> {
+    static R: OnceLock<Vec<String>> = OnceLock::new();
+    R.get_or_init(|| {
+        (0..UNITS as u64)
+            .map(|i| {
+                let mut cfg = SimConfig {
+                    seed: 1 + i,
+                    ..SimConfig::default()
+                };
+                cfg.unit.serial = "SERIAL".into();
+                cfg.schedule.dwell_means = true;
+                simulate(&cfg, |_| {}).unwrap().csv
+            })
+            .collect()
+    })
 }
 
-/// `n` simulated units of the paper's profile (serials `PREFIX-i`) in `dir`.
-fn units(dir: &Path, prefix: &str, n: u64, seed0: u64) {
+/// A lot of the 50 units, serials `PREFIX-i`, in `dir`.
+fn lot(dir: &Path, prefix: &str) {
     std::fs::create_dir_all(dir).unwrap();
-    for i in 0..n {
-        let mut cfg = SimConfig {
-            seed: seed0 + i,
-            ..SimConfig::default()
-        };
-        cfg.unit.serial = format!("{prefix}-{i}");
-        let sim = simulate(&cfg, |_| {}).unwrap();
-        std::fs::write(dir.join(format!("{prefix}-{i:03}.csv")), sim.csv).unwrap();
+    for (i, csv) in recordings().iter().enumerate() {
+        let serial = format!("{prefix}-{i:02}");
+        let text = csv.replacen("# unit=SERIAL", &format!("# unit={serial}"), 1);
+        assert_ne!(&text, csv);
+        std::fs::write(dir.join(format!("{serial}.csv")), text).unwrap();
     }
 }
 
-fn batch(dir: &Path, out: &Path, db: &Path) -> Process {
+fn batch(dir: &Path, out: &Path, db: &str, station: &str) -> Process {
     let mut c = Process::new(env!("CARGO_BIN_EXE_host-fit"));
     c.arg("batch")
         .arg(dir)
         .arg("--out")
         .arg(out)
-        .arg("--db")
-        .arg(db)
-        .args(["--jobs", "1", "--force"])
+        .args(["--db", db, "--jobs", "1", "--station", station])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
     c
 }
 
-/// Every record of a batch is whole: its run, input hash, blob with a CRC that checks,
-/// coefficients and verdict.
-fn assert_whole(s: &Store) {
-    for r in s.all().unwrap() {
+fn store(db: &str) -> Store {
+    Store::open_existing(Location::parse(db).unwrap()).unwrap()
+}
+
+/// Every record is whole: its input hash, a blob with a CRC that checks and its own run
+/// id in it, coefficients, a verdict that is no error, a test record.
+fn assert_whole(all: &[Record]) {
+    for r in all {
         assert_eq!(r.command, Command::Batch);
         assert_eq!(r.input_sha256.as_ref().map(String::len), Some(64), "{r:?}");
         let blob = r.blob.as_ref().expect("a blob");
         let n = blob.len();
         assert_eq!(
             Some(firmware_core::crc::crc32(&blob[..n - 4])),
-            r.blob_crc(),
-            "{}",
-            r.serial
+            r.blob_crc()
         );
-        assert!(r.at_t0.is_some() && r.judged.is_some() && r.worst_dg_mg.is_some());
+        assert_eq!(blob_run_id(blob), Some(r.run_id));
+        assert!(r.at_t0.is_some() && r.worst_dg_mg.is_some() && r.test_record.is_some());
+        let j = r.judged.as_ref().unwrap();
+        assert_eq!(
+            j.verdict,
+            host_fit::batch::UnitStatus::Pass,
+            "{}: {}",
+            r.serial,
+            j.reason
+        );
     }
 }
 
-fn integrity(db: &Path) -> String {
-    let c = rusqlite::Connection::open(db).unwrap();
-    c.query_row("PRAGMA integrity_check", [], |r| r.get(0))
-        .unwrap()
+/// The rows of a summary.csv: (unit, acceptance).
+fn summary(out: &Path) -> Vec<(String, String)> {
+    let mut r = csv::Reader::from_path(out.join("summary.csv")).unwrap();
+    r.records()
+        .map(|row| {
+            let row = row.unwrap();
+            (row[0].to_string(), row[2].to_string())
+        })
+        .collect()
 }
 
-#[test]
-fn two_batches_writing_one_store_at_once_lose_nothing() {
-    let root = tempdir("two");
-    let (a, b) = (root.join("lot-a"), root.join("lot-b"));
-    // 40 units each: several seconds of work, so that each writer commits several
-    // chunks (one a second) while the other runs
-    units(&a, "A", 40, 100);
-    units(&b, "B", 40, 200);
-    let db = root.join("shared.sqlite");
-    let mut pa = batch(&a, &root.join("out-a"), &db).spawn().unwrap();
-    let mut pb = batch(&b, &root.join("out-b"), &db).spawn().unwrap();
-    let (ra, rb) = (pa.wait().unwrap(), pb.wait().unwrap());
-    let err = |p: std::process::Child| {
-        let mut s = String::new();
-        use std::io::Read;
-        p.stderr.unwrap().read_to_string(&mut s).unwrap();
-        s
-    };
-    assert!(ra.success(), "{}", err(pa));
-    assert!(rb.success(), "{}", err(pb));
-    let s = Store::open_existing(&db).unwrap();
-    let all = s.all().unwrap();
-    assert_eq!(all.len(), 80, "every unit of both batches recorded");
+fn eight_stations_at_once(root: &Path, db: &str) {
+    let mut procs = Vec::new();
+    for k in 0..STATIONS {
+        let dir = root.join(format!("lot-{k}"));
+        lot(&dir, &format!("S{k}"));
+        let out = root.join(format!("out-{k}"));
+        procs.push((
+            k,
+            out.clone(),
+            batch(&dir, &out, db, &format!("ST-{k}")).spawn().unwrap(),
+        ));
+    }
+    for (k, out, p) in procs {
+        let o = p.wait_with_output().unwrap();
+        assert!(
+            o.status.success(),
+            "station {k}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_eq!(summary(&out).len(), UNITS);
+    }
+    let all = store(db).all().unwrap();
+    assert_eq!(
+        all.len(),
+        STATIONS * UNITS,
+        "every unit of every station recorded"
+    );
     let mut runs: Vec<String> = all.iter().map(|r| r.run_id.to_string()).collect();
     runs.sort();
     runs.dedup();
-    assert_eq!(runs.len(), 80, "run ids are unique");
-    for (lot, prefix) in [("lot-a", "A-"), ("lot-b", "B-")] {
-        let mine: Vec<_> = all
+    assert_eq!(runs.len(), STATIONS * UNITS, "run ids are unique");
+    let mut serials: Vec<&str> = all.iter().map(|r| r.serial.as_str()).collect();
+    serials.sort();
+    serials.dedup();
+    assert_eq!(serials.len(), STATIONS * UNITS, "no unit twice");
+    for k in 0..STATIONS {
+        let mine: Vec<&Record> = all
             .iter()
-            .filter(|r| r.lot.as_deref() == Some(lot))
+            .filter(|r| r.lot.as_deref() == Some(&format!("lot-{k}")))
             .collect();
-        assert_eq!(mine.len(), 40, "{lot}");
-        assert!(mine.iter().all(|r| r.serial.starts_with(prefix)));
+        assert_eq!(mine.len(), UNITS);
+        assert!(mine.iter().all(|r| r.serial.starts_with(&format!("S{k}-"))
+            && r.trace.station.as_deref() == Some(&format!("ST-{k}"))));
     }
-    // the two wrote at the same time: their records' places in the table interleave
-    let ids = |lot: &str| -> Vec<i64> {
-        all.iter()
-            .filter(|r| r.lot.as_deref() == Some(lot))
+    // they wrote at the same time: the stations' records interleave in the table
+    let first_last = |k: usize| {
+        let ids: Vec<i64> = all
+            .iter()
+            .filter(|r| r.trace.station.as_deref() == Some(&format!("ST-{k}")))
             .map(|r| r.id)
-            .collect()
+            .collect();
+        (*ids.iter().min().unwrap(), *ids.iter().max().unwrap())
     };
-    let (ia, ib) = (ids("lot-a"), ids("lot-b"));
-    let (a0, a1) = (ia.iter().min().unwrap(), ia.iter().max().unwrap());
-    let (b0, b1) = (ib.iter().min().unwrap(), ib.iter().max().unwrap());
-    assert!(a0 < b1 && b0 < a1, "not concurrent: ids {ia:?} {ib:?}");
-    assert_whole(&s);
-    assert_eq!(integrity(&db), "ok");
-    let _ = std::fs::remove_dir_all(&root);
+    let (a0, a1) = first_last(0);
+    assert!(
+        (1..STATIONS).any(|k| {
+            let (b0, b1) = first_last(k);
+            a0 < b1 && b0 < a1
+        }),
+        "not concurrent"
+    );
+    assert_whole(&all);
 }
 
 #[test]
-fn a_batch_killed_mid_way_leaves_whole_records_and_a_store_that_goes_on() {
-    let root = tempdir("kill");
-    let dir = root.join("lot");
-    // more units than a few chunks: on a quiet machine the first commit (a chunk, or
-    // what was done when the flush timer ran) must still leave units to kill
-    let n_units = 3 * host_fit::batch::RECORD_CHUNK;
-    units(&dir, "K", n_units as u64, 300);
-    let db = root.join("records.sqlite");
-    let mut p = batch(&dir, &root.join("out"), &db).spawn().unwrap();
+fn eight_stations_writing_one_sqlite_store_lose_and_duplicate_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("line.sqlite").display().to_string();
+    eight_stations_at_once(tmp.path(), &db);
+    let c = rusqlite::Connection::open(&db).unwrap();
+    let ok: String = c
+        .query_row("PRAGMA integrity_check", [], |r| r.get(0))
+        .unwrap();
+    assert_eq!(ok, "ok");
+}
+
+#[test]
+fn eight_stations_writing_one_postgresql_store_lose_and_duplicate_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let db = pg::database("eight");
+    eight_stations_at_once(tmp.path(), &db);
+}
+
+/// A station killed (SIGKILL) once its first records are in, then run again with the
+/// same command, no `--force`.
+fn killed_and_run_again(root: &Path, db: &str) {
+    let dir = root.join("lot-k");
+    lot(&dir, "K");
+    let out = root.join("out");
+    let mut p = batch(&dir, &out, db, "ST-K").spawn().unwrap();
     let t = Instant::now();
-    // kill it once a first chunk is in (and long before the last unit)
-    let count = |db: &Path| -> i64 {
-        rusqlite::Connection::open_with_flags(db, rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY)
-            .and_then(|c| c.query_row("SELECT count(*) FROM runs", [], |r| r.get(0)))
+    let count = || {
+        Store::open_existing(Location::parse(db).unwrap())
+            .and_then(|mut s| s.count())
             .unwrap_or(0)
     };
-    while count(&db) == 0 {
+    while count() == 0 {
         assert!(
             t.elapsed() < Duration::from_secs(120),
             "no record in 2 minutes"
@@ -145,21 +209,108 @@ fn a_batch_killed_mid_way_leaves_whole_records_and_a_store_that_goes_on() {
             p.try_wait().unwrap().is_none(),
             "the batch ended before it was killed"
         );
-        std::thread::sleep(Duration::from_millis(20));
+        std::thread::sleep(Duration::from_millis(10));
     }
     p.kill().unwrap();
     p.wait().unwrap();
-    let s = Store::open_existing(&db).unwrap();
-    let n = s.count().unwrap();
-    assert!(n > 0 && n < n_units as i64, "{n} records");
-    assert_whole(&s);
-    drop(s);
-    assert_eq!(integrity(&db), "ok");
-    // the store goes on: the batch run again appends every unit
-    let o = batch(&dir, &root.join("out"), &db).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s = Store::open_existing(&db).unwrap();
-    assert_eq!(s.count().unwrap(), n + n_units as i64);
-    assert_whole(&s);
-    let _ = std::fs::remove_dir_all(&root);
+    let before = store(db).all().unwrap();
+    let n = before.len();
+    assert!(n > 0 && n < UNITS, "{n} records at the kill");
+    assert_whole(&before);
+    // the files of the units recorded, as the killed run left them
+    let kept: Vec<(PathBuf, Vec<u8>)> = before
+        .iter()
+        .map(|r| {
+            let b = out.join(format!("{}.blob", r.serial));
+            let bytes = std::fs::read(&b).unwrap();
+            (b, bytes)
+        })
+        .collect();
+    let o = batch(&dir, &out, db, "ST-K").output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        text.contains(&format!("resumed: {n} units already recorded")),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!("{UNITS} pass, 0 fail, 0 error")),
+        "{text}"
+    );
+    let after = store(db).all().unwrap();
+    assert_eq!(
+        after.len(),
+        UNITS,
+        "every unit once: {n} kept, the rest done"
+    );
+    assert_whole(&after);
+    // the units recorded before the kill are the same records, their blobs untouched
+    for r in &before {
+        assert!(after.iter().any(|a| a == r), "{} changed", r.serial);
+    }
+    for (b, bytes) in kept {
+        assert_eq!(std::fs::read(&b).unwrap(), bytes, "{}", b.display());
+    }
+    // every unit's blob carries its record's run id; the summary is whole
+    for r in &after {
+        let blob = std::fs::read(out.join(format!("{}.blob", r.serial))).unwrap();
+        assert_eq!(blob_run_id(&blob), Some(r.run_id), "{}", r.serial);
+        assert!(out.join(format!("{}.test-record.json", r.serial)).exists());
+    }
+    let rows = summary(&out);
+    assert_eq!(rows.len(), UNITS);
+    assert!(rows.iter().all(|r| r.1 == "pass"), "{rows:?}");
+}
+
+#[test]
+fn a_station_killed_mid_lot_resumes_on_sqlite() {
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("records.sqlite").display().to_string();
+    killed_and_run_again(tmp.path(), &db);
+}
+
+#[test]
+fn a_station_killed_mid_lot_resumes_on_postgresql() {
+    let tmp = tempfile::tempdir().unwrap();
+    let db = pg::database("killed");
+    killed_and_run_again(tmp.path(), &db);
+}
+
+#[test]
+fn a_new_store_is_readable_as_the_umask_allows() {
+    use std::os::unix::fs::PermissionsExt;
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("lot-u");
+    lot(&dir, "U");
+    // two units are enough
+    for e in std::fs::read_dir(&dir).unwrap().flatten().skip(2) {
+        std::fs::remove_file(e.path()).unwrap();
+    }
+    for (umask, want) in [("022", 0o644), ("002", 0o664), ("077", 0o600)] {
+        let out = tmp.path().join(format!("out-{umask}"));
+        let st = Process::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "umask {umask} && exec \"$0\" batch \"$1\" --out \"$2\" --jobs 1"
+            ))
+            .arg(env!("CARGO_BIN_EXE_host-fit"))
+            .arg(&dir)
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            st.status.success(),
+            "{}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+        let mode = std::fs::metadata(out.join("records.sqlite"))
+            .unwrap()
+            .permissions()
+            .mode();
+        assert_eq!(mode & 0o777, want, "umask {umask}: {mode:o}");
+    }
 }

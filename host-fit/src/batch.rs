@@ -19,8 +19,8 @@ use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
 use crate::fit::temperature::span;
 use crate::output::{check_writable, write_atomic, write_json};
-use crate::resume::Prior;
 use crate::store::record::{sha256_file, stamp, AtT0, Command as Recorded, HashingReader, Record};
+use crate::store::resume::Prior;
 use crate::store::{test_record, Store, Target};
 use crate::verify::{verify, TempMax};
 use firmware_core::compensate::Method;
@@ -38,47 +38,8 @@ pub const OUTLIER_Z: f64 = 3.5;
 /// Units recorded in one transaction of the record store.
 pub const RECORD_CHUNK: usize = 64;
 
-/// How a unit of the batch ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum UnitStatus {
-    /// Fitted, and its blob passed acceptance.
-    Pass,
-    /// Fitted, and its blob failed acceptance.
-    Fail,
-    /// Fitted, but a band of the specification had no verification dwell to judge.
-    NotJudged,
-    /// Could not be processed (the reason says why).
-    Error,
-}
-
-impl UnitStatus {
-    /// `pass`, `fail`, `not_judged` or `error`, as the summary writes it.
-    pub fn name(self) -> &'static str {
-        match self {
-            UnitStatus::Pass => "pass",
-            UnitStatus::Fail => "fail",
-            UnitStatus::NotJudged => "not_judged",
-            UnitStatus::Error => "error",
-        }
-    }
-}
-
-impl From<Verdict> for UnitStatus {
-    fn from(v: Verdict) -> Self {
-        match v {
-            Verdict::Pass => UnitStatus::Pass,
-            Verdict::Fail => UnitStatus::Fail,
-            Verdict::NotJudged => UnitStatus::NotJudged,
-        }
-    }
-}
-
-impl std::fmt::Display for UnitStatus {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
+/// How a unit of the batch ended (the store's acceptance verdict: one set).
+pub use crate::store::record::UnitStatus;
 
 /// One unit's line of the summary.
 #[derive(Debug, Clone)]
@@ -314,12 +275,48 @@ fn write_test_record(
     if let Some(rc) = &mut r.record {
         rc.test_record = Some(v);
     }
-    write_json(&test_record_path(out, stem), &tr, force)
+    write_json(&test_record::path(out, stem), &tr, force)
 }
 
-/// Where a unit's test record is written.
-pub fn test_record_path(out: &Path, stem: &str) -> PathBuf {
-    out.join(format!("{stem}.test-record.json"))
+/// A unit kept as an earlier run of the batch recorded it (see
+/// [`crate::store::resume`]): its line of the summary from its record, its blob and test
+/// record files written again from the store if they are missing.
+fn kept(path: &Path, out: &Path, r: &Record) -> Result<UnitResult> {
+    crate::store::resume::restore_files(path, out, r)?;
+    let judged = r.judged.as_ref();
+    // the uncompensated |dg| is in the test record's verify phase
+    let uncompensated = r.test_record.as_ref().and_then(|t| {
+        t["phases"]
+            .as_array()?
+            .iter()
+            .find(|p| p["name"] == "verify")?["measurements"]["worst_dg_uncompensated_mg"]
+            ["measured_value"]
+            .as_f64()
+    });
+    let findings = r
+        .findings
+        .as_ref()
+        .and_then(|f| f.as_array())
+        .map(|a| {
+            a.iter()
+                .filter_map(|f| f["effect"].as_str().and_then(EffectId::parse))
+                .collect()
+        })
+        .unwrap_or_default();
+    Ok(UnitResult {
+        file: path.to_path_buf(),
+        unit: r.serial.clone(),
+        acceptance: judged.map_or(UnitStatus::NotJudged, |j| j.verdict),
+        reason: judged.map(|j| j.reason.clone()).unwrap_or_default(),
+        model: r.model.clone().unwrap_or_default(),
+        max_dg_before_mg: uncompensated,
+        max_dg_after_mg: r.worst_dg_mg,
+        findings,
+        at_t0: r.at_t0.map(|a| a.values),
+        at_t0_sigma: r.at_t0.and_then(|a| a.sigma).unwrap_or([0.0; 12]),
+        outlier: Vec::new(),
+        record: None,
+    })
 }
 
 fn one(path: &Path, out: &Path, o: &BatchOptions, force: bool) -> UnitResult {
@@ -579,14 +576,14 @@ fn open_store(
     };
     let mut store = Store::open(&t.db)?;
     let prior = match (&t.lot, o.force) {
-        (Some(lot), false) => crate::resume::prior(&mut store, lot, files, out)?,
+        (Some(lot), false) => crate::store::resume::prior(&mut store, lot, files, out)?,
         _ => Prior::default(),
     };
     Ok((Some(store.writer(RECORD_CHUNK)), prior))
 }
 
 /// Run a batch over every `*.csv` in `dir`; writes `summary.csv` and `lot.csv` in `out`.
-/// Run again after a crash, it resumes (see [`crate::resume`]).
+/// Run again after a crash, it resumes (see [`crate::store::resume`]).
 pub fn run(dir: &Path, out: &Path, o: &BatchOptions) -> Result<BatchOutcome> {
     let files = recordings(dir)?;
     let summary = out.join("summary.csv");
@@ -624,8 +621,8 @@ pub fn run(dir: &Path, out: &Path, o: &BatchOptions) -> Result<BatchOutcome> {
         files
             .par_iter()
             .map(|f| {
-                let r = match crate::resume::recorded_for(&prior, f) {
-                    Some(rc) => crate::resume::kept(f, out, rc).unwrap_or_else(|e| {
+                let r = match crate::store::resume::recorded_for(&prior, f) {
+                    Some(rc) => kept(f, out, rc).unwrap_or_else(|e| {
                         let mut r = one(f, out, o, o.force);
                         r.reason = format!("{} (kept record unreadable: {e})", r.reason);
                         r

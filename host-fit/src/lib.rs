@@ -46,6 +46,5 @@ pub mod batch;
 pub mod demo;
 pub mod demo_plan;
 pub mod report;
-pub mod resume;
 
 pub mod cli;

@@ -26,7 +26,7 @@ fn server() -> &'static str {
                 .unwrap_or(cut.len());
             return Ok(format!("{}/", &cut[..at]));
         }
-        let c = cluster::Cluster::start(&std::env::temp_dir())?;
+        let c = cluster::Cluster::start(&std::env::temp_dir(), false)?;
         let base = c.url("");
         c.stop_after(std::process::id())?;
         Ok(base)

@@ -5,7 +5,7 @@
 //! that moves from a lot on) with the rule such a shift trips, and a stable process no
 //! more than the stated false-alarm rate; bad stores are refused, named, left alone.
 use host_fit::simulate::{PAPER_UNIT, PAPER_UNIT_TEMPS};
-use host_fit::store::record::{blob_run_id, Command, Record};
+use host_fit::store::record::{blob_run_id, from_name, name_of, Command, Record};
 use host_fit::store::trend::all_rules_rate;
 use host_fit::store::Store;
 use serde_json::Value;
@@ -13,13 +13,6 @@ use std::path::{Path, PathBuf};
 use tests::{cli, cli_json};
 
 mod reports;
-
-fn tempdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hf-store-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -145,7 +138,10 @@ fn assert_records_hold_what_was_made(
     // verify: the blob it verified, the verdict, the worst |dg|
     assert_eq!(v.blob, f.blob);
     let j = v.judged.as_ref().unwrap();
-    assert_eq!(j.verdict, ver["acceptance"].as_str().unwrap());
+    assert_eq!(
+        Some(j.verdict),
+        from_name(ver["acceptance"].as_str().unwrap())
+    );
     assert_eq!(j.reason, ver["reason"].as_str().unwrap());
     close(v.worst_dg_mg.unwrap(), worst(ver));
     assert!(v.at_t0.unwrap().sigma.is_none());
@@ -158,7 +154,10 @@ fn assert_records_hold_what_was_made(
     assert_eq!(blob_run_id(v.blob.as_ref().unwrap()), Some(f.run_id));
     assert_eq!(blob_run_id(d.blob.as_ref().unwrap()), Some(d.run_id));
     // diagnose: the contract's verdict and findings, its blob
-    assert_eq!(d.diagnosis_verdict.as_deref(), diag["verdict"].as_str());
+    assert_eq!(
+        d.diagnosis_verdict,
+        from_name(diag["verdict"].as_str().unwrap())
+    );
     assert_eq!(d.findings.as_ref(), Some(&diag["findings"]));
     assert_eq!(d.blob.as_deref(), Some(&std::fs::read(dblob).unwrap()[..]));
 }
@@ -247,7 +246,8 @@ fn assert_history_and_blobs(root: &Path, db: &Path, all: &[Record], (fb, dblob):
 /// `fit`, `verify` and `diagnose` with `--db`: one record each, holding what each made.
 #[test]
 fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
-    let root = tempdir("commands");
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path().to_path_buf();
     let rec = root.join("unit.csv");
     let (code, _, err) = cli(&["simulate", "--seed", "3", "--out", s(&rec)]);
     assert_eq!(code, 0, "{err}");
@@ -312,7 +312,6 @@ fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
         "{:?}",
         all2[3].model
     );
-    let _ = std::fs::remove_dir_all(&root);
 }
 
 /// The flagged points of chart `q` in a `trend --json`: (unit place, rules).
@@ -364,7 +363,10 @@ fn assert_default_store_matches_the_files(root: &Path, dir: &Path, n: usize) {
             Some(sha256sum(Path::new(file)).as_str())
         );
         let j = r.judged.as_ref().unwrap();
-        assert_eq!((j.verdict.as_str(), j.reason.as_str()), (acc, reason));
+        assert_eq!(
+            (name_of(&j.verdict).as_str(), j.reason.as_str()),
+            (acc, reason)
+        );
         let blob = own.join(format!("{unit}.blob"));
         assert_eq!(r.blob.as_deref(), Some(&std::fs::read(&blob).unwrap()[..]));
         assert_eq!(blob_run_id(r.blob.as_ref().unwrap()), Some(r.run_id));
@@ -389,7 +391,8 @@ fn assert_default_store_matches_the_files(root: &Path, dir: &Path, n: usize) {
 /// often than the false-alarm rate stated for a reference of 20 units allows.
 #[test]
 fn batches_record_every_unit_and_trend_flags_a_shift_across_lots() {
-    let root = tempdir("trend");
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path().to_path_buf();
     let shared = root.join("line.sqlite");
     let (stable, per_stable, per_shifted) = (4, 10, 8);
     let mut made = 0;
@@ -515,15 +518,15 @@ fn batches_record_every_unit_and_trend_flags_a_shift_across_lots() {
         "2999-12-31",
     ]);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains(&format!("({made} units)")), "{out}");
-    let _ = std::fs::remove_dir_all(&root);
+    assert!(out.contains(&format!("({made} calibrations)")), "{out}");
 }
 
 /// A store of a newer schema, cut short, not a database, empty or missing: every command
 /// refuses it naming the file and the reason, leaves it as it was, and writes nothing.
 #[test]
 fn bad_stores_are_refused_named_and_left_alone() {
-    let root = tempdir("bad");
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path().to_path_buf();
     let rec = root.join("unit.csv");
     let (code, _, err) = cli(&["simulate", "--seed", "5", "--out", s(&rec)]);
     assert_eq!(code, 0, "{err}");
@@ -596,8 +599,7 @@ fn bad_stores_are_refused_named_and_left_alone() {
     assert!(!root.join("none.sqlite").exists());
     // a newer store's version is named by name
     let (_, _, err) = cli(&["history", "PAPER-UNIT", "--db", s(&newer)]);
-    assert!(err.contains("reads versions up to 1"), "{err}");
-    let _ = std::fs::remove_dir_all(&root);
+    assert!(err.contains("reads versions up to 2"), "{err}");
 }
 
 /// The demo records every blob it writes in its folder's store and ends by printing the
@@ -605,7 +607,8 @@ fn bad_stores_are_refused_named_and_left_alone() {
 /// `--force` it appends.
 #[test]
 fn the_demo_records_its_blobs_and_shows_the_history() {
-    let root = tempdir("demo");
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path().to_path_buf();
     let dir = root.join("demo-out");
     let (code, out, err) = cli(&["demo", "--out", s(&dir)]);
     assert_eq!(code, 0, "{err}");
@@ -651,5 +654,4 @@ fn the_demo_records_its_blobs_and_shows_the_history() {
     let (code, _, err) = cli(&["demo", "--out", s(&dir), "--force"]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(records(&db).len(), 8);
-    let _ = std::fs::remove_dir_all(&root);
 }

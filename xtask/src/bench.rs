@@ -1,5 +1,6 @@
 //! `cargo xtask bench`: criterion benchmarks of firmware-core and host-fit, a batch of
-//! 1000 simulated units, the record store at scale; writes target/bench/summary.md.
+//! 1000 simulated units, the record store at scale on both backends (`store_bench`);
+//! writes target/bench/summary.md.
 use crate::steps::Outcome;
 use std::path::Path;
 use std::process::Command;
@@ -152,7 +153,7 @@ fn best_of_cpu(bin: &Path, args: &[String], n: usize, before: &dyn Fn()) -> Opti
 }
 
 /// The best wall-clock time (s) of `n` runs of `host-fit ARGS` (see [`best_of_cpu`]).
-fn best_of(bin: &Path, args: &[String], n: usize, before: &dyn Fn()) -> Option<f64> {
+pub fn best_of(bin: &Path, args: &[String], n: usize, before: &dyn Fn()) -> Option<f64> {
     best_of_cpu(bin, args, n, before).map(|t| t.0)
 }
 
@@ -222,99 +223,6 @@ fn batch_with_and_without_store(
     md
 }
 
-/// The record store at scale: the batch of the 1000 units without a store and with one
-/// (alternating, best of two each), a store of 100 000 records made from that batch's
-/// records by the `fill_store` example (new serials, run ids, lots of 1000), then one
-/// serial's history and the trend over every unit through the release binary, against
-/// the targets (20 %, 50 ms, 5 s).
-fn store_figures(bin: &Path, root: &Path, units: &Path, steps: &mut crate::Steps) -> String {
-    let dir = root.join("target/bench");
-    let s = |p: &Path| p.display().to_string();
-    let remove = |p: &Path| {
-        for ext in ["", "-wal", "-shm"] {
-            let _ = std::fs::remove_file(format!("{}{ext}", p.display()));
-        }
-    };
-    let db = dir.join("store-batch.sqlite");
-    let mut md = batch_with_and_without_store(bin, units, &db, steps);
-    let mut c = crate::cargo();
-    c.args([
-        "build",
-        "--release",
-        "-p",
-        "host-fit",
-        "--example",
-        "fill_store",
-    ]);
-    steps.run("build the fill_store example", c);
-    let big = dir.join("store-100k.sqlite");
-    remove(&big);
-    let t = std::time::Instant::now();
-    let filled = steps.step("a store of 100 000 records", || {
-        let st = Command::new(root.join("target/release/examples/fill_store"))
-            .args([s(&db), s(&big), "100000".into()])
-            .status()
-            .map_err(|e| format!("fill_store: {e}"))?;
-        st.success()
-            .then_some(())
-            .ok_or(format!("fill_store {} {} 100000: {st}", s(&db), s(&big)))
-    });
-    if filled.is_err() {
-        return md;
-    }
-    let size = std::fs::metadata(&big).map(|m| m.len()).unwrap_or(0);
-    md.push_str(&format!(
-        "| write 100 000 records (10 000 a transaction; the store: {:.0} MB) | {:.2} s | |\n",
-        size as f64 / 1e6,
-        t.elapsed().as_secs_f64()
-    ));
-    let cases = [
-        (
-            "`host-fit history UNIT-054321` in it (a new process: open, check, query, print)",
-            vec![
-                "history".to_string(),
-                "UNIT-054321".into(),
-                "--db".into(),
-                s(&big),
-            ],
-            5,
-            0.050,
-        ),
-        (
-            "`host-fit trend` over its 100 000 units (13 charts, 8 rules, HTML written)",
-            vec![
-                "trend".to_string(),
-                "--db".into(),
-                s(&big),
-                "--out".into(),
-                s(&dir.join("trend-100k.html")),
-                "--force".into(),
-            ],
-            3,
-            5.0,
-        ),
-    ];
-    for (name, args, n, target) in cases {
-        let timed = steps.step(name, || {
-            best_of(bin, &args, n, &|| {}).ok_or(format!("host-fit {} failed", args.join(" ")))
-        });
-        if let Ok(t) = timed {
-            let shown = if t < 1.0 {
-                format!("{:.1} ms", t * 1e3)
-            } else {
-                format!("{t:.2} s")
-            };
-            let goal = if target < 1.0 {
-                format!("< {:.0} ms", target * 1e3)
-            } else {
-                format!("< {target:.0} s")
-            };
-            md.push_str(&format!("| {name}, best of {n} | {shown} | {goal} |\n"));
-        }
-    }
-    md
-}
-
 /// Run the benchmarks.
 pub fn bench(steps: &mut crate::Steps) {
     let root = crate::root();
@@ -365,7 +273,9 @@ pub fn bench(steps: &mut crate::Steps) {
     let batch_s = t.elapsed().as_secs_f64();
     let verdicts = batch.unwrap_or_default();
     let diag = diagnosis_times(&bin, &root, steps);
-    let store = store_figures(&bin, &root, &units, steps);
+    let db = root.join("target/bench/store-batch.sqlite");
+    let mut store = batch_with_and_without_store(&bin, &units, &db, steps);
+    store.push_str(&crate::store_bench::store_figures(&bin, &root, &db, steps));
     let mut md = criterion_summary(&results(&root.join("target/criterion")));
     md.push_str(&format!("\n### Batch\n\n`host-fit batch` of 1000 simulated units of the paper's profile (22 k rows each), `--jobs 2`, every unit's model chosen by cross-validation and judged against the acceptance specification: **{batch_s:.1} s** (target < 60 s).\n\n`{verdicts}`\n"));
     md.push_str(&diag);

@@ -10,9 +10,11 @@ mod embedded;
 mod fuzz;
 mod host;
 mod measure;
+mod pgcluster;
 mod qemu;
 mod setup;
 mod steps;
+mod store_bench;
 mod summary;
 mod test;
 mod toolchain;
@@ -66,6 +68,9 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Some("bench") if rest.first().map(String::as_str) == Some("store") => {
+            task(store_bench::store_only)
+        }
         Some("bench") => task(bench::bench),
         Some("blind") => task(host::blind),
         Some("cross") => task(cross::cross),
@@ -85,16 +90,20 @@ fn main() -> ExitCode {
 const USAGE: &str = "usage: cargo xtask <command>
 
 commands:
-  test                      fmt, clippy, no_std build, all tests (headless Chromium included),
-                            thumb cross builds, the QEMU proof, a fuzz smoke run per target;
-                            installs what it needs when missing (apt as root)
+  test                      fmt, clippy, no_std build, all tests (headless Chromium and a
+                            throwaway PostgreSQL cluster included), thumb cross builds, the
+                            QEMU proof, a fuzz smoke run per target; installs what it needs
+                            when missing (apt as root)
   demo [--out DIR] [--seed N] [--force]
                             the paper's experiment on the digital twin -> demo-out/ (or DIR,
                             relative to where you run it): recording, blobs, summary.json,
                             report.html
   blind                     the long blind suite of the diagnosis (tens of minutes)
-  bench                     criterion benchmarks and a batch of 1000 simulated units
-                            -> target/bench/summary.md
+  bench                     criterion benchmarks, a batch of 1000 simulated units, the record
+                            store on SQLite and PostgreSQL (8 writers, history among 100 000
+                            records) -> target/bench/summary.md
+  bench store               only the record store's figures (from a batch of 64 units)
+                            -> target/bench/store.md
   fuzz [--seconds N] [TARGET..]
                             cargo-fuzz targets (default all, 60 s each)
   cross                     firmware-core built for thumbv7em-none-eabihf

@@ -2,8 +2,8 @@
 //! tests crate's `tests/src/pg.rs` both include this file): Debian's server
 //! (`pg_config --bindir`, else the newest `/usr/lib/postgresql/*/bin`), `initdb` into a
 //! fresh folder, a private port on 127.0.0.1 and a private socket folder, trust
-//! authentication on 127.0.0.1 and the socket only, no fsync (nothing in it outlives
-//! the run). Run as root, `initdb` and `pg_ctl` run as the `postgres` user (the server
+//! authentication on 127.0.0.1 and the socket only; for the tests without fsync
+//! (nothing in it outlives the run), for the benchmark durable as a plant's server. Run as root, `initdb` and `pg_ctl` run as the `postgres` user (the server
 //! refuses root). [`Cluster`] stops the server and removes its folder when dropped.
 #![allow(dead_code)]
 use std::path::{Path, PathBuf};
@@ -84,8 +84,9 @@ impl Cluster {
         self.dir.join("data")
     }
 
-    /// Start a cluster in a new folder under `parent`.
-    pub fn start(parent: &Path) -> Result<Cluster, String> {
+    /// Start a cluster in a new folder under `parent`; `durable`: every commit reaches
+    /// the disk (fsync, synchronous commit), as on a plant's server.
+    pub fn start(parent: &Path, durable: bool) -> Result<Cluster, String> {
         let bin = bindir().ok_or(
             "no PostgreSQL server: apt-get install postgresql (cargo xtask test installs it)",
         )?;
@@ -128,8 +129,13 @@ impl Cluster {
                 "--no-sync",
             ],
         )?;
+        let fast = if durable {
+            ""
+        } else {
+            "fsync = off\nsynchronous_commit = off\nfull_page_writes = off\n"
+        };
         let conf = format!(
-            "listen_addresses = '127.0.0.1'\nport = {}\nunix_socket_directories = '{}'\nfsync = off\nsynchronous_commit = off\nfull_page_writes = off\nmax_connections = 200\nshared_buffers = 64MB\n",
+            "listen_addresses = '127.0.0.1'\nport = {}\nunix_socket_directories = '{}'\n{fast}max_connections = 200\nshared_buffers = 128MB\n",
             c.port,
             c.dir.display()
         );

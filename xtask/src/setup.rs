@@ -1,7 +1,7 @@
 //! What the full test needs beyond the Rust toolchain, installed when missing: QEMU 10
 //! from bookworm-backports, LLVM's nm/size, gcc, the Arm GNU toolchain (Debian's
 //! gcc-arm-none-eabi, for the C harness), Debian's Chromium (the reports' browser
-//! test), cargo-fuzz. Installing with apt needs
+//! test), Debian's PostgreSQL server (the record store's tests), cargo-fuzz. Installing with apt needs
 //! root (CI runs as root); otherwise the message says what to install.
 use std::process::Command;
 
@@ -148,6 +148,34 @@ pub fn chromium() -> Result<(), String> {
         apt_update()?;
         install()
     })
+}
+
+/// Debian's PostgreSQL server (the record store's tests start a throwaway cluster of
+/// it; no service is started for them).
+pub fn postgresql() -> Result<(), String> {
+    if crate::pgcluster::bindir().is_some() {
+        return Ok(());
+    }
+    if !is_root() {
+        return Err("PostgreSQL's server is missing: apt-get install postgresql (as root)".into());
+    }
+    eprintln!("xtask: installing Debian's postgresql (the record store's tests)");
+    let install = || {
+        apt(&[
+            "install",
+            "-y",
+            "-qq",
+            "--no-install-recommends",
+            "postgresql",
+        ])
+    };
+    install().or_else(|_| {
+        apt_update()?;
+        install()
+    })?;
+    crate::pgcluster::bindir()
+        .map(|_| ())
+        .ok_or_else(|| "postgresql installed, but no initdb under pg_config --bindir".into())
 }
 
 /// cargo-fuzz for the nightly toolchain (from crates.io).

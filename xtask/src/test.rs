@@ -1,6 +1,8 @@
 //! `cargo xtask test`: everything, in this order: fmt, clippy, the no_std build and
 //! tests, the workspace's tests (Chromium installed first for the reports' browser
-//! test), the thumb cross builds, the firmware under QEMU, a fuzz smoke run per target.
+//! test; PostgreSQL installed and a throwaway cluster started for the record store's,
+//! stopped right after them, also when one fails), the thumb cross builds, the
+//! firmware under QEMU, a fuzz smoke run per target.
 use crate::Steps;
 use std::process::Command;
 
@@ -53,11 +55,23 @@ pub fn test(s: &mut Steps) {
     );
     // the reports' browser test needs Chromium: it fails (not skips) without it
     s.prepare("install chromium", crate::setup::chromium);
+    // the record store's tests need a real PostgreSQL server: one throwaway cluster
+    // for the whole run (each test makes its own database in it), its URL handed over
+    // in HOSTFIT_TEST_PG; the guard stops it when dropped, right after the tests
+    let cluster = s
+        .prepare("install postgresql", crate::setup::postgresql)
+        .and_then(|()| {
+            s.prepare("start a throwaway PostgreSQL cluster", || {
+                crate::pgcluster::Cluster::start(&crate::root().join("target"), false)
+            })
+        });
+    let mut tests = cargo(&["test", "--workspace", "--release", "--no-fail-fast"]);
+    if let Some(c) = &cluster {
+        tests.env(crate::pgcluster::TEST_PG_VAR, c.url("postgres"));
+    }
     // every test binary runs, so one failure does not hide the others
-    s.run(
-        "tests (workspace)",
-        cargo(&["test", "--workspace", "--release", "--no-fail-fast"]),
-    );
+    s.run("tests (workspace)", tests);
+    drop(cluster);
     crate::cross::cross(s);
     crate::embedded::embedded(s);
     // the fuzz smoke run: XTASK_FUZZ_SECONDS per target (default 30)

@@ -99,7 +99,7 @@ where
 /// Where and by whom, from the flags (and their environment variables); the operator
 /// else the login name.
 fn trace(a: &RecordArgs) -> Trace {
-    let login = || std::env::var("USER").ok().filter(|u| !u.is_empty());
+    let login = || crate::store::location::environment().login.clone();
     Trace {
         station: a.station.clone(),
         chamber: a.chamber.clone(),

@@ -3,8 +3,8 @@
 //! and [`Record::from_row`] reads one back by them. Insert, select, history, the trend
 //! and `store copy` use these three and nothing else, on either backend; a test holds
 //! the names of the three (and of a new store's table) equal.
+use super::record::UnitStatus;
 use super::record::{from_name, name_of, AtT0, Command, Judged, Record, RunId, Trace, COEFFS};
-use crate::batch::UnitStatus;
 use firmware_core::model::COEFF_NAMES;
 use std::collections::HashMap;
 use std::sync::Arc;

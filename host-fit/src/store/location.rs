@@ -3,9 +3,73 @@
 //! password is taken from the URL, else `PGPASSWORD`, else a pgpass file (`PGPASSFILE`
 //! or `~/.pgpass`, the server's own format and rules), and is never shown: a location
 //! prints as its URL without the password, the form every message, record and report
-//! uses.
+//! uses. The environment is read by `main`, once ([`set_environment`]); the library
+//! alone (tests, examples) knows only what the URL says.
 use crate::error::{HostError, Result};
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// What the environment says about a login: `PGUSER`, `PGHOST`, `PGPASSWORD`, the
+/// pgpass file (`PGPASSFILE`, else `$HOME/.pgpass`) and the login name (`USER`, the
+/// operator when none is given).
+#[derive(Clone, Default, PartialEq, Eq)]
+pub struct Environment {
+    /// `PGUSER`.
+    pub pg_user: Option<String>,
+    /// `PGHOST`.
+    pub pg_host: Option<String>,
+    /// `PGPASSWORD` (never printed).
+    pg_password: Option<String>,
+    /// The pgpass file.
+    pub pg_passfile: Option<PathBuf>,
+    /// `USER`.
+    pub login: Option<String>,
+}
+
+impl std::fmt::Debug for Environment {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Environment {{ pg_user: {:?}, pg_host: {:?}, pg_password: {}, pg_passfile: {:?}, login: {:?} }}",
+            self.pg_user,
+            self.pg_host,
+            if self.pg_password.is_some() { "(set)" } else { "None" },
+            self.pg_passfile,
+            self.login
+        )
+    }
+}
+
+impl Environment {
+    /// From the variables `get` gives (main passes the process environment's).
+    pub fn from_vars(get: impl Fn(&str) -> Option<String>) -> Environment {
+        let var = |k: &str| get(k).filter(|v| !v.is_empty());
+        Environment {
+            pg_user: var("PGUSER"),
+            pg_host: var("PGHOST"),
+            pg_password: var("PGPASSWORD"),
+            pg_passfile: var("PGPASSFILE")
+                .map(PathBuf::from)
+                .or_else(|| var("HOME").map(|h| Path::new(&h).join(".pgpass"))),
+            login: var("USER"),
+        }
+    }
+}
+
+static ENVIRONMENT: OnceLock<Environment> = OnceLock::new();
+
+/// Set the environment the store's logins use (main does, once, before anything).
+pub fn set_environment(e: Environment) {
+    let _ = ENVIRONMENT.set(e);
+}
+
+/// The environment main set (none in a library run: the URL alone).
+pub fn environment() -> &'static Environment {
+    static NONE: OnceLock<Environment> = OnceLock::new();
+    ENVIRONMENT
+        .get()
+        .unwrap_or_else(|| NONE.get_or_init(Environment::default))
+}
 
 /// A record store's location.
 #[derive(Clone, PartialEq, Eq)]
@@ -192,18 +256,18 @@ impl PgUrl {
             })?,
             None => PG_PORT,
         };
-        let env = |k: &str| std::env::var(k).ok().filter(|v| !v.is_empty());
+        let env = environment();
         let user = user
             .filter(|u| !u.is_empty())
-            .or_else(|| env("PGUSER"))
-            .or_else(|| env("USER"))
+            .or_else(|| env.pg_user.clone())
+            .or_else(|| env.login.clone())
             .ok_or_else(|| {
                 HostError::msg(format!(
                     "--db {shown}: no user: give postgresql://USER@host:port/database"
                 ))
             })?;
         let host = match host.as_str() {
-            "" => env("PGHOST").unwrap_or_else(|| "localhost".into()),
+            "" => env.pg_host.clone().unwrap_or_else(|| "localhost".into()),
             _ => percent_decode(&host, "host", &shown)?,
         };
         let dbname = if dbname.is_empty() {
@@ -219,7 +283,10 @@ impl PgUrl {
             password,
         };
         if u.password.is_none() {
-            u.password = env("PGPASSWORD").or_else(|| pgpass(&u));
+            u.password = env
+                .pg_password
+                .clone()
+                .or_else(|| env.pg_passfile.as_deref().and_then(|f| pgpass(f, &u)));
         }
         Ok(u)
     }
@@ -253,20 +320,17 @@ impl PgUrl {
     }
 }
 
-/// The password a pgpass file gives for `u` (`PGPASSFILE`, else `~/.pgpass`): lines of
+/// The password the pgpass file `path` gives for `u`: lines of
 /// `host:port:database:user:password`, `*` matching anything, `\:` and `\\` escaped;
 /// the first line that matches wins. As libpq does, a file that the group or others
 /// can read is ignored.
-fn pgpass(u: &PgUrl) -> Option<String> {
+fn pgpass(path: &Path, u: &PgUrl) -> Option<String> {
     use std::os::unix::fs::PermissionsExt;
-    let path = std::env::var_os("PGPASSFILE")
-        .map(PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".pgpass")))?;
-    let meta = std::fs::metadata(&path).ok()?;
+    let meta = std::fs::metadata(path).ok()?;
     if !meta.is_file() || meta.permissions().mode() & 0o077 != 0 {
         return None;
     }
-    let text = std::fs::read_to_string(&path).ok()?;
+    let text = std::fs::read_to_string(path).ok()?;
     let host = if u.host.starts_with('/') {
         "localhost".to_string()
     } else {
@@ -335,6 +399,26 @@ mod tests {
         assert!(e.to_string().contains("mysql"), "{e}");
         let e = Location::parse("postgresql://op:hush@h:port/d").unwrap_err();
         assert!(e.to_string().contains("port") && !e.to_string().contains("hush"));
+    }
+
+    #[test]
+    fn a_pgpass_file_gives_the_password_only_when_private() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("pgpass");
+        std::fs::write(
+            &f,
+            "# the line\nother:5432:*:op:no\ndb.plant:*:line:op:yes\n",
+        )
+        .unwrap();
+        let Location::Postgres(u) = Location::parse("postgresql://op@db.plant:6000/line").unwrap()
+        else {
+            panic!()
+        };
+        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o644)).unwrap();
+        assert_eq!(pgpass(&f, &u), None);
+        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o600)).unwrap();
+        assert_eq!(pgpass(&f, &u).as_deref(), Some("yes"));
     }
 
     #[test]

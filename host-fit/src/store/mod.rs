@@ -65,6 +65,7 @@ pub mod history;
 pub mod location;
 pub mod pg;
 pub mod record;
+pub mod resume;
 pub mod schema;
 pub mod sqlite;
 pub mod test_record;

@@ -1,7 +1,6 @@
 //! One record of the store: what a run of `fit`, `verify`, `diagnose`, `batch` (one per
 //! unit) or `demo` (one per model) made of one unit, with where it came from (the run
 //! id, the tool's version and commit, the command and its options, the input's SHA-256).
-use crate::batch::UnitStatus;
 use crate::diagnose::contract::Verdict as DiagnosisVerdict;
 use crate::error::{HostError, Result};
 use firmware_core::model::{COEFF_NAMES, N_COEFFS};
@@ -93,6 +92,46 @@ pub fn name_of<T: Serialize>(v: &T) -> String {
 /// The value of a closed set whose serde name is `s` (None for a name it does not have).
 pub fn from_name<T: DeserializeOwned>(s: &str) -> Option<T> {
     serde_json::from_value(serde_json::Value::String(s.to_string())).ok()
+}
+
+/// How a unit of the batch ended, and the store's acceptance verdict (its serde name is
+/// the one spelling: summary, JSON and store).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UnitStatus {
+    /// Fitted, and its blob passed acceptance.
+    Pass,
+    /// Fitted, and its blob failed acceptance.
+    Fail,
+    /// Fitted, but a band of the specification had no verification dwell to judge.
+    NotJudged,
+    /// Could not be processed (the reason says why).
+    Error,
+}
+
+impl UnitStatus {
+    /// `pass`, `fail`, `not_judged` or `error`, as the summary writes it (its serde
+    /// name).
+    pub fn name(self) -> String {
+        name_of(&self)
+    }
+}
+
+impl From<crate::acceptance::Verdict> for UnitStatus {
+    fn from(v: crate::acceptance::Verdict) -> Self {
+        use crate::acceptance::Verdict;
+        match v {
+            Verdict::Pass => UnitStatus::Pass,
+            Verdict::Fail => UnitStatus::Fail,
+            Verdict::NotJudged => UnitStatus::NotJudged,
+        }
+    }
+}
+
+impl std::fmt::Display for UnitStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.name())
+    }
 }
 
 /// Where and by whom a unit was calibrated: the station (the bench computer), the

@@ -19,11 +19,16 @@
 //!   and `verify` (the worst compensated |dg| near T0 and over the range against the
 //!   acceptance limits, the dwells outside the valid range, the uncompensated |dg|).
 use super::record::Record;
+use super::record::UnitStatus;
 use crate::acceptance::{Acceptance, OutsideRange, Verdict};
-use crate::batch::UnitStatus;
 use firmware_core::model::COEFF_NAMES;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+
+/// Where a unit's test record is written: `OUT/STEM.test-record.json`.
+pub fn path(out: &std::path::Path, stem: &str) -> std::path::PathBuf {
+    out.join(format!("{stem}.test-record.json"))
+}
 
 /// The schema's name and version.
 pub const SCHEMA: &str = "host-fit-test-record/1";

@@ -182,23 +182,22 @@ impl Store {
                     .collect(),
             );
         }
-        let mut sql = format!(
-            "INSERT INTO runs ({}) VALUES ({})",
-            cols.iter()
-                .map(|c| c.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", "),
-            (1..=cols.len())
-                .map(|i| d.placeholder(i))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
+        let names: Vec<&str> = cols.iter().map(|c| c.name.as_str()).collect();
         let ids = match &mut self.conn {
-            Conn::Sqlite(c) => sqlite::insert(c, &self.at, &sql, &rows)?,
+            Conn::Sqlite(c) => {
+                let sql = format!(
+                    "INSERT INTO runs ({}) VALUES ({})",
+                    names.join(", "),
+                    (1..=cols.len())
+                        .map(|i| d.placeholder(i))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+                sqlite::insert(c, &self.at, &sql, &rows)?
+            }
             Conn::Postgres(c) => {
-                sql.push_str(" RETURNING id");
                 let types: Vec<SqlType> = cols.iter().map(|c| c.ty).collect();
-                pg::insert(c, &self.at, &sql, &types, &rows)?
+                pg::insert(c, &self.at, &names, &types, &rows)?
             }
         };
         for (r, id) in records.iter_mut().zip(ids) {

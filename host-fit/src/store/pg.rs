@@ -169,24 +169,56 @@ fn params(values: &[Value]) -> Vec<Box<dyn ToSql + Sync>> {
         .collect()
 }
 
-/// Insert `rows` (each of the columns `types`, in order) with `sql` (an INSERT ...
-/// RETURNING id) in one transaction: their ids.
+/// Rows per INSERT statement (each row binds one parameter per column: PostgreSQL
+/// takes at most 65 535 a statement).
+const ROWS_PER_INSERT: usize = 200;
+
+/// Insert `rows` (each of the columns `names`, typed `types`, in order) into `runs` in
+/// one transaction, [`ROWS_PER_INSERT`] rows a statement: their ids, in the order of
+/// `rows` (matched by run id, the column `run_id`).
 pub fn insert(
     c: &mut Client,
     at: &Path,
-    sql: &str,
+    names: &[&str],
     types: &[SqlType],
     rows: &[Vec<Value>],
 ) -> Result<Vec<i64>> {
     let e = |e: postgres::Error| pg_error(at, &e);
+    let run_col = names.iter().position(|n| *n == "run_id");
     let mut tx = c.transaction().map_err(e)?;
-    let st = tx.prepare(sql).map_err(e)?;
     let mut ids = Vec::with_capacity(rows.len());
-    for r in rows {
-        let p: Vec<Box<dyn ToSql + Sync>> =
-            r.iter().zip(types).map(|(v, t)| param(v, *t)).collect();
+    for chunk in rows.chunks(ROWS_PER_INSERT) {
+        let k = names.len();
+        let values = (0..chunk.len())
+            .map(|r| {
+                let ph: Vec<String> = (1..=k).map(|i| format!("${}", r * k + i)).collect();
+                format!("({})", ph.join(", "))
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        let sql = format!(
+            "INSERT INTO runs ({}) VALUES {values} RETURNING id, run_id",
+            names.join(", ")
+        );
+        let p: Vec<Box<dyn ToSql + Sync>> = chunk
+            .iter()
+            .flat_map(|r| r.iter().zip(types).map(|(v, t)| param(v, *t)))
+            .collect();
         let refs: Vec<&(dyn ToSql + Sync)> = p.iter().map(|b| b.as_ref()).collect();
-        ids.push(tx.query_one(&st, &refs).map_err(e)?.get::<_, i64>(0));
+        let back = tx.query(&sql, &refs).map_err(e)?;
+        let by_run: std::collections::HashMap<String, i64> = back
+            .iter()
+            .map(|r| (r.get::<_, String>(1), r.get::<_, i64>(0)))
+            .collect();
+        for r in chunk {
+            let run = run_col.and_then(|i| match &r[i] {
+                Value::Text(t) => by_run.get(t).copied(),
+                _ => None,
+            });
+            ids.push(run.ok_or_else(|| {
+                HostError::in_file(at, "the server did not return the id of a record it wrote")
+            })?);
+        }
     }
     tx.commit().map_err(e)?;
     Ok(ids)

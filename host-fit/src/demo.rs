@@ -195,7 +195,7 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<(DemoOutcome, Beside)> 
         check_writable(&f, force)?;
     }
     // opened first: a bad store stops the demo before it writes anything
-    let mut store = Store::open(&dir.join(STORE))?;
+    let mut store = Store::open(dir.join(STORE))?;
     let cfg = SimConfig {
         seed,
         ..SimConfig::default()

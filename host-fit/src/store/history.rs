@@ -162,6 +162,15 @@ impl History {
     }
 }
 
+/// A run whose id starts with the digits asked for.
+#[derive(Clone)]
+struct Hit {
+    run: String,
+    serial: String,
+    blob: Option<Vec<u8>>,
+    crc: Option<i64>,
+}
+
 /// The blob of the run of `serial` whose id is or starts with `run` (at least 6 hex
 /// digits), its CRC checked against the stored one and its own trailer.
 pub fn stored_blob(store: &mut Store, serial: &str, run: &str) -> Result<(RunId, Vec<u8>)> {
@@ -179,22 +188,25 @@ pub fn stored_blob(store: &mut Store, serial: &str, run: &str) -> Result<(RunId,
         .iter()
         .map(|s| s.to_string())
         .collect();
-    let hits: Vec<(String, String, Option<Vec<u8>>, Option<i64>)> = store
+    let hits: Vec<Hit> = store
         .select(&names, &f)?
         .iter()
-        .map(|r| {
-            (
-                r.text("run_id").unwrap_or_default(),
-                r.text("serial").unwrap_or_default(),
-                match r.get("blob") {
-                    super::columns::Value::Blob(b) => Some(b.clone()),
-                    _ => None,
-                },
-                r.integer("blob_crc"),
-            )
+        .map(|r| Hit {
+            run: r.text("run_id").unwrap_or_default(),
+            serial: r.text("serial").unwrap_or_default(),
+            blob: match r.get("blob") {
+                super::columns::Value::Blob(b) => Some(b.clone()),
+                _ => None,
+            },
+            crc: r.integer("blob_crc"),
         })
         .collect();
-    let (id, unit, blob, crc) = match hits.as_slice() {
+    let Hit {
+        run: id,
+        serial: unit,
+        blob,
+        crc,
+    } = match hits.as_slice() {
         [] => {
             return Err(HostError::in_file(
                 store.path(),
@@ -209,7 +221,7 @@ pub fn stored_blob(store: &mut Store, serial: &str, run: &str) -> Result<(RunId,
                     "`{run}` starts {} run ids ({}): give more digits",
                     many.len(),
                     many.iter()
-                        .map(|h| h.0.as_str())
+                        .map(|h| h.run.as_str())
                         .collect::<Vec<_>>()
                         .join(", ")
                 ),

@@ -118,7 +118,8 @@ pub struct TestRecord {
 fn measurement(name: &str, v: Option<f64>, units: &str, limit: Option<f64>) -> Measurement {
     let outcome = match (v, limit) {
         (None, _) => MeasurementOutcome::Unset,
-        (Some(x), Some(l)) if !(x <= l) => MeasurementOutcome::Fail,
+        // over the limit, or not a number
+        (Some(x), Some(l)) if x.is_nan() || x > l => MeasurementOutcome::Fail,
         (Some(_), _) => MeasurementOutcome::Pass,
     };
     Measurement {

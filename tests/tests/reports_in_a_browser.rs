@@ -500,6 +500,6 @@ fn the_trend_report_in_a_browser() {
         "50",
     ]);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("150 units"), "{out}");
+    assert!(out.contains("150 calibrations"), "{out}");
     check_in_browser("trend report", &report);
 }

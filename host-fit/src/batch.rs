@@ -128,6 +128,8 @@ pub struct BatchOptions {
     pub positions: Positions,
     /// Record every unit in this store.
     pub store: Option<Target>,
+    /// The checks at the door every unit's data are let past (each then a warning).
+    pub allow: Vec<crate::data::door::Check>,
 }
 
 /// The per-unit JSON.
@@ -167,6 +169,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     let file = std::fs::File::open(path).map_err(|e| HostError::io(path, &e))?;
     let mut input = HashingReader::new(file);
     let mut rec = Recording::from_reader(path, &mut input, o.positions.clone())?;
+    crate::data::door::admit(&mut rec, &crate::data::door::Check::ALL, &o.allow)?;
     let missing: Vec<String> = crate::fit::coverage::missing(&rec)
         .iter()
         .map(|m| m.text())

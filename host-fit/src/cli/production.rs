@@ -24,6 +24,7 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
         force: a.force,
         positions,
         store: super::records::batch_store(&a.dir, &a.out, &a.record, a.no_db),
+        allow: a.allow.iter().map(|x| (*x).into()).collect(),
     };
     let res = crate::batch::run(&a.dir, &a.out, &o)?;
     let count = |s: UnitStatus| res.units.iter().filter(|r| r.acceptance == s).count();

@@ -196,7 +196,11 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
         let d = crate::diagnose::diagnose(&oriented.rec)?;
         r.findings = d.findings.iter().map(|f| f.effect).collect();
         let names: Vec<&str> = r.findings.iter().map(|e| e.as_str()).collect();
-        r.model = format!("diagnosed ({})", names.join("+"));
+        r.model = if names.is_empty() {
+            "diagnosed (no findings)".to_string()
+        } else {
+            format!("diagnosed ({})", names.join("+"))
+        };
         r.at_t0_sigma = d.coefficient_sigma(rec.t0_c);
         (d.calibration(rec.t0_c)?, Some(d.contract()))
     } else {

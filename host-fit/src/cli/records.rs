@@ -271,6 +271,15 @@ pub(super) fn history(a: HistoryArgs, out: &mut dyn Write) -> Result<()> {
         );
     }
     let h = unit_history(&store, &a.serial)?;
+    if h.records.is_empty() {
+        return Err(HostError::in_file(
+            &a.db,
+            format!(
+                "no records of unit `{}` in this store (serials are matched exactly, case and all)",
+                a.serial
+            ),
+        ));
+    }
     if a.json {
         w(out, json(&h)?)
     } else {

@@ -74,11 +74,12 @@ pub const END_RAMP_C: f64 = 2.0;
 pub const RAMP_NOT_SETTLING: f64 = 0.8;
 
 /// The plausible change of the outputs per g for each unit (lower, upper), as
-/// [`output_scale`] measures it (0.7 to 1 of the sensitivity): V 0.01-6 (a navigation
-/// accelerometer's analogue output gives 0.1-10 V per g at most across a +-15 V swing over
-/// a range of at least +-2 g), mV the same in mV, m/s^2 about 9.8, g about 1, mg about
-/// 1000 (each within a factor of two, for a partial set of positions and an uncalibrated
-/// sensor); counts and labels of other units are anything.
+/// [`output_scale`] measures it (0.7 to 1 of the sensitivity). V: 0.01-6 (a navigation
+/// accelerometer's analogue output is 0.1-10 V per g; one swinging +-15 V over a range of
+/// at least +-2 g gives at most 7.5, and the edge at 6 tells m/s2 numbers, measured 6.9-9.8,
+/// from V); mV the same in mV; m/s^2 about 9.8, g about 1, mg about 1000, each within a
+/// factor of two (a partial set of positions, an uncalibrated sensor); counts and labels
+/// of other units anything.
 pub fn per_g_band(u: &OutputUnit) -> Option<(f64, f64)> {
     match u {
         OutputUnit::Volt => Some((0.01, 6.0)),

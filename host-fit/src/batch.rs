@@ -90,6 +90,8 @@ pub struct BatchOptions {
     pub positions: Positions,
     /// Record every unit in this store.
     pub store: Option<Target>,
+    /// The checks at the door every unit's data are let past (each then a warning).
+    pub allow: Vec<crate::data::door::Check>,
 }
 
 /// The per-unit JSON.
@@ -136,6 +138,7 @@ fn fit_unit(
     let file = std::fs::File::open(path).map_err(|e| HostError::io(path, &e))?;
     let mut input = HashingReader::new(file);
     let mut rec = Recording::from_reader(path, &mut input, o.positions.clone())?;
+    crate::data::door::admit(&mut rec, &crate::data::door::Check::ALL, &o.allow)?;
     let missing: Vec<String> = crate::fit::coverage::missing(&rec)
         .iter()
         .map(|m| m.text())
@@ -162,7 +165,11 @@ fn fit_unit(
         let d = crate::diagnose::diagnose(&oriented.rec)?;
         r.findings = d.findings.iter().map(|f| f.effect).collect();
         let names: Vec<&str> = r.findings.iter().map(|e| e.as_str()).collect();
-        r.model = format!("diagnosed ({})", names.join("+"));
+        r.model = if names.is_empty() {
+            "diagnosed (no findings)".to_string()
+        } else {
+            format!("diagnosed ({})", names.join("+"))
+        };
         r.at_t0_sigma = d.coefficient_sigma(rec.t0_c);
         (d.calibration(rec.t0_c)?, Some(d.contract()))
     } else {

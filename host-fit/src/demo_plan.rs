@@ -165,7 +165,8 @@ pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> 
     let temps = verification_temps(&l);
     let dwell_samples = l.dwell_s * l.rate_hz;
     // the paper test predicted as the candidates are, so the target is like for like
-    let (paper_predicted_mg, _) = predict(paper, &temps, &l.positions, l.noise_v, dwell_samples)?;
+    let paper_predicted_mg =
+        predict(paper, &temps, &l.positions, l.noise_v, dwell_samples)?.worst_mg;
     let paper_hours = paper.rows.last().map_or(0.0, |r| r.t_s) / 3600.0;
     let c = candidates(&l, cfg.seed)?;
     let (target_from, target, chosen) = match choose(&c, Target::AccuracyMg(paper_predicted_mg)) {
@@ -178,7 +179,8 @@ pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> 
             let t = Target::Hours(paper_hours);
             let i = choose(&c, t).ok_or_else(|| {
                 HostError::msg(format!(
-                    "no candidate plan within the paper test's {paper_hours:.2} h:\n{}",
+                    "{}:\n{}",
+                    crate::plan::why_none(&c, t, &l),
                     crate::plan::table(&c, None)
                 ))
             })?;

@@ -96,6 +96,37 @@ pub struct Candidate {
     pub predicted_mg: f64,
     /// The thermal lag the fit of the twin's recording kept, s.
     pub lag_s: Option<f64>,
+    /// The valid range of the blob fitted to the twin's recording (as `fit --route
+    /// dynamic` writes it), C.
+    pub valid_c: [f64; 2],
+    /// Whether that reaches the range asked for, within [`COVER_TOLERANCE_C`] of each end:
+    /// only such a candidate is chosen.
+    pub covers: bool,
+}
+
+/// A candidate covers the range asked for when its blob's valid range reaches within
+/// this of each end, C: as far as a blob of the static route claims beyond its data
+/// ([`crate::fit::temperature::RANGE_MARGIN_C`]); further, the unit would be compensated
+/// by extrapolation where the engineer asked for a calibration.
+pub const COVER_TOLERANCE_C: f64 = crate::fit::temperature::RANGE_MARGIN_C;
+
+impl Candidate {
+    /// Its label in the table and on the plot: `A`, `B`, ... by its place.
+    pub fn label(i: usize) -> String {
+        let letters = b"ABCDEFGHIJKLMNOPQRSTUVWXYZ";
+        let n = letters.len();
+        let mut s = String::new();
+        if i >= n {
+            s.push(char::from(letters[(i / n - 1) % n]));
+        }
+        s.push(char::from(letters[i % n]));
+        s
+    }
+
+    /// Its valid range as `lo..hi` (C, one decimal).
+    pub fn valid_text(&self) -> String {
+        format!("{:.1}..{:.1}", self.valid_c[0], self.valid_c[1])
+    }
 }
 
 /// The reference temperature the fit and the acceptance's tighter band use, C (a
@@ -237,8 +268,19 @@ pub fn run(cfg: &SimConfig, steps: &[Step], name: &str) -> Result<(String, Recor
     Ok((sim.csv, rec))
 }
 
+/// What [`predict`] predicts of a recording.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Predicted {
+    /// The worst verification |dg|, mg.
+    pub worst_mg: f64,
+    /// The thermal lag the fit kept, s.
+    pub lag_s: Option<f64>,
+    /// The valid range of the blob of the fit, C.
+    pub valid_c: [f64; 2],
+}
+
 /// The predicted worst verification |dg| of the dynamic fit of `rec` at `temps` over
-/// `positions`, mg, and the lag kept: 3 sigma of the fit's covariance (dispersion-scaled)
+/// `positions`, mg, the lag kept and the blob's valid range: 3 sigma of the fit's covariance (dispersion-scaled)
 /// and of a verification dwell's own noise (`noise_v` per sample, `dwell_samples`
 /// averaged) in quadrature, plus the firmware cache's budget (one dwell sigma, the most
 /// `fit`'s default step costs). Not included: the temperature sensor's noise and
@@ -250,8 +292,9 @@ pub fn predict(
     positions: &[String],
     noise_v: f64,
     dwell_samples: f64,
-) -> Result<(f64, Option<f64>)> {
+) -> Result<Predicted> {
     let d = fit_dynamic(rec)?;
+    let cal = d.calibration()?;
     let f = &d.fit;
     let Some(cov) = &f.cov else {
         return Err(HostError::msg("the fit carries no covariance"));
@@ -302,7 +345,32 @@ pub fn predict(
             worst = worst.max((3.0 * (var + dwell_var).sqrt() + dwell_var.sqrt()) * 1e3);
         }
     }
-    Ok((worst, d.lag_tau_s))
+    Ok(Predicted {
+        worst_mg: worst,
+        lag_s: d.lag_tau_s,
+        valid_c: [cal.t_min_c, cal.t_max_c],
+    })
+}
+
+/// The hold at the hot end (whole minutes) that brings the twin's case, where its
+/// temperature sensor sits, within half of [`COVER_TOLERANCE_C`] of the set point after a
+/// ramp at `c_per_min`: the chamber's air and the case lag the set point in series
+/// (`tau_air`, `tau_case`), by `r (tau_air + tau_case)` at the end of a long ramp at `r`
+/// C/s, and close the gap in a hold as
+/// `r (tau_case^2 e^(-t/tau_case) - tau_air^2 e^(-t/tau_air)) / (tau_case - tau_air)`
+/// (conservative for a ramp shorter than the lags). At most a day.
+pub fn cover_hold_min(cfg: &SimConfig, c_per_min: f64) -> f64 {
+    let r = c_per_min / 60.0;
+    let a = cfg.chamber.tau_air_s.max(0.0);
+    // equal time constants: the limit of the formula, approached closely enough
+    let c = cfg.chamber.tau_case_s.max(0.0).max(a + 1e-3);
+    let decay = |t: f64, tau: f64| if tau > 0.0 { (-t / tau).exp() } else { 0.0 };
+    let gap = |t: f64| r * (c * c * decay(t, c) - a * a * decay(t, a)) / (c - a);
+    let mut t = 0.0;
+    while gap(t) > COVER_TOLERANCE_C / 2.0 && t < 86_400.0 {
+        t += 60.0;
+    }
+    t / 60.0
 }
 
 /// The candidates: stops and soaks of 10, 25 and 40 minutes; sweeps at the fastest
@@ -311,7 +379,10 @@ pub fn predict(
 /// the shortest sweep a slowly lagging unit can have), one held a settle time at the hot
 /// end and half of it at the cold end (the start is soaked there already; the hot end is
 /// where the element must come close to the top of the range), and at half the ramp with
-/// one.
+/// one; and at the fastest ramp and at half of it, held at the hot end until the twin's
+/// sensor comes to the top of the range ([`cover_hold_min`]; the start is soaked at the
+/// bottom) and a settle time at the cold end, so that a sweep may cover the range asked
+/// for.
 pub fn kinds(l: &Limits) -> Vec<Kind> {
     let settle_min = ((l.tau_s + 600.0) / 60.0).round();
     let mut v: Vec<Kind> = [10.0, 25.0, 40.0]
@@ -330,6 +401,21 @@ pub fn kinds(l: &Limits) -> Vec<Kind> {
             end_hold_min: (settle_min * cold).round(),
         });
     }
+    let cfg = twin(l, 0);
+    for f in [1.0, 0.5] {
+        let c_per_min = l.max_ramp_c_per_min * f;
+        let k = Kind::Sweep {
+            c_per_min,
+            // the element must settle too where it lags
+            hold_min: cover_hold_min(&cfg, c_per_min).max(settle_min),
+            // a settle time at the cold end, where the sweep ends: its last turn through
+            // the positions at rest, as the symmetric sweeps have
+            end_hold_min: settle_min,
+        };
+        if !v.contains(&k) {
+            v.push(k);
+        }
+    }
     v
 }
 
@@ -343,13 +429,15 @@ pub fn candidates(l: &Limits, seed: u64) -> Result<Vec<Candidate>> {
         .map(|kind| {
             let (steps, end) = program(kind, l);
             let (_, rec) = run(&cfg, &steps, "candidate.csv")?;
-            let (predicted_mg, lag_s) =
-                predict(&rec, &temps, &l.positions, l.noise_v, l.dwell_s * l.rate_hz)?;
+            let p = predict(&rec, &temps, &l.positions, l.noise_v, l.dwell_s * l.rate_hz)?;
             Ok(Candidate {
                 kind,
                 hours: end / 3600.0,
-                predicted_mg,
-                lag_s,
+                predicted_mg: p.worst_mg,
+                lag_s: p.lag_s,
+                valid_c: p.valid_c,
+                covers: p.valid_c[0] <= l.lo_c + COVER_TOLERANCE_C
+                    && p.valid_c[1] >= l.hi_c - COVER_TOLERANCE_C,
             })
         })
         .collect()
@@ -382,9 +470,10 @@ pub enum Target {
     Hours(f64),
 }
 
-/// The chosen candidate's index, or None when none meets the target.
+/// The chosen candidate's index among those that cover the range asked for, or None
+/// when none of them meets the target ([`why_none`] says why).
 pub fn choose(c: &[Candidate], target: Target) -> Option<usize> {
-    let idx = 0..c.len();
+    let idx = (0..c.len()).filter(|&i| c[i].covers);
     match target {
         Target::AccuracyMg(mg) => idx
             .filter(|&i| c[i].predicted_mg <= mg)
@@ -395,19 +484,61 @@ pub fn choose(c: &[Candidate], target: Target) -> Option<usize> {
     }
 }
 
-/// The table of candidates (the chosen one marked).
+/// Why no candidate was chosen for `target` over the range of `l`: none covers the range,
+/// none that covers it does so within the hours or the accuracy asked (with the shortest,
+/// or the most accurate, that does), or none meets the target at all.
+pub fn why_none(c: &[Candidate], target: Target, l: &Limits) -> String {
+    let range = format!("{}..{} C", l.lo_c, l.hi_c);
+    let covering = || c.iter().enumerate().filter(|(_, x)| x.covers);
+    let shortest = covering().min_by(|a, b| a.1.hours.total_cmp(&b.1.hours));
+    let best = covering().min_by(|a, b| a.1.predicted_mg.total_cmp(&b.1.predicted_mg));
+    match (target, shortest, best) {
+        (_, None, _) | (_, _, None) => format!(
+            "no candidate's blob covers the range asked for ({range}, within {COVER_TOLERANCE_C} C of each end: see the valid ranges)"
+        ),
+        (Target::Hours(h), Some((i, x)), _) => format!(
+            "no plan covers {range} within {h} chamber hours: the shortest that does is {} ({}, {:.2} h, valid {} C); give --hours {:.2} or more, or a narrower --range-c",
+            Candidate::label(i),
+            x.kind.describe(),
+            x.hours,
+            x.valid_text(),
+            (x.hours * 100.0).ceil() / 100.0
+        ),
+        (Target::AccuracyMg(mg), _, Some((i, x))) => format!(
+            "no plan that covers {range} is predicted within {mg} mg: the most accurate that does is {} ({}, predicted {:.4} mg, {:.2} h)",
+            Candidate::label(i),
+            x.kind.describe(),
+            x.predicted_mg,
+            x.hours
+        ),
+    }
+}
+
+/// The table of candidates (the chosen one marked), each with its label, hours,
+/// prediction, lag and the valid range of its blob (`short` where it does not cover the
+/// range asked for).
 pub fn table(c: &[Candidate], chosen: Option<usize>) -> String {
-    let mut s = String::from(
-        "  plan                              chamber h  predicted worst |dg|, mg  lag kept, s\n",
+    let w = c
+        .iter()
+        .map(|x| x.kind.describe().len())
+        .chain([4])
+        .max()
+        .unwrap_or(4);
+    let mut s = format!(
+        "    {:<w$}  chamber h  predicted worst |dg|, mg  lag kept, s  valid range, C\n",
+        "plan"
     );
     for (i, x) in c.iter().enumerate() {
         s.push_str(&format!(
-            "{} {:<33} {:>9.2}  {:>24.4}  {:>11}\n",
+            "{} {:<2} {:<w$}  {:>9.2}  {:>24.4}  {:>11}  {}{}\n",
             if Some(i) == chosen { "*" } else { " " },
+            Candidate::label(i),
             x.kind.describe(),
             x.hours,
             x.predicted_mg,
-            x.lag_s.map_or("none".into(), |t| format!("{t:.0}"))
+            x.lag_s.map_or("none".into(), |t| format!("{t:.0}")),
+            x.valid_text(),
+            if x.covers { "" } else { " (short)" }
         ));
     }
     s

@@ -216,6 +216,14 @@ fn check_plan(dir: &std::path::Path, summary: &Value) {
     let judged = p["judged"].as_array().unwrap();
     assert_eq!(judged.len(), 2);
     assert!(judged[1]["hours"].as_f64().unwrap() < judged[0]["hours"].as_f64().unwrap());
+    // the plan's blob covers the paper test's range (within 1 C of each end), as `plan`
+    // chooses only such a plan
+    let v = &judged[1]["valid_c"];
+    let (lo, hi) = (v[0].as_f64().unwrap(), v[1].as_f64().unwrap());
+    assert!(
+        lo <= -39.0 && hi >= 69.0,
+        "the plan's blob is valid over {lo}..{hi} C"
+    );
     for (file, j) in ["chosen.blob", "plan.blob"].iter().zip(judged) {
         let (code, out, err) = cli(&[
             "verify",

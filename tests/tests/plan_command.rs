@@ -1,8 +1,10 @@
 //! The `host-fit plan` command end to end (issue 19): the program it writes holds to the
 //! stated chamber (range, fastest ramp) and ends with an equilibrium verification block;
 //! it never overwrites without `--force`; bad options are refused naming the option; the
-//! target picks the candidate it says; the written plan, run on the twin with
-//! `simulate --plan`, fitted and verified, is within its predicted accuracy.
+//! target picks the candidate it says among those whose blob covers the range asked for,
+//! or says that none can within the hours; the written plan, run on the twin with
+//! `simulate --plan`, fitted and verified, covers the range and is within its predicted
+//! accuracy.
 use serde_json::Value;
 use tests::time_true::{s, verify};
 use tests::{cli, cli_json};
@@ -59,6 +61,10 @@ fn hours(c: &Value) -> f64 {
 }
 fn predicted(c: &Value) -> f64 {
     c["predicted_mg"].as_f64().unwrap()
+}
+/// Its blob reaches within 1 C of each end of the range asked for.
+fn covers(c: &Value) -> bool {
+    c["covers"].as_bool().unwrap()
 }
 
 /// The program holds to the chamber and ends with the verification block.
@@ -122,6 +128,32 @@ fn check_program(rows: &[Row], j: &Value) {
         .all(|r| temps.iter().any(|&vt| (r.sp - vt).abs() < 1e-9)));
 }
 
+/// Fewer hours than any plan that covers the range needs (`shortest`): refused, naming
+/// the hours that would do, and nothing written.
+fn refuses_too_few_hours(dir: &std::path::Path, shortest: f64) {
+    let none = dir.join("none.csv");
+    let (code, _, err) = cli(&[
+        "plan",
+        "--range-c=-30,60",
+        "--seed",
+        "5",
+        "--hours",
+        &format!("{}", shortest - 0.01),
+        "--out",
+        s(&none),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("no plan covers -30..60 C within")
+            && err.contains(&format!(
+                "give --hours {:.2}",
+                (shortest * 100.0).ceil() / 100.0
+            )),
+        "{err}"
+    );
+    assert!(!none.exists());
+}
+
 /// Bad options are refused naming the option, and write nothing.
 fn refuses_bad_options(dir: &std::path::Path) {
     // bad options: refused, naming the option
@@ -151,8 +183,17 @@ fn plan_writes_a_program_the_chamber_can_follow_and_the_twin_meets_its_predictio
     let dir = tempfile::tempdir().unwrap();
     // a target between the candidates' predictions: some meet it, some do not
     let (all, _) = plan(dir.path(), "all.csv", &["--hours", "1000"]);
-    let cands = all["candidates"].as_array().unwrap().clone();
-    assert!(cands.len() >= 4, "{cands:?}");
+    let every = all["candidates"].as_array().unwrap().clone();
+    // a candidate whose blob falls short of the range is never chosen; its valid range
+    // says so
+    for c in &every {
+        let v = &c["valid_c"];
+        let (lo, hi) = (v[0].as_f64().unwrap(), v[1].as_f64().unwrap());
+        assert_eq!(covers(c), lo <= LO + 1.0 && hi >= HI - 1.0, "{c}");
+    }
+    let cands: Vec<Value> = every.iter().filter(|c| covers(c)).cloned().collect();
+    assert!(cands.len() >= 4, "{every:?}");
+    assert!(covers(&all["chosen"]));
     let mut preds: Vec<f64> = cands.iter().map(predicted).collect();
     preds.sort_by(f64::total_cmp);
     // --hours without a binding limit: the most accurate of all
@@ -185,6 +226,7 @@ fn plan_writes_a_program_the_chamber_can_follow_and_the_twin_meets_its_predictio
         .fold(f64::INFINITY, f64::min);
     assert!(hours(&jh["chosen"]) <= limit);
     assert_eq!(predicted(&jh["chosen"]), best);
+    refuses_too_few_hours(dir.path(), hs[0]);
 
     let text = std::fs::read_to_string(&prog).unwrap();
     let rows = parse(&text);
@@ -229,7 +271,7 @@ fn plan_writes_a_program_the_chamber_can_follow_and_the_twin_meets_its_predictio
         let (code, _, err) = cli(&["simulate", "--plan", s(p), "--out", s(r), "--seed", seed]);
         assert_eq!(code, 0, "{err}");
     }
-    cli_json(&[
+    let fitted = cli_json(&[
         "fit",
         s(&cal),
         "--route",
@@ -238,6 +280,12 @@ fn plan_writes_a_program_the_chamber_can_follow_and_the_twin_meets_its_predictio
         s(&blob),
         "--json",
     ]);
+    // the blob covers the range asked for, as the plan said
+    let (lo, hi) = (
+        fitted["t_min_c"].as_f64().unwrap(),
+        fitted["t_max_c"].as_f64().unwrap(),
+    );
+    assert!(lo <= LO + 1.0 && hi >= HI - 1.0, "valid {lo}..{hi} C");
     let (worst, dg) = verify(&vrec, None, &blob);
     // verify judges the verification positions (PP1..PP6) of the block's 36 dwells at
     // three temperatures; its TP dwells are calibration positions
@@ -363,8 +411,12 @@ fn plan_report_plots_every_candidate_and_rings_the_chosen_one() {
     )
     .unwrap();
     let series = data["series"].as_array().unwrap();
-    assert_eq!(series.len(), 3);
-    let drawn: Vec<(f64, f64)> = series[..2]
+    // stops and soaks, sweeps, those short of the range (each where there are some),
+    // the chosen one's ring last
+    let n = series.len();
+    assert!((3..=4).contains(&n), "{n} series");
+    assert_eq!(series[n - 1]["marker"], "ring");
+    let drawn: Vec<(f64, f64)> = series[..n - 1]
         .iter()
         .flat_map(|s| s["points"].as_array().unwrap().iter())
         .map(|p| (p[0].as_f64().unwrap(), p[1].as_f64().unwrap()))
@@ -376,7 +428,25 @@ fn plan_report_plots_every_candidate_and_rings_the_chosen_one() {
             "{c} not drawn: {drawn:?}"
         );
     }
-    let ring = &series[2]["points"][0];
+    // every candidate labelled as in the table (A, B, ...)
+    let mut labels: Vec<&str> = series[..n - 1]
+        .iter()
+        .flat_map(|s| s["labels"].as_array().unwrap().iter())
+        .map(|l| l.as_str().unwrap())
+        .collect();
+    labels.sort_unstable();
+    let want: Vec<String> = (0..cands.len())
+        .map(host_fit::plan::Candidate::label)
+        .collect();
+    assert_eq!(labels, want);
+    let mut drawn_labels: Vec<&str> = doc
+        .descendants()
+        .filter(|n| n.attribute("class") == Some("point-label"))
+        .filter_map(|n| n.text())
+        .collect();
+    drawn_labels.sort_unstable();
+    assert_eq!(drawn_labels, want);
+    let ring = &series[n - 1]["points"][0];
     assert_eq!(
         (ring[0].as_f64().unwrap(), ring[1].as_f64().unwrap()),
         (hours(&j["chosen"]), predicted(&j["chosen"]))
@@ -398,9 +468,9 @@ fn plan_report_plots_every_candidate_and_rings_the_chosen_one() {
         let v: Vec<String> = d.split_whitespace().map(String::from).collect();
         v.chunks(2).map(|c| (c[0].clone(), c[1].clone())).collect()
     };
-    let marks: Vec<(String, String)> = (0..2).flat_map(vertices).collect();
+    let marks: Vec<(String, String)> = (0..n - 1).flat_map(vertices).collect();
     assert_eq!(marks.len(), cands.len());
-    let ringed = vertices(2);
+    let ringed = vertices(n - 1);
     assert_eq!(ringed.len(), 1);
     assert!(
         marks.contains(&ringed[0]),

@@ -1,6 +1,8 @@
 //! Issue 19's done-criteria on the twin: for a unit with no lag and units whose element
-//! lags its sensor by 5 and 20 minutes, the plan `host-fit plan --hours 2` chooses (the
-//! unit type's lag stated), run on the same unit and fitted by default, passes acceptance
+//! lags its sensor by 5 and 20 minutes, the plan `host-fit plan --hours 2.5` chooses (the
+//! unit type's lag stated; since issue 29 only a plan whose blob covers the range
+//! -40..70 C: no sweep of 2 h brings the unit's sensor to +70 C and back), run on the
+//! same unit and fitted by default, passes acceptance
 //! on an equilibrium verification block with its worst |dg| within 1.5x of the 6-h
 //! stop-and-soak test's (fitted on the route `fit` chooses for it, the default) on the
 //! same unit, and `plan`'s predicted accuracy covers the simulated one. The 20-min lag
@@ -15,16 +17,17 @@ use tests::time_true::{s, write};
 
 /// The plan's worst verification |dg| within this factor of the 6-h test's.
 const HOURS_FACTOR: f64 = 1.5;
-/// The plan's chamber hours at most.
-const MAX_HOURS: f64 = 2.0;
+/// The plan's chamber hours at most: a sweep that covers -40..70 C at 3 C/min needs
+/// about 2.1 h (its hot end held 44 min for the sensor to come within 0.5 C of +70 C).
+const MAX_HOURS: f64 = 2.5;
 
 #[test]
-fn a_plan_of_two_hours_chosen_by_plan_meets_the_six_hour_test_on_the_same_unit() {
+fn a_plan_of_two_and_a_half_hours_chosen_by_plan_meets_the_six_hour_test_on_the_same_unit() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let mut failed = Vec::new();
     let mut text = String::from(
-        "unit             plan (plan --hours 2)                h   predicted mg  simulated mg  6-h test mg  ratio  6-h dynamic mg\n",
+        "unit             plan (plan --hours 2.5)              h   predicted mg  simulated mg  6-h test mg  ratio  6-h dynamic mg\n",
     );
     for (lag_s, seed) in [(0.0, 51), (300.0, 52), (1200.0, 53)] {
         let u = unit(lag_s, seed);

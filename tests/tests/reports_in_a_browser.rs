@@ -110,12 +110,18 @@ const MEASURE: &str = r#"<script>(function () {
   for (const f of document.querySelectorAll('figure')) {
     const svg = f.querySelector('svg'), s = svg.getBoundingClientRect();
     const fb = f.getBoundingClientRect();
-    r.figures.push({ id: f.id, left: fb.left + window.scrollX, top: fb.top + window.scrollY,
-                     width: s.width, height: s.height });
+    // the drawing's scale on the page: a text's size as read is its font size times it
+    const vb = svg.viewBox.baseVal, scale = vb && vb.width ? s.width / vb.width : 1;
+    const fig = { id: f.id, left: fb.left + window.scrollX, top: fb.top + window.scrollY,
+                  width: s.width, height: s.height, min_text_px: 1e9, point_labels: [] };
+    r.figures.push(fig);
     if (s.width < 300) r.narrow.push(f.id + ' ' + s.width.toFixed(0));
     const boxes = [];
     for (const t of svg.querySelectorAll('text')) {
       const b = t.getBoundingClientRect();
+      if (t.textContent.trim())
+        fig.min_text_px = Math.min(fig.min_text_px, parseFloat(getComputedStyle(t).fontSize) * scale);
+      if (t.classList.contains('point-label') && b.width > 0) fig.point_labels.push(t.textContent);
       if (b.left < s.left - 0.5 || b.right > s.right + 0.5 || b.top < s.top - 0.5 || b.bottom > s.bottom + 0.5)
         r.cut_text.push(f.id + ': ' + t.textContent);
       for (const [o, ob] of boxes) {
@@ -230,6 +236,15 @@ fn check_in_browser(
     name: &str,
     report: &Path,
 ) -> (Vec<reports::Figure>, Shot, Vec<serde_json::Value>) {
+    check_in_browser_with(name, report, &|_, _| {})
+}
+
+/// [`check_in_browser`], and `also` on every width's measured figures.
+fn check_in_browser_with(
+    name: &str,
+    report: &Path,
+    also: &dyn Fn(u32, &[serde_json::Value]),
+) -> (Vec<reports::Figure>, Shot, Vec<serde_json::Value>) {
     let html = std::fs::read_to_string(report).unwrap();
     let figures = reports::check_plots(&html);
     assert!(!figures.is_empty(), "{name}: no plots");
@@ -259,6 +274,7 @@ fn check_in_browser(
             figures.len(),
             "{name}: every figure laid out"
         );
+        also(width, &list("figures"));
         if width == SHOT_WIDTH {
             height = l["height"].as_u64().unwrap() as u32;
             let shot = screenshot(report, height.min(30_000), dir);
@@ -355,6 +371,55 @@ fn check_shot(name: &str, s: &Shot, figures: &[serde_json::Value]) {
             ink * 100.0
         );
     }
+}
+
+/// The smallest text a reader is asked to read on the plan's plot, px (as laid out:
+/// the font size times the drawing's scale on the page).
+const MIN_PLAN_TEXT_PX: f64 = 11.0;
+
+/// The plan's page (issue 29 item 3): its one plot drawn at its own size, so that every
+/// text on it reads at [`MIN_PLAN_TEXT_PX`] or more at every width, and every candidate
+/// labelled on it (as in the table) with a label laid out inside the drawing, overlapping
+/// nothing.
+#[test]
+fn the_plan_report_in_a_browser() {
+    let tmp = tempdir();
+    let dir = tmp.path();
+    let report = dir.join("plan.html");
+    let (code, out, err) = cli(&[
+        "plan",
+        "--target-mg",
+        "0.1",
+        "--out",
+        dir.join("plan.csv").to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let n = j["candidates"].as_array().unwrap().len();
+    let want: Vec<String> = (0..n).map(host_fit::plan::Candidate::label).collect();
+    check_in_browser_with("plan report", &report, &|width, figures| {
+        let f = figures
+            .iter()
+            .find(|f| f["id"] == "plan-accuracy-hours")
+            .expect("the plan's plot");
+        let px = f["min_text_px"].as_f64().unwrap();
+        assert!(
+            px >= MIN_PLAN_TEXT_PX,
+            "at {width} px its smallest text reads {px:.1} px (at least {MIN_PLAN_TEXT_PX})"
+        );
+        let mut labels: Vec<String> = f["point_labels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|l| l.as_str().unwrap().to_string())
+            .collect();
+        labels.sort();
+        assert_eq!(labels, want, "at {width} px");
+        println!("plan report at {width} px: smallest text {px:.1} px, {n} candidates labelled");
+    });
 }
 
 #[test]

@@ -187,8 +187,24 @@ fn blobs_record_the_output_unit() {
     let dir = tempfile::tempdir().unwrap();
     let (rec, _) = write(dir.path(), "unit", &production("clean", 3));
     let text = std::fs::read_to_string(&rec).unwrap();
+    // the outputs in mV, as the label says (a V recording labelled mV is refused at the
+    // door: its outputs change by 0.55 per g, not 550)
+    let mv: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') || l.starts_with("t_s") {
+                return l.to_string();
+            }
+            let mut f: Vec<String> = l.split(',').map(String::from).collect();
+            let n = f.len();
+            for x in &mut f[n - 3..] {
+                *x = format!("{}", 1000.0 * x.parse::<f64>().unwrap());
+            }
+            f.join(",")
+        })
+        .collect();
     let labelled = dir.path().join("labelled.csv");
-    std::fs::write(&labelled, format!("# output_unit=mV\n{text}")).unwrap();
+    std::fs::write(&labelled, format!("# output_unit=mV\n{}\n", mv.join("\n"))).unwrap();
     for (cmd, blob) in [("fit", "fit.blob"), ("diagnose", "diag.blob")] {
         let b = dir.path().join(blob);
         cli_json(&[cmd, s(&labelled), "--out", s(&b), "--json", "--force"]);

@@ -178,6 +178,29 @@ pub struct PositionArgs {
     pub unknown_orientations: bool,
 }
 
+/// A check at the door that data may be let past (`--allow`).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AllowArg {
+    /// Outputs whose change per g is implausible for their stated unit.
+    OutputScale,
+    /// Temperatures that look like Kelvin or Fahrenheit.
+    TemperatureScale,
+    /// A recording that covers less than its test promised (its T0 outside the data, a
+    /// test cut off on its way to its next stop): fitted over the range it covers.
+    Partial,
+}
+
+impl From<AllowArg> for crate::data::door::Check {
+    fn from(a: AllowArg) -> Self {
+        use crate::data::door::Check;
+        match a {
+            AllowArg::OutputScale => Check::OutputScale,
+            AllowArg::TemperatureScale => Check::TemperatureScale,
+            AllowArg::Partial => Check::Partial,
+        }
+    }
+}
+
 /// A recording and its positions.
 #[derive(Args, Debug, Clone)]
 pub struct Input {
@@ -190,6 +213,12 @@ pub struct Input {
     /// temperature ramps), which are otherwise left out.
     #[arg(long)]
     pub verbose: bool,
+    /// Let the data past these checks at the door (comma-separated), each then a
+    /// warning: output-scale (outputs implausible for their unit), temperature-scale
+    /// (temperatures that look like Kelvin or Fahrenheit), partial (a recording that
+    /// covers less than its test promised; refused only where a blob is written).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub allow: Vec<AllowArg>,
 }
 
 /// Where a run is recorded (the record store; `history` and `trend` read it).
@@ -408,6 +437,10 @@ pub struct BatchArgs {
     /// Record nothing (no record store).
     #[arg(long, conflicts_with = "db")]
     pub no_db: bool,
+    /// Let every unit's data past these checks at the door (comma-separated; as `fit
+    /// --allow`): output-scale, temperature-scale, partial.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub allow: Vec<AllowArg>,
 }
 
 /// `blind`.

@@ -1,6 +1,6 @@
 //! `temp-fit`, `identify` and `fit`: from data to coefficients and blobs.
 use super::args::{FitArgs, IdentifyArgs, RouteArg, TempFitArgs};
-use super::common::{load_to_fit, oriented, serial, w};
+use super::common::{load_for_blob, load_to_fit, oriented, serial, w};
 use crate::blob::{build_blob, Cache, F32_BOUND_G};
 use crate::data::table::{read_table, to_csv, TableRow};
 use crate::diagnose::dynamic::{auto, fit_dynamic, Candidate, DynamicFit, Routed, Shape};
@@ -335,7 +335,7 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     check_writable(&a.out, a.force)?;
     let req = ModelRequest::from(&a.model);
     req.check()?;
-    let rec = load_to_fit(&a.input, err)?;
+    let rec = load_for_blob(&a.input, err)?;
     let route = Route::from(a.route);
     if route == Route::Dynamic && req.kind.is_some() {
         return Err(HostError::msg(

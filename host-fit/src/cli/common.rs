@@ -1,6 +1,7 @@
 //! What every command shares: reading a recording with its positions, the unit's serial,
 //! writing a line of output.
 use super::args::{Input, PositionArgs};
+use crate::data::door::Check;
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::error::{HostError, Result};
@@ -53,21 +54,34 @@ pub(super) fn positions(p: &PositionArgs) -> Result<(Positions, Vec<String>)> {
     Ok((pos, warns))
 }
 
-/// Read the recording of `input` with its positions ([`positions`]); warnings go to
-/// `err`, and the notes on expected features of the data too with `--verbose`.
+/// The checks at the door that refuse a recording read to judge or study it: its units
+/// (a recording that covers less than its test promised is a warning).
+const REFUSE_TO_STUDY: [Check; 2] = [Check::OutputScale, Check::TemperatureScale];
+
+/// Read the recording of `input` with its positions ([`positions`]), past the checks at
+/// the door of its units ([`crate::data::door`]); warnings go to `err`, and the notes on
+/// expected features of the data too with `--verbose`.
 pub(super) fn load(input: &Input, err: &mut dyn Write) -> Result<Recording> {
-    read(input, err, false)
+    read(input, err, false, &REFUSE_TO_STUDY)
 }
 
 /// [`load`] for a command that fits: a position missing at a stop is a warning too,
 /// naming the position and the stop (and kept in the recording's warnings).
 pub(super) fn load_to_fit(input: &Input, err: &mut dyn Write) -> Result<Recording> {
-    read(input, err, true)
+    read(input, err, true, &REFUSE_TO_STUDY)
 }
 
-fn read(input: &Input, err: &mut dyn Write, fitting: bool) -> Result<Recording> {
+/// [`load_to_fit`] for a command that writes a blob: a recording that covers less than
+/// its test promised is refused too (unless `--allow partial`).
+pub(super) fn load_for_blob(input: &Input, err: &mut dyn Write) -> Result<Recording> {
+    read(input, err, true, &Check::ALL)
+}
+
+fn read(input: &Input, err: &mut dyn Write, fitting: bool, refuse: &[Check]) -> Result<Recording> {
     let (pos, mut warns) = positions(&input.positions)?;
     let mut rec = Recording::read(&input.recording, pos)?;
+    let allow: Vec<Check> = input.allow.iter().map(|a| Check::from(*a)).collect();
+    crate::data::door::admit(&mut rec, refuse, &allow)?;
     if fitting {
         let missing = crate::fit::coverage::missing(&rec);
         rec.warnings.extend(missing.iter().map(|m| m.text()));

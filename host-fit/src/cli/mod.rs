@@ -19,6 +19,10 @@ where
     I: IntoIterator<Item = T>,
     T: Into<std::ffi::OsString> + Clone,
 {
+    // a reader that goes away (`host-fit inspect B | head`) ends the output, not the
+    // command, and without a word about it
+    let (mut out, mut err) = (Closable::new(out), Closable::new(err));
+    let (out, err): (&mut dyn Write, &mut dyn Write) = (&mut out, &mut err);
     let cli = match records::parse(args) {
         Ok(c) => c,
         Err(e) => {
@@ -39,6 +43,52 @@ where
             let _ = writeln!(err, "error: {e}");
             1
         }
+    }
+}
+
+/// Output to a reader that may go away: once its pipe is closed, what follows is dropped
+/// (the command ends as it would have, with its own exit code) instead of ending in
+/// "Broken pipe".
+struct Closable<'a> {
+    inner: &'a mut dyn Write,
+    closed: bool,
+}
+
+impl<'a> Closable<'a> {
+    fn new(inner: &'a mut dyn Write) -> Self {
+        Closable {
+            inner,
+            closed: false,
+        }
+    }
+
+    /// `r`, or, when the reader has gone, `ok` and nothing more written from now on.
+    fn unless_closed<T>(&mut self, r: std::io::Result<T>, ok: T) -> std::io::Result<T> {
+        match r {
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                self.closed = true;
+                Ok(ok)
+            }
+            r => r,
+        }
+    }
+}
+
+impl Write for Closable<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.closed {
+            return Ok(buf.len());
+        }
+        let r = self.inner.write(buf);
+        self.unless_closed(r, buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        if self.closed {
+            return Ok(());
+        }
+        let r = self.inner.flush();
+        self.unless_closed(r, ())
     }
 }
 

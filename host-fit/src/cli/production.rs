@@ -24,6 +24,7 @@ pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
         force: a.force,
         positions,
         store: super::records::batch_store(&a.dir, &a.out, &a.record, a.no_db)?,
+        allow: a.allow.iter().map(|x| (*x).into()).collect(),
     };
     let res = crate::batch::run(&a.dir, &a.out, &o)?;
     let count = |s: UnitStatus| res.units.iter().filter(|r| r.acceptance == s).count();
@@ -315,7 +316,8 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
     let text = table(&c, chosen);
     let Some(i) = chosen else {
         return Err(HostError::msg(format!(
-            "no candidate meets the target:\n{text}"
+            "{}:\n{text}",
+            crate::plan::why_none(&c, target, &l)
         )));
     };
     let (mut steps, end) = program(c[i].kind, &l);
@@ -323,7 +325,7 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
     steps.extend(verification(&l, end, last));
     let csv = crate::simulate::program::to_csv(&steps);
     let page = match &a.report {
-        Some(_) => Some(crate::report::plan::html(&c, i, target)?),
+        Some(_) => Some(crate::report::plan::html(&c, i, target, &l)?),
         None => None,
     };
     write_atomic(&a.out, csv.as_bytes(), a.force)?;
@@ -346,10 +348,14 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
     w(
         out,
         format!(
-            "{text}chosen: {} ({:.2} chamber hours, predicted worst |dg| {:.4} mg); verification block at {:?} C\nwrote {} ({} rows; run it on the twin with `host-fit simulate --plan {}`)",
+            "{text}chosen: {} {} ({:.2} chamber hours, predicted worst |dg| {:.4} mg, its blob valid over {} C of the {}..{} C asked); verification block at {:?} C\nwrote {} ({} rows; run it on the twin with `host-fit simulate --plan {}`)",
+            crate::plan::Candidate::label(i),
             c[i].kind.describe(),
             c[i].hours,
             c[i].predicted_mg,
+            c[i].valid_text(),
+            l.lo_c,
+            l.hi_c,
             verification_temps(&l),
             a.out.display(),
             steps.len(),

@@ -296,6 +296,14 @@ pub(super) fn history(a: HistoryArgs, out: &mut dyn Write) -> Result<()> {
         return w(out, test_record(&mut store, &a.serial, a.run.as_deref())?);
     }
     let h = unit_history(&mut store, &a.serial)?;
+    if h.records.is_empty() {
+        // the store's location as it prints (a URL without its password)
+        return Err(HostError::msg(format!(
+            "{}: no records of unit `{}` in this store (serials are matched exactly, case and all)",
+            Location::parse(&a.db)?,
+            a.serial
+        )));
+    }
     if a.json {
         w(out, json(&h)?)
     } else {

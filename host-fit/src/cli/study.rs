@@ -1,6 +1,6 @@
 //! `diagnose`, `report` and `blind`: looking into a recording, and testing the looking.
 use super::args::{BlindArgs, DiagnoseArgs, ReportArgs};
-use super::common::{load_to_fit, oriented, serial, w};
+use super::common::{load_for_blob, load_to_fit, oriented, serial, w};
 use crate::analysis::{analyse, table};
 use crate::blob::build_blob;
 use crate::data::recording::Recording;
@@ -17,7 +17,13 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
     for p in a.report.iter().chain(a.out.iter()) {
         check_writable(p, a.force)?;
     }
-    let rec = oriented(load_to_fit(&a.input, err)?, err)?;
+    // a blob written is refused over partial data, as `fit` refuses it
+    let load = if a.out.is_some() {
+        load_for_blob
+    } else {
+        load_to_fit
+    };
+    let rec = oriented(load(&a.input, err)?, err)?;
     let d = crate::diagnose::diagnose(&rec)?;
     let mut c = d.contract();
     let name = a.serial.as_deref().unwrap_or(serial(&rec));

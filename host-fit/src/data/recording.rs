@@ -131,6 +131,10 @@ pub const MAX_DWELL_DRIFT_C: f64 = 0.5;
 /// A dwell whose temperature moves this much (C) rests through a ramp: expected, noted
 /// once for all such dwells.
 pub const RAMP_SPAN_C: f64 = 2.0;
+/// A recording in which at least this share of the dwells drift more than
+/// [`MAX_DWELL_DRIFT_C`] is a sweep: `fit` takes it on the dynamic route, through its
+/// moving dwells, so their drift is expected (a note, not a warning).
+pub const SWEEP_MOVING_SHARE: f64 = 0.5;
 
 const KNOWN_META: [&str; 6] = [
     "unit",
@@ -390,9 +394,32 @@ impl Recording {
         self.summarise_ramps(&ramps);
     }
 
+    /// The share of the dwells that drift more than [`MAX_DWELL_DRIFT_C`] (0 without
+    /// dwells).
+    pub fn moving_share(&self) -> f64 {
+        let moving = self
+            .dwells
+            .iter()
+            .filter(|d| d.temp_span_c > MAX_DWELL_DRIFT_C)
+            .count();
+        moving as f64 / self.dwells.len().max(1) as f64
+    }
+
     /// A few drifting dwells are named one by one; many are one warning naming the worst
-    /// (each is still left out of the static fits).
+    /// (each is still left out of the static fits). In a sweep ([`SWEEP_MOVING_SHARE`])
+    /// they are one note: the dynamic route fits through them.
     fn summarise_drifts(&mut self, mut drifts: Vec<(String, String, f64)>) {
+        if !drifts.is_empty() && self.moving_share() >= SWEEP_MOVING_SHARE {
+            self.notes.push(format!(
+                "{}: {} dwells drift {MAX_DWELL_DRIFT_C} to {RAMP_SPAN_C} C in temperature: \
+                 expected in a sweep ({:.0}% of the dwells move), fitted through on the dynamic \
+                 route (a static fit leaves them out)",
+                self.path.display(),
+                drifts.len(),
+                100.0 * self.moving_share()
+            ));
+            return;
+        }
         if drifts.len() <= MAX_NAMED_SHORT_DWELLS {
             self.warnings.extend(drifts.into_iter().map(|d| d.0));
             return;

@@ -364,9 +364,15 @@ impl Contract {
                 if x.reproduced { "reproduced on both halves" } else { "NOT reproduced on both halves" }
             ));
             for (k, v) in &x.parameters {
-                let u = x.uncertainties.get(k).copied().unwrap_or(f64::NAN);
                 let unit = x.units.get(k).map(String::as_str).unwrap_or("");
-                s.push_str(&format!("    {k} = {v:.4e} +- {u:.1e} {unit}\n"));
+                // a parameter the search fixes (a threshold, an estimator's constant) has
+                // no uncertainty: said, not printed as NaN
+                let line = match x.uncertainties.get(k).filter(|u| u.is_finite()) {
+                    Some(u) => format!("    {k} = {v:.4e} +- {u:.1e} {unit}"),
+                    None => format!("    {k} = {v:.4e} {unit} (fixed, not fitted)"),
+                };
+                s.push_str(line.trim_end());
+                s.push('\n');
             }
             s.push_str(&format!("    {}\n", x.evidence));
         }

@@ -29,7 +29,7 @@ use serde::Serialize;
 /// [`MAX_DWELL_DRIFT_C`] (the static route keeps none of them). Counted in dwells, not
 /// samples: a stop-and-soak test's few long rests through its ramps hold most of its
 /// samples, its tilter's dwells are static.
-pub const SWEEP_MOVING_SHARE: f64 = 0.5;
+pub const SWEEP_MOVING_SHARE: f64 = crate::data::recording::SWEEP_MOVING_SHARE;
 
 /// How much of a recording's dwells move in temperature.
 #[derive(Debug, Clone, Copy, Serialize, PartialEq)]
@@ -206,6 +206,25 @@ fn order_by_heldout(data: &Data, f: &Fit, cands: &mut Vec<Candidate>) -> Fit {
     best
 }
 
+/// The models compared, each once (its first judgement), the final model `f` alone
+/// chosen (added when refining its lag made it a model of its own).
+fn compared(cands: Vec<Candidate>, f: &Fit) -> Vec<Candidate> {
+    let last = describe(f);
+    let mut out: Vec<Candidate> = Vec::new();
+    for c in cands {
+        if !out.iter().any(|o| o.model == c.model) {
+            out.push(Candidate {
+                chosen: c.model == last,
+                ..c
+            });
+        }
+    }
+    if !out.iter().any(|o| o.chosen) {
+        out.push(candidate(f, true));
+    }
+    out
+}
+
 /// Fit `rec` on the dynamic route (see the module doc).
 pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
     let rules = Rules::default();
@@ -265,6 +284,7 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
         }
     }
     let f = refine_lag(&data, &order_by_heldout(&data, &f, &mut cands));
+    let cands = compared(cands, &f);
     let noise_rms = metrics::floor_rms(&data);
     let term = |f: &Fit, e: usize| -> [f64; 3] {
         std::array::from_fn(|axis| {

@@ -43,7 +43,10 @@ fn script_json(v: &impl serde::Serialize) -> Result<String> {
 /// drawn data.
 fn figure(p: &Plot) -> Result<String> {
     let prepared = prepare(p);
-    let class = if p.wide {
+    let natural = format!(" class=\"wide\" style=\"max-width:{}px\"", p.width);
+    let class = if p.natural {
+        natural.as_str()
+    } else if p.wide {
         " class=\"wide\""
     } else if p.double {
         " class=\"double\""

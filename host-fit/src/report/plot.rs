@@ -150,6 +150,9 @@ pub struct Series {
     pub gap: Option<f64>,
     /// The line's width, px.
     pub width: f64,
+    /// Labels drawn beside the points, same order (empty: none); a labelled series is
+    /// never thinned.
+    pub labels: Vec<String>,
 }
 
 impl Series {
@@ -170,6 +173,7 @@ impl Series {
             errors: None,
             gap: None,
             width: 2.0,
+            labels: Vec::new(),
         }
     }
 
@@ -204,6 +208,12 @@ impl Series {
     /// With 1-sigma error bars.
     pub fn with_errors(mut self, e: Vec<f64>) -> Series {
         self.errors = Some(e);
+        self
+    }
+
+    /// With a label beside each point.
+    pub fn with_labels(mut self, labels: Vec<String>) -> Series {
+        self.labels = labels;
         self
     }
 }
@@ -261,6 +271,9 @@ pub struct Plot {
     pub wide: bool,
     /// Spans two columns of the page's grid (where it has two or more).
     pub double: bool,
+    /// Drawn across the page's grid but never wider than `width`: its text keeps its
+    /// size in px on any screen wide enough (a lone plot read closely).
+    pub natural: bool,
     /// A sentence under the plot.
     pub note: String,
 }
@@ -453,7 +466,7 @@ pub fn prepare(p: &Plot) -> Prepared {
     let mut plot = p.clone();
     let points_in_data = p.series.iter().map(|s| s.points.len()).collect();
     for s in &mut plot.series {
-        if s.errors.is_some() {
+        if s.errors.is_some() || !s.labels.is_empty() {
             continue;
         }
         if s.line.is_none() && s.points.len() > 400 {
@@ -502,6 +515,8 @@ struct SeriesData<'a> {
     points: Vec<[f64; 2]>,
     points_in_data: usize,
     errors: Option<&'a [f64]>,
+    #[serde(skip_serializing_if = "<[String]>::is_empty")]
+    labels: &'a [String],
 }
 
 #[derive(Serialize)]
@@ -568,6 +583,7 @@ impl Prepared {
                     points: stored(&s.points, &self.x, &self.y),
                     points_in_data: *n,
                     errors: s.errors.as_deref(),
+                    labels: &s.labels,
                 })
                 .collect(),
             bands: p

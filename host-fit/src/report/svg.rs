@@ -79,6 +79,7 @@ pub fn svg(p: &Prepared) -> String {
         series(p, i, s, &mut o);
     }
     o.push_str("</g>");
+    point_labels(p, &mut o);
     let _ = write!(
         o,
         r#"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="{AXIS}" stroke-width="1"/>"#,
@@ -351,6 +352,92 @@ fn series(p: &Prepared, i: usize, s: &Series, o: &mut String) {
         marker_def(&id, s.marker, &c, r, opacity),
         s.marker.name()
     );
+}
+
+/// Size of the labels beside points, px.
+pub const POINT_LABEL_FONT: f64 = 13.0;
+
+/// A text's box `[left, top, right, bottom]` from its left end and baseline, px, with a
+/// margin of a pixel (the browser's box includes the font's ascent and descent).
+fn text_box(x: f64, baseline: f64, width: f64, size: f64) -> [f64; 4] {
+    [
+        x - 1.0,
+        baseline - size - 1.0,
+        x + width + 1.0,
+        baseline + 0.3 * size + 1.0,
+    ]
+}
+
+fn meets(a: &[f64; 4], b: &[f64; 4]) -> bool {
+    a[0] < b[2] && b[0] < a[2] && a[1] < b[3] && b[1] < a[3]
+}
+
+/// The labels of the labelled series beside their points: each at the first of a few
+/// spots (right, left, above, below, then further out) whose box meets neither a
+/// label placed before nor a labelled point's marker and stays inside the plotting area
+/// (at the first spot inside it when none is free).
+fn point_labels(p: &Prepared, o: &mut String) {
+    let size = POINT_LABEL_FONT;
+    let area = [LEFT, p.y.p1, p.size.0 - RIGHT, p.y.p0];
+    let points: Vec<(f64, f64, &str)> = p
+        .plot
+        .series
+        .iter()
+        .flat_map(|s| s.points.iter().zip(&s.labels))
+        .map(|(q, l)| (p.x.px(q.0), p.y.px(q.1), l.as_str()))
+        .collect();
+    if points.is_empty() {
+        return;
+    }
+    // every labelled point's marker, a ring's width about it
+    let mut taken: Vec<[f64; 4]> = points
+        .iter()
+        .map(|(x, y, _)| [x - 7.0, y - 7.0, x + 7.0, y + 7.0])
+        .collect();
+    o.push_str(r#"<g class="point-labels">"#);
+    for (x, y, label) in points {
+        // bold: a tenth wider than the estimate for regular text
+        let w = 1.1 * text_px(label, size);
+        let spots = (1..=5).flat_map(|k| {
+            // the first spot clears a ring about the point (the chosen one)
+            let d = 5.0 + 4.0 * f64::from(k);
+            [
+                (x + d, y + 0.35 * size),
+                (x - d - w, y + 0.35 * size),
+                (x - w / 2.0, y - d),
+                (x - w / 2.0, y + d + 0.7 * size),
+                (x + d, y - d),
+                (x - d - w, y + d + 0.7 * size),
+            ]
+        });
+        let inside =
+            |b: &[f64; 4]| b[0] >= area[0] && b[1] >= area[1] && b[2] <= area[2] && b[3] <= area[3];
+        let mut first_inside = None;
+        let mut chosen = None;
+        for (lx, ly) in spots {
+            let b = text_box(lx, ly, w, size);
+            if !inside(&b) {
+                continue;
+            }
+            first_inside.get_or_insert((lx, ly, b));
+            if !taken.iter().any(|t| meets(t, &b)) {
+                chosen = Some((lx, ly, b));
+                break;
+            }
+        }
+        let Some((lx, ly, b)) = chosen.or(first_inside) else {
+            continue;
+        };
+        taken.push(b);
+        let _ = write!(
+            o,
+            r#"<text class="point-label" x="{}" y="{}" font-size="{size}" font-weight="bold">{}</text>"#,
+            f(lx),
+            f(ly),
+            esc(label)
+        );
+    }
+    o.push_str("</g>");
 }
 
 /// The legend under the x label: a sample of each series' line and marker, a swatch of

@@ -21,12 +21,14 @@ fn main() {
         .and_then(|s| s.all())
         .unwrap_or_else(|e| fail(e));
     if src.is_empty() {
-        fail(host_fit::error::HostError::msg(
+        fail(host_fit::error::HostError::new(
+            host_fit::error::ErrorKind::Insufficient,
             "the source store has no records",
         ));
     }
     if Path::new(out).exists() {
         fail(host_fit::error::HostError::in_file(
+            host_fit::error::ErrorKind::Exists,
             Path::new(out),
             "exists: give a new path",
         ));

@@ -10,7 +10,7 @@
 //! has no judged dwell (the band near T0 always; the band over the range when the
 //! valid range reaches beyond T0 +- `t0_band_c`): what was not judged cannot pass;
 //! `pass` otherwise.
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::verify::Verification;
 use serde::Serialize;
 
@@ -55,9 +55,10 @@ impl Spec {
     pub fn new(t0_mg: f64, range_mg: f64) -> Result<Spec> {
         for (v, name) in [(t0_mg, "--accept-t0-mg"), (range_mg, "--accept-range-mg")] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(HostError::msg(format!(
-                    "{name} must be a positive number of mg, got {v}"
-                )));
+                return Err(HostError::new(
+                    ErrorKind::Invalid,
+                    format!("{name} must be a positive number of mg, got {v}"),
+                ));
             }
         }
         Ok(Spec {

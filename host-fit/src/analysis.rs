@@ -7,7 +7,7 @@ use crate::blob::build_blob;
 use crate::data::positions::Role;
 use crate::data::recording::Recording;
 use crate::data::table::TableRow;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::equilibrium::static_observations;
 use crate::fit::identify::StopCoeffs;
 use crate::fit::noise::noise;
@@ -131,7 +131,7 @@ fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Fits> {
     let selection = chosen
         .selection
         .clone()
-        .ok_or_else(|| HostError::msg("internal: no selection"))?;
+        .ok_or_else(|| HostError::new(ErrorKind::Internal, "internal: no selection"))?;
     let pwl_all = fit_joint(
         &obs,
         &Basis::Pwl {
@@ -177,7 +177,8 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
         crate::blob::Cache::for_model(&model, &mut cal, None);
         let (blob, bytes, _) = build_blob(&serial, &rec.output_unit, &cal)?;
         let run = |m: Method| -> Result<Verification> {
-            verify(&rec, &blob, m, &check).ok_or_else(|| HostError::msg("singular K(T0)"))
+            verify(&rec, &blob, m, &check)
+                .ok_or_else(|| HostError::new(ErrorKind::Numerical, "singular K(T0)"))
         };
         let v = [
             run(Method::CorrectConstants)?,

@@ -8,7 +8,7 @@ use crate::analysis::{analyse, DemoOutcome, SummaryRow};
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::demo_plan::{beside, Beside, TargetFrom};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::select::Selection;
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::simulate::{simulate, SimConfig, TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
@@ -218,7 +218,7 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<(DemoOutcome, Beside)> 
         .models
         .iter()
         .find(|m| m.file == "chosen.blob")
-        .ok_or_else(|| HostError::msg("internal: no data-chosen model"))?;
+        .ok_or_else(|| HostError::new(ErrorKind::Internal, "internal: no data-chosen model"))?;
     let plan = beside(&cfg, &oc.recording, (&paper.blob, &paper.name))?;
     b.finish_and_clear();
     let mut recorded = records(&oc, &plan, &rec_path, &sim.csv, seed)?;

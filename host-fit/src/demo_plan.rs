@@ -8,7 +8,7 @@ use crate::blob::{build_blob, Cache};
 use crate::data::positions::Role;
 use crate::data::recording::Recording;
 use crate::diagnose::dynamic::{auto, Routed};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::pipeline::ModelRequest;
 use crate::plan::{
     candidates, choose, predict, program, run, verification, verification_temps, Candidate, Limits,
@@ -130,9 +130,10 @@ pub fn fit_as_fit_does(rec: &Recording) -> Result<(Calibration<f64>, String)> {
 fn judged(ver: &Recording, blob: &Blob, what: (String, f64, String)) -> Result<Judged> {
     let check = |p: usize| ver.positions.has_role(p, Role::Verification);
     let v = verify(ver, blob, Method::CorrectConstants, &check)
-        .ok_or_else(|| HostError::msg("singular K(T0)"))?;
+        .ok_or_else(|| HostError::new(ErrorKind::Numerical, "singular K(T0)"))?;
     if v.dwells.is_empty() {
-        return Err(HostError::msg(
+        return Err(HostError::new(
+            ErrorKind::Internal,
             "internal: the verification block has no verification dwells",
         ));
     }
@@ -177,10 +178,13 @@ pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> 
         None => {
             let t = Target::Hours(paper_hours);
             let i = choose(&c, t).ok_or_else(|| {
-                HostError::msg(format!(
-                    "no candidate plan within the paper test's {paper_hours:.2} h:\n{}",
-                    crate::plan::table(&c, None)
-                ))
+                HostError::new(
+                    ErrorKind::Unmet,
+                    format!(
+                        "no candidate plan within the paper test's {paper_hours:.2} h:\n{}",
+                        crate::plan::table(&c, None)
+                    ),
+                )
             })?;
             (TargetFrom::PaperHours, t, i)
         }
@@ -202,8 +206,12 @@ pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> 
         rec.unit.as_str()
     };
     let (blob, bytes, _) = build_blob(serial, &rec.output_unit, &cal)?;
-    let paper_b = Blob::decode(paper_blob.0)
-        .map_err(|e| HostError::msg(format!("internal: the paper test's blob: {e}")))?;
+    let paper_b = Blob::decode(paper_blob.0).map_err(|e| {
+        HostError::new(
+            ErrorKind::Internal,
+            format!("internal: the paper test's blob: {e}"),
+        )
+    })?;
     let judged = [
         judged(
             &ver,

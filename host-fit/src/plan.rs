@@ -11,7 +11,7 @@ use crate::data::recording::Recording;
 use crate::diagnose::design::static_at;
 use crate::diagnose::dynamic::fit_dynamic;
 use crate::diagnose::metrics::dispersion;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::simulate::program::Step;
 use crate::simulate::{simulate, PerAxis, SimConfig};
 use serde::Serialize;
@@ -254,7 +254,10 @@ pub fn predict(
     let d = fit_dynamic(rec)?;
     let f = &d.fit;
     let Some(cov) = &f.cov else {
-        return Err(HostError::msg("the fit carries no covariance"));
+        return Err(HostError::new(
+            ErrorKind::Numerical,
+            "the fit carries no covariance",
+        ));
     };
     let phi = dispersion(&d.data, f);
     let p = f.x.len();
@@ -367,7 +370,8 @@ fn check(l: &Limits) -> Result<()> {
     if ok {
         Ok(())
     } else {
-        Err(HostError::msg(
+        Err(HostError::new(
+            ErrorKind::Invalid,
             "plan needs a range lo < hi, a ramp > 0, a rate > 0, a noise > 0, a time constant >= 0, a dwell > 0 and at least 6 positions",
         ))
     }

@@ -573,6 +573,98 @@ fn the_parser_stays_in_the_cli_and_the_library_reads_no_environment() {
     assert!(bad.is_empty(), "{}", bad.join("\n"));
 }
 
+/// The kindless constructors of the error in `code` (error.rs): a `pub fn` returning
+/// `Self` that neither takes an `ErrorKind`, nor is a method of an error (`self`), nor
+/// names the kind it makes in its body.
+fn kindless_constructors(code: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut rest = code;
+    while let Some(p) = rest.find("pub fn ") {
+        rest = &rest[p + 7..];
+        let name: String = rest
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        let Some(open) = rest.find('{') else { break };
+        let signature = &rest[..open];
+        if !signature.contains("-> Self") {
+            continue;
+        }
+        // the body: to the matching brace
+        let (mut depth, mut end) = (0i32, open);
+        for (i, c) in rest[open..].char_indices() {
+            match c {
+                '{' => depth += 1,
+                '}' => depth -= 1,
+                _ => {}
+            }
+            if depth == 0 {
+                end = open + i;
+                break;
+            }
+        }
+        let body = &rest[open..end];
+        if !(signature.contains("ErrorKind")
+            || signature.contains("self")
+            || body.contains("ErrorKind::"))
+        {
+            out.push(name);
+        }
+    }
+    out
+}
+
+/// Whether `code` builds a `ty` by a struct literal (`Ty { field: .., ..}`), not by a
+/// function (a `-> Ty {` body is not a literal).
+fn struct_literal(code: &str, ty: &str) -> bool {
+    code.match_indices(&format!("{ty} {{")).any(|(i, m)| {
+        let rest = code[i + m.len()..].trim_start();
+        let field: String = rest
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        let after = rest[field.len()..].trim_start();
+        rest.starts_with("..")
+            || (!field.is_empty()
+                && ((after.starts_with(':') && !after.starts_with("::")) || after.starts_with(',')))
+    })
+}
+
+/// Errors are one small `#[non_exhaustive]` enum of kinds: every constructor of
+/// `HostError` states the kind it makes, and no code builds one by hand.
+#[test]
+fn every_error_has_a_kind() {
+    let error = std::fs::read_to_string(src().join("error.rs")).unwrap();
+    let kinds = error
+        .find("pub enum ErrorKind")
+        .expect("error.rs defines ErrorKind");
+    assert!(
+        error[..kinds].trim_end().ends_with("#[non_exhaustive]"),
+        "ErrorKind is #[non_exhaustive]: a new kind is not a breaking change"
+    );
+    let bad = kindless_constructors(&code_only(&error));
+    assert!(
+        bad.is_empty(),
+        "constructors of HostError without a kind: {bad:?}"
+    );
+    let mut by_hand = Vec::new();
+    for dir in all_code() {
+        for (m, p) in files(&dir) {
+            let code = code_only(&std::fs::read_to_string(&p).unwrap());
+            if m != "error"
+                && (struct_literal(&code, "HostError") || uses(&code, "HostError::msg("))
+            {
+                by_hand.push(format!("{}: {m}", dir.display()));
+            }
+        }
+    }
+    assert!(
+        by_hand.is_empty(),
+        "errors built without a kind (use HostError::new(ErrorKind::.., ..)):\n{}",
+        by_hand.join("\n")
+    );
+}
+
 /// The checks themselves can fail: a circle, an upward import, a long function.
 #[test]
 fn the_checks_catch_what_they_are_for() {
@@ -628,6 +720,14 @@ fn the_checks_catch_what_they_are_for() {
     );
     let other = "match (a, b) { (Some(x), _) => 1, _ => 2 }";
     assert!(wildcards_over_closed_sets(other).is_empty());
+    let kindless = "impl E { pub fn msg(m: String) -> Self { E { m } } \
+        pub fn new(kind: ErrorKind, m: String) -> Self { x } \
+        pub fn io(e: X) -> Self { Self::new(ErrorKind::Io, e) } \
+        pub fn within(self, f: P) -> Self { self } pub fn kind(&self) -> ErrorKind { k } }";
+    assert_eq!(kindless_constructors(kindless), ["msg"]);
+    assert!(struct_literal("Err(E { file: None, ..e })", "E"));
+    assert!(!struct_literal("fn f() -> E {\n    let m = 1;", "E"));
+    assert!(!struct_literal("fn f() -> E {\n    E::new(k, m)", "E"));
     assert!(uses("let x = std::env::var(\"A\");", "std::env::var"));
     assert!(!uses("my_clap::f()", "clap"));
 }

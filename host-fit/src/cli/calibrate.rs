@@ -4,7 +4,7 @@ use super::common::{load_to_fit, oriented, serial, w};
 use crate::blob::{build_blob, Cache, F32_BOUND_G};
 use crate::data::table::{read_table, to_csv, TableRow};
 use crate::diagnose::dynamic::{auto, fit_dynamic, Candidate, DynamicFit, Routed, Shape};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::describe::ModelDescription;
 use crate::fit::equilibrium::Excluded;
 use crate::fit::identify::StopCoeffs;
@@ -338,7 +338,8 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     let rec = load_to_fit(&a.input, err)?;
     let route = Route::from(a.route);
     if route == Route::Dynamic && req.kind.is_some() {
-        return Err(HostError::msg(
+        return Err(HostError::new(
+            ErrorKind::Invalid,
             "the dynamic route chooses its model on held-out blocks of time; --model does not apply to it",
         ));
     }
@@ -362,7 +363,7 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
         }
         (_, RouteArg::Static) => fit_chosen(&rec, &req)?,
         (None, _) => {
-            return Err(HostError::msg(format!(
+            return Err(HostError::new(ErrorKind::Invalid, format!(
                 "the model is chosen by the data on the static route only; with --route {} give --model",
                 route.name()
             )))

@@ -3,7 +3,7 @@
 use super::args::{Input, PositionArgs};
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use std::borrow::Cow;
 use std::io::Write;
 
@@ -22,7 +22,8 @@ pub enum Outcome {
 
 /// Write one line of output.
 pub(super) fn w(out: &mut dyn Write, s: impl std::fmt::Display) -> Result<()> {
-    writeln!(out, "{s}").map_err(|e| HostError::msg(format!("cannot write output: {e}")))
+    writeln!(out, "{s}")
+        .map_err(|e| HostError::new(ErrorKind::Io, format!("cannot write output: {e}")))
 }
 
 /// The positions of `p`: the built-ins and the positions file, the verification

@@ -9,7 +9,7 @@ use crate::blob::Inspection;
 use crate::data::recording::Recording;
 use crate::diagnose::contract::Contract;
 use crate::diagnose::Diagnosis;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::pipeline::FitOutcome;
 use crate::fit::predict::coefficient_sigma;
 use crate::output::{check_writable, json, write_atomic};
@@ -287,7 +287,8 @@ pub(super) fn trend(a: TrendArgs, out: &mut dyn Write) -> Result<()> {
             clock::bound("--reference-to", t, true)?,
         ),
         (_, _, Some(0)) => {
-            return Err(HostError::msg(
+            return Err(HostError::new(
+                ErrorKind::Invalid,
                 "--reference-first 0: the limits need reference units (2 or more)",
             ))
         }

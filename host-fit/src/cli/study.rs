@@ -5,7 +5,7 @@ use crate::analysis::{analyse, table};
 use crate::blob::build_blob;
 use crate::data::recording::Recording;
 use crate::diagnose::contract::BlobNote;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::output::{check_writable, json, write_atomic};
 use crate::progress::with_progress;
 use crate::simulate::{SimConfig, TrueUnit};
@@ -81,6 +81,7 @@ fn twin_truth(path: &Path, rec: &Recording) -> Result<TrueUnit> {
     let text = std::fs::read_to_string(path).map_err(|e| HostError::io(path, &e))?;
     let bad = |e: serde_json::Error| {
         HostError::in_file(
+            ErrorKind::Malformed,
             path,
             format!("is not a twin's truth (`simulate --truth`): {e}"),
         )
@@ -90,6 +91,7 @@ fn twin_truth(path: &Path, rec: &Recording) -> Result<TrueUnit> {
         SimConfig::deserialize(v.get("config").unwrap_or(&serde_json::Value::Null)).map_err(bad)?;
     if cfg.unit.serial != rec.unit {
         return Err(HostError::in_file(
+            ErrorKind::Mismatch,
             path,
             format!(
                 "is the truth of unit `{}`, the recording is of unit `{}`",
@@ -97,7 +99,7 @@ fn twin_truth(path: &Path, rec: &Recording) -> Result<TrueUnit> {
             ),
         ));
     }
-    TrueUnit::new(&cfg).map_err(|e| HostError::in_file(path, e.message))
+    TrueUnit::new(&cfg).map_err(|e| e.within(path))
 }
 
 pub(super) fn blind(a: BlindArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {

@@ -1,7 +1,7 @@
 //! The recording reader, exactly per recording-format.md (version 1), and its dwells.
 use crate::data::fields::{self, number as parse_num, temperature as parse_temp};
 use crate::data::positions::Positions;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -45,6 +45,7 @@ fn power_off_spans(path: &Path, line: usize, v: &str) -> Result<Vec<[f64; 2]>> {
             .map(|(i, _)| i);
         let Some(cut) = cut else {
             return Err(HostError::at_field(
+                ErrorKind::Malformed,
                 path,
                 line,
                 "power_off_s",
@@ -55,6 +56,7 @@ fn power_off_spans(path: &Path, line: usize, v: &str) -> Result<Vec<[f64; 2]>> {
         let end = parse_num(path, line, "power_off_s", span[cut + 1..].trim())?;
         if end < start {
             return Err(HostError::at_field(
+                ErrorKind::Malformed,
                 path,
                 line,
                 "power_off_s",
@@ -178,8 +180,14 @@ impl Recording {
                 break;
             }
             line_no += 1;
-            let mut text = std::str::from_utf8(&buf)
-                .map_err(|_| HostError::at(path, line_no, "is not valid UTF-8 text"))?;
+            let mut text = std::str::from_utf8(&buf).map_err(|_| {
+                HostError::at(
+                    ErrorKind::Malformed,
+                    path,
+                    line_no,
+                    "is not valid UTF-8 text",
+                )
+            })?;
             if line_no == 1 {
                 text = text.strip_prefix('\u{feff}').unwrap_or(text);
             }
@@ -204,6 +212,7 @@ impl Recording {
                     let row = c.parse_row(path, line_no, line, &rec.positions)?;
                     if row.t_s < last_t {
                         return Err(HostError::at_field(
+                            ErrorKind::Malformed,
                             path,
                             line_no,
                             "t_s",
@@ -217,12 +226,14 @@ impl Recording {
         }
         if cols.is_none() {
             return Err(HostError::in_file(
+                ErrorKind::Malformed,
                 path,
                 "no header row: the file is empty or holds only comments (need t_s,position,temp_c,ux_v,uy_v,uz_v)",
             ));
         }
         if rec.rows.is_empty() {
             return Err(HostError::at(
+                ErrorKind::Insufficient,
                 path,
                 line_no,
                 "no data rows after the header",
@@ -243,6 +254,7 @@ impl Recording {
         match k.as_str() {
             "format" if v != "at-recording/1" => {
                 return Err(HostError::at_field(
+                    ErrorKind::Unsupported,
                     &self.path,
                     line,
                     "format",
@@ -489,6 +501,7 @@ impl Columns {
         for (i, n) in names.iter().enumerate() {
             if names.iter().take(i).any(|m| m == n) {
                 return Err(HostError::at_field(
+                    ErrorKind::Malformed,
                     path,
                     line,
                     n,
@@ -531,6 +544,7 @@ impl Columns {
                 ""
             };
             return Err(HostError::at(
+                ErrorKind::Malformed,
                 path,
                 line,
                 format!(
@@ -549,6 +563,7 @@ impl Columns {
         } else {
             Some(positions.index(pname).ok_or_else(|| {
                 HostError::at_field(
+                    ErrorKind::Malformed,
                     path,
                     line,
                     "position",

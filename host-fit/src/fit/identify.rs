@@ -1,7 +1,7 @@
 //! Identification of the 12 coefficients: observation windows, stops, and the per-stop
 //! least squares that reduces to the paper's formula (10).
 use crate::data::recording::{Dwell, Recording};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::lsq::weighted_lsq;
 use crate::fit::noise::Noise;
 use firmware_core::model::{K_INDEX, U0_INDEX};
@@ -227,6 +227,7 @@ pub fn identify_stop(rec: &Recording, stop: &Stop, noise: &Noise) -> Result<Stop
             .collect();
         let (k, u0, e2, se) = axis_lsq(axis, &rows).ok_or_else(|| {
             HostError::in_file(
+                ErrorKind::Insufficient,
                 &rec.path,
                 format!(
                     "at the stop at {:.2} C the positions present ({}) do not determine the coefficients: need at least 4 positions not in one plane (e.g. TP1..TP6)",

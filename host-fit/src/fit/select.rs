@@ -9,7 +9,7 @@
 //! ([`crate::fit::folds`]): every candidate is scored on the same held-out dwells, and
 //! none is lost to the fold design.
 use crate::data::positions::Positions;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::folds::{design, FoldDesign};
 use crate::fit::identify::Obs;
 use crate::fit::temperature::{fit_joint, temperature_clusters, Basis, ModelFit, Setting};
@@ -247,6 +247,7 @@ pub fn choose_among(
     let all = candidates(&temps);
     if !all.iter().any(keep) {
         return Err(HostError::in_file(
+            ErrorKind::Insufficient,
             path,
             format!(
                 "no model of that family can be fitted to calibration data at {} temperature(s)",
@@ -274,6 +275,7 @@ pub fn choose_among(
         .map(|(b, s)| (b.clone(), s))
         .ok_or_else(|| {
             HostError::in_file(
+                ErrorKind::Insufficient,
                 path,
                 format!(
                     "no dwell of the {} calibration dwells can be held out without leaving the model undetermined: too few positions or temperatures for cross-validation (give --model)",

@@ -1,7 +1,7 @@
 //! The twin's configuration, as read from TOML (`examples/sim/all-effects.toml`
 //! documents every option); every section optional, unknown keys refused.
 use crate::data::output_unit::OutputUnit;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use serde::{Deserialize, Serialize};
 
 /// The whole simulation, as read from TOML (every section optional).
@@ -63,9 +63,10 @@ impl Output {
             OutputUnit::MilliG | OutputUnit::Counts => 1000.0 / NOMINAL_V_PER_G,
             OutputUnit::MetresPerS2 => 9.80665 / NOMINAL_V_PER_G,
             OutputUnit::Other(u) => {
-                return Err(HostError::msg(format!(
-                    "output.unit `{u}`: expected V, mV, m/s2, g, mg or counts"
-                )))
+                return Err(HostError::new(
+                    ErrorKind::Invalid,
+                    format!("output.unit `{u}`: expected V, mV, m/s2, g, mg or counts"),
+                ))
             }
         };
         let per_v = if self.per_v == 0.0 {
@@ -74,7 +75,8 @@ impl Output {
             self.per_v
         };
         if !(per_v.is_finite() && per_v > 0.0) {
-            return Err(HostError::msg(
+            return Err(HostError::new(
+                ErrorKind::Invalid,
                 "output.per_v must be > 0 (0: the unit's default)",
             ));
         }
@@ -82,12 +84,18 @@ impl Output {
             (OutputUnit::Counts, 0.0) => 1.0,
             (OutputUnit::Counts, q) if q >= 1.0 && q.fract() == 0.0 => q,
             (OutputUnit::Counts, q) => {
-                return Err(HostError::msg(format!(
-                    "output.quantum {q}: counts step by a whole number of counts (>= 1)"
-                )))
+                return Err(HostError::new(
+                    ErrorKind::Invalid,
+                    format!("output.quantum {q}: counts step by a whole number of counts (>= 1)"),
+                ))
             }
             (_, q) if q.is_finite() && q >= 0.0 => q,
-            (_, q) => return Err(HostError::msg(format!("output.quantum {q} must be >= 0"))),
+            (_, q) => {
+                return Err(HostError::new(
+                    ErrorKind::Invalid,
+                    format!("output.quantum {q} must be >= 0"),
+                ))
+            }
         };
         Ok((per_v, step))
     }
@@ -598,8 +606,8 @@ pub fn parse_config(path: &std::path::Path, text: &str) -> Result<SimConfig> {
             .span()
             .map(|s| text.get(..s.start).unwrap_or(text).matches('\n').count() + 1);
         match line {
-            Some(l) => HostError::at(path, l, e.message().to_string()),
-            None => HostError::in_file(path, e.message().to_string()),
+            Some(l) => HostError::at(ErrorKind::Malformed, path, l, e.message().to_string()),
+            None => HostError::in_file(ErrorKind::Malformed, path, e.message().to_string()),
         }
     })
 }

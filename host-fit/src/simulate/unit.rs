@@ -1,6 +1,6 @@
 //! The simulated unit's true coefficients against temperature: the paper unit (its
 //! Tables 1-2 and the rows designed in docs/paper-unit.md) or a configured table.
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::simulate::config::{Bend, Curvature, SimConfig};
 
 /// The built-in paper unit: the paper's Tables 1-2 at -40, +20, +70 C, and at -10 and
@@ -100,13 +100,15 @@ impl TrueUnit {
             "paper" => (PAPER_UNIT_TEMPS.to_vec(), PAPER_UNIT.to_vec()),
             "table" => (cfg.unit.temps_c.clone(), cfg.unit.coeffs.clone()),
             m => {
-                return Err(HostError::msg(format!(
-                    "unit.model `{m}`: expected `paper` or `table`"
-                )))
+                return Err(HostError::new(
+                    ErrorKind::Invalid,
+                    format!("unit.model `{m}`: expected `paper` or `table`"),
+                ))
             }
         };
         if temps.is_empty() || temps.len() != rows.len() || temps.windows(2).any(|w| w[0] >= w[1]) {
-            return Err(HostError::msg(
+            return Err(HostError::new(
+                ErrorKind::Invalid,
                 "unit.temps_c must be strictly increasing, one per row of unit.coeffs",
             ));
         }
@@ -114,9 +116,10 @@ impl TrueUnit {
             "poly" => true,
             "pwl" => false,
             m => {
-                return Err(HostError::msg(format!(
-                    "unit.interp `{m}`: expected `poly` or `pwl`"
-                )))
+                return Err(HostError::new(
+                    ErrorKind::Invalid,
+                    format!("unit.interp `{m}`: expected `poly` or `pwl`"),
+                ))
             }
         };
         Ok(TrueUnit {

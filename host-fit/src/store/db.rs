@@ -4,7 +4,7 @@
 use super::fault::{db_error, BUSY_TIMEOUT};
 use super::record::{coefficient_columns, Command, Invocation, Record, COEFFS};
 use super::schema;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use rusqlite::{params_from_iter, Connection, OpenFlags, TransactionBehavior};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -25,6 +25,7 @@ fn check_file(path: &Path) -> Result<()> {
     let len = f.metadata().map_err(|e| HostError::io(path, &e))?.len();
     if len == 0 {
         return Err(HostError::in_file(
+            ErrorKind::Store,
             path,
             "is empty (0 bytes): not a record store (a store cut to nothing?); it is left as it is: restore it, or give a path that does not exist yet for a new store",
         ));
@@ -32,12 +33,14 @@ fn check_file(path: &Path) -> Result<()> {
     let mut head = [0u8; 100];
     if len < 100 || f.read_exact(&mut head).is_err() {
         return Err(HostError::in_file(
+            ErrorKind::Store,
             path,
             format!("is {len} bytes: too short for an SQLite database header (100 bytes), not a record store or one cut short; it is left as it is"),
         ));
     }
     if &head[..16] != b"SQLite format 3\0" {
         return Err(HostError::in_file(
+            ErrorKind::Store,
             path,
             "is not a record store (not an SQLite database); it is left as it is",
         ));
@@ -53,6 +56,7 @@ fn check_file(path: &Path) -> Result<()> {
     let in_use = std::fs::metadata(&wal).is_ok_and(|m| m.len() > 0);
     if valid && !in_use && len < page * pages {
         return Err(HostError::in_file(
+            ErrorKind::Store,
             path,
             format!("the record store is cut short: its header states {pages} pages of {page} bytes ({} bytes), the file has {len}; it is left as it is: restore it from a copy", page * pages),
         ));
@@ -191,6 +195,7 @@ impl Store {
     fn open_with(path: &Path, create: bool) -> Result<Store> {
         if path.is_dir() {
             return Err(HostError::in_file(
+                ErrorKind::Invalid,
                 path,
                 "is a folder: give the record store's file (e.g. this folder/records.sqlite)",
             ));
@@ -198,6 +203,7 @@ impl Store {
         let exists = path.exists();
         if !exists && !create {
             return Err(HostError::in_file(
+                ErrorKind::Store,
                 path,
                 "no record store here: give the --db of a fit, verify, diagnose or batch (a batch writes records.sqlite in its output folder)",
             ));
@@ -295,9 +301,12 @@ impl Writer {
     /// Write what is left and return how many records were written, or the first error.
     pub fn finish(self) -> Result<usize> {
         drop(self.tx);
-        self.handle
-            .join()
-            .map_err(|_| HostError::msg("the record store's writer stopped unexpectedly"))?
+        self.handle.join().map_err(|_| {
+            HostError::new(
+                ErrorKind::Internal,
+                "the record store's writer stopped unexpectedly",
+            )
+        })?
     }
 }
 
@@ -408,6 +417,7 @@ mod tests {
         let text = dir.path().join("notes.txt");
         std::fs::write(&text, "x".repeat(500)).unwrap();
         let e = Store::open(&text).err().unwrap();
+        assert_eq!(e.kind(), ErrorKind::Store);
         assert!(
             e.to_string().contains("notes.txt") && e.message.contains("not an SQLite database"),
             "{e}"
@@ -416,10 +426,12 @@ mod tests {
         let empty = dir.path().join("empty.sqlite");
         std::fs::write(&empty, "").unwrap();
         let e = Store::open(&empty).err().unwrap();
+        assert_eq!(e.kind(), ErrorKind::Store);
         assert!(e.message.contains("is empty"), "{e}");
         assert_eq!(std::fs::metadata(&empty).unwrap().len(), 0);
         let missing = dir.path().join("none.sqlite");
         let e = Store::open_existing(&missing).err().unwrap();
+        assert_eq!(e.kind(), ErrorKind::Store);
         assert!(e.message.contains("no record store"), "{e}");
         assert!(!missing.exists());
         // a store cut to half its length
@@ -432,6 +444,7 @@ mod tests {
         let full = std::fs::read(&p).unwrap();
         std::fs::write(&p, &full[..full.len() / 2]).unwrap();
         let e = Store::open(&p).err().unwrap();
+        assert_eq!(e.kind(), ErrorKind::Store);
         assert!(e.message.contains("cut short"), "{e}");
         assert_eq!(std::fs::read(&p).unwrap().len(), full.len() / 2);
     }

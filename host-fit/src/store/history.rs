@@ -4,7 +4,7 @@
 use super::db::{record_columns, Store};
 use super::fault::db_error;
 use super::record::{AtT0, Command, Judged, Record, RunId, COEFFS};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use rusqlite::types::ValueRef;
 use rusqlite::{Row, ToSql};
 use serde::Serialize;
@@ -262,9 +262,12 @@ impl History {
 pub fn stored_blob(store: &Store, serial: &str, run: &str) -> Result<(RunId, Vec<u8>)> {
     let run = run.to_ascii_lowercase();
     if run.len() < 6 || run.len() > 32 || !run.bytes().all(|c| c.is_ascii_hexdigit()) {
-        return Err(HostError::msg(format!(
-            "--blob `{run}` is not a run id (32 hex digits, or the first 6 or more of them)"
-        )));
+        return Err(HostError::new(
+            ErrorKind::Invalid,
+            format!(
+                "--blob `{run}` is not a run id (32 hex digits, or the first 6 or more of them)"
+            ),
+        ));
     }
     let e = |e| db_error(store.path(), e);
     let mut st = store
@@ -288,6 +291,7 @@ pub fn stored_blob(store: &Store, serial: &str, run: &str) -> Result<(RunId, Vec
     let (id, unit, blob, crc) = match hits.as_slice() {
         [] => {
             return Err(HostError::in_file(
+                ErrorKind::Store,
                 store.path(),
                 format!("no run `{run}` in the record store"),
             ))
@@ -295,6 +299,7 @@ pub fn stored_blob(store: &Store, serial: &str, run: &str) -> Result<(RunId, Vec
         [one] => one.clone(),
         many => {
             return Err(HostError::in_file(
+                ErrorKind::Invalid,
                 store.path(),
                 format!(
                     "`{run}` starts {} run ids ({}): give more digits",
@@ -309,12 +314,14 @@ pub fn stored_blob(store: &Store, serial: &str, run: &str) -> Result<(RunId, Vec
     };
     if unit != serial {
         return Err(HostError::in_file(
+            ErrorKind::Mismatch,
             store.path(),
             format!("run {id} is of unit `{unit}`, not `{serial}`"),
         ));
     }
     let blob = blob.ok_or_else(|| {
         HostError::in_file(
+            ErrorKind::Store,
             store.path(),
             format!("run {id} made no blob (a run that failed, or a diagnosis without --out)"),
         )
@@ -324,12 +331,17 @@ pub fn stored_blob(store: &Store, serial: &str, run: &str) -> Result<(RunId, Vec
     let computed = (n >= 4).then(|| firmware_core::crc::crc32(&blob[..n - 4]));
     if trailer.is_none() || trailer != computed || crc != trailer.map(i64::from) {
         return Err(HostError::in_file(
+            ErrorKind::Blob,
             store.path(),
             format!("the stored blob of run {id} fails its CRC check (stored {crc:?}, trailer {trailer:?}, computed {computed:?}): not re-issued"),
         ));
     }
     let rid = RunId::parse(&id).ok_or_else(|| {
-        HostError::in_file(store.path(), format!("run id `{id}` is not 32 hex digits"))
+        HostError::in_file(
+            ErrorKind::Store,
+            store.path(),
+            format!("run id `{id}` is not 32 hex digits"),
+        )
     })?;
     Ok((rid, blob))
 }

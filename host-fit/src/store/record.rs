@@ -1,7 +1,7 @@
 //! One record of the store: what a run of `fit`, `verify`, `diagnose`, `batch` (one per
 //! unit) or `demo` (one per model) made of one unit, with where it came from (the run
 //! id, the tool's version and commit, the command and its options, the input's SHA-256).
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use firmware_core::model::{COEFF_NAMES, N_COEFFS};
 use serde::ser::SerializeStruct;
 use serde::{Serialize, Serializer};
@@ -21,8 +21,9 @@ impl RunId {
     /// A fresh id from the operating system's random source.
     pub fn fresh() -> Result<RunId> {
         let mut b = [0u8; 16];
-        getrandom::fill(&mut b)
-            .map_err(|e| HostError::msg(format!("no random source for a run id: {e}")))?;
+        getrandom::fill(&mut b).map_err(|e| {
+            HostError::new(ErrorKind::Io, format!("no random source for a run id: {e}"))
+        })?;
         Ok(RunId(b))
     }
 
@@ -162,7 +163,10 @@ pub fn blob_crc(blob: &[u8]) -> Option<u32> {
 pub fn stamp(blob: &[u8], run: RunId) -> Result<Vec<u8>> {
     use firmware_core::blob::{Blob, MAX_BLOB_LEN};
     let err = |e: firmware_core::error::Error| {
-        HostError::msg(format!("cannot stamp the blob with its run id: {e}"))
+        HostError::new(
+            ErrorKind::Blob,
+            format!("cannot stamp the blob with its run id: {e}"),
+        )
     };
     let mut b = Blob::decode(blob).map_err(err)?;
     b.run_id = firmware_core::blob::RunId(run.0);
@@ -312,8 +316,12 @@ impl Record {
     /// Fill the diagnosis columns from a diagnosis' JSON contract (its `verdict` and
     /// `findings`, as the contract itself serialises them).
     pub fn with_diagnosis(&mut self, contract: &impl Serialize) -> Result<()> {
-        let v = serde_json::to_value(contract)
-            .map_err(|e| HostError::msg(format!("cannot encode the diagnosis: {e}")))?;
+        let v = serde_json::to_value(contract).map_err(|e| {
+            HostError::new(
+                ErrorKind::Internal,
+                format!("cannot encode the diagnosis: {e}"),
+            )
+        })?;
         self.diagnosis_verdict = v["verdict"].as_str().map(String::from);
         self.findings = Some(v["findings"].clone());
         Ok(())
@@ -322,11 +330,18 @@ impl Record {
     /// Fill the acceptance from a typed verdict (serialised as it is everywhere) and its
     /// reason.
     pub fn with_verdict(&mut self, verdict: &impl Serialize, reason: &str) -> Result<()> {
-        let v = serde_json::to_value(verdict)
-            .map_err(|e| HostError::msg(format!("cannot encode the verdict: {e}")))?;
-        let name = v
-            .as_str()
-            .ok_or_else(|| HostError::msg(format!("a verdict that is not a name: {v}")))?;
+        let v = serde_json::to_value(verdict).map_err(|e| {
+            HostError::new(
+                ErrorKind::Internal,
+                format!("cannot encode the verdict: {e}"),
+            )
+        })?;
+        let name = v.as_str().ok_or_else(|| {
+            HostError::new(
+                ErrorKind::Internal,
+                format!("a verdict that is not a name: {v}"),
+            )
+        })?;
         self.judged = Some(Judged {
             verdict: name.to_string(),
             reason: reason.to_string(),
@@ -391,6 +406,7 @@ mod tests {
         std::fs::write(&p, "abc").unwrap();
         assert_eq!(sha256_file(&p).unwrap(), abc);
         let e = sha256_file(&dir.path().join("missing")).unwrap_err();
+        assert_eq!(e.kind(), crate::error::ErrorKind::Io);
         assert!(e.to_string().contains("missing"), "{e}");
     }
 

@@ -4,7 +4,7 @@
 //! migration runs in one transaction, so a store is at one version or the next, never
 //! between.
 use super::record::{coefficient_columns, Command};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use rusqlite::{Connection, TransactionBehavior};
 use std::path::Path;
 
@@ -86,12 +86,14 @@ fn version(conn: &Connection, path: &Path, known: i64) -> Result<(i64, bool)> {
     let empty = app == 0 && version == 0 && objects == 0;
     if !empty && app != APPLICATION_ID {
         return Err(HostError::in_file(
+            ErrorKind::Store,
             path,
             format!("is an SQLite database but not a host-fit record store (application id {app:#x}, {objects} tables and indexes): left as it is; give the path of a record store, or of a new file"),
         ));
     }
     if version > known {
         return Err(HostError::in_file(
+            ErrorKind::Store,
             path,
             format!("is a record store of schema version {version}; this host-fit ({}) reads versions up to {known}: use a newer host-fit (the store is left as it is)", env!("CARGO_PKG_VERSION")),
         ));
@@ -109,6 +111,7 @@ pub fn prepare(conn: &mut Connection, path: &Path, create: bool, steps: &[String
     }
     if empty && !create {
         return Err(HostError::in_file(
+            ErrorKind::Store,
             path,
             "is an empty database, not a record store (no fit, verify, diagnose or batch has written to it)",
         ));
@@ -121,6 +124,7 @@ pub fn prepare(conn: &mut Connection, path: &Path, create: bool, steps: &[String
     for (i, step) in steps.iter().enumerate().skip(v as usize) {
         tx.execute_batch(step).map_err(|e| {
             HostError::in_file(
+                ErrorKind::Store,
                 path,
                 format!(
                     "migration of the record store to version {} failed (nothing changed): {e}",
@@ -165,6 +169,7 @@ mod tests {
         let mut v3 = v2.clone();
         v3.push("ALTER TABLE runs ADD COLUMN x TEXT; SELECT * FROM no_such_table;".into());
         let e = prepare(&mut c, &p, false, &v3).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Store);
         assert!(e.message.contains("version 3 failed"), "{e}");
         let (v, _) = version(&c, &p, 3).unwrap();
         assert_eq!(v, 2);
@@ -182,6 +187,7 @@ mod tests {
         assert_eq!(n, 1);
         // and this host-fit (version 1) refuses the version-2 store, naming the version
         let e = prepare(&mut c, &p, false, &v1).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Store);
         assert!(e.message.contains("schema version 2"), "{e}");
         assert!(e.message.contains("up to 1"), "{e}");
     }
@@ -213,10 +219,12 @@ mod tests {
         let mut c = open(&p);
         c.execute_batch("CREATE TABLE notes (x TEXT);").unwrap();
         let e = prepare(&mut c, &p, true, &migrations()).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Store);
         assert!(e.message.contains("not a host-fit record store"), "{e}");
         let q = dir.path().join("empty.sqlite");
         let mut c = open(&q);
         let e = prepare(&mut c, &q, false, &migrations()).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Store);
         assert!(e.message.contains("empty database"), "{e}");
     }
 }

@@ -15,7 +15,7 @@
 //! Monte-Carlo tests hold every one of these rates.
 use super::db::Store;
 use super::fault::db_error;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use firmware_core::model::COEFF_NAMES;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -179,7 +179,7 @@ pub fn parse_rules(s: &str) -> Result<Vec<Rule>> {
             .ok()
             .and_then(Rule::from_number)
             .ok_or_else(|| {
-                HostError::msg(format!(
+                HostError::new(ErrorKind::Invalid, format!(
                     "--rules `{s}`: `{p}` is not a rule: Nelson's numbers 1 to 8, comma-separated, or `all`"
                 ))
             })?;
@@ -493,6 +493,7 @@ pub fn trend(store: &Store, reference: Reference, rules: &[Rule]) -> Result<Tren
     let (units, coeffs, out_units, dg) = load(store)?;
     if units.is_empty() {
         return Err(HostError::in_file(
+            ErrorKind::Insufficient,
             store.path(),
             "holds no calibration (no fit, diagnose --out, batch or demo record): nothing to chart",
         ));
@@ -752,6 +753,7 @@ mod tests {
         );
         assert_eq!(parse_rules("all").unwrap().len(), 8);
         let e = parse_rules("1,9").unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Invalid);
         assert!(e.message.contains("`9`"), "{e}");
     }
 }

@@ -15,8 +15,21 @@ use crate::verify::Verification;
 use serde::Serialize;
 
 /// What becomes of verification dwells outside the blob's valid range.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    Default,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "lowercase")]
 pub enum OutsideRange {
     /// They make the verdict `fail`: the unit was tested where its blob claims nothing.
     #[default]
@@ -86,8 +99,20 @@ impl Spec {
 }
 
 /// The verdict.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "snake_case")]
 pub enum Verdict {
     /// Every band judged, every judged dwell within its limit, none outside the valid
     /// range (or those reported apart).
@@ -102,17 +127,25 @@ pub enum Verdict {
 impl Verdict {
     /// `pass`, `fail` or `not_judged`.
     pub fn name(self) -> &'static str {
-        match self {
-            Verdict::Pass => "pass",
-            Verdict::Fail => "fail",
-            Verdict::NotJudged => "not_judged",
-        }
+        self.into()
     }
 }
 
 /// A band of the specification.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "snake_case")]
 pub enum Band {
     /// Within `t0_band_c` of T0.
     NearT0,

@@ -20,27 +20,43 @@ use firmware_core::compensate::{ErrorModel, Method};
 use serde::{Deserialize, Serialize};
 
 /// How a row's outputs were compensated.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str", try_from = "String")]
 pub enum Compensation {
     /// Not at all: the T0 constants.
-    #[serde(rename = "none")]
+    #[strum(serialize = "none")]
     None,
     /// Method 1: correct the constants.
-    #[serde(rename = "1")]
+    #[strum(serialize = "1")]
     Method1,
     /// Method 2: correct the result.
-    #[serde(rename = "2")]
+    #[strum(serialize = "2")]
     Method2,
 }
 
 impl Compensation {
     /// `none`, `1` or `2`, as summary.json and the table write it.
     pub fn name(self) -> &'static str {
-        match self {
-            Compensation::None => "none",
-            Compensation::Method1 => "1",
-            Compensation::Method2 => "2",
-        }
+        self.into()
+    }
+}
+
+impl TryFrom<String> for Compensation {
+    type Error = strum::ParseError;
+    fn try_from(s: String) -> std::result::Result<Self, Self::Error> {
+        s.parse()
     }
 }
 

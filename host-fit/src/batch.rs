@@ -38,8 +38,20 @@ pub const OUTLIER_Z: f64 = 3.5;
 pub const RECORD_CHUNK: usize = 64;
 
 /// How a unit of the batch ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "snake_case")]
 pub enum UnitStatus {
     /// Fitted, and its blob passed acceptance.
     Pass,
@@ -54,12 +66,7 @@ pub enum UnitStatus {
 impl UnitStatus {
     /// `pass`, `fail`, `not_judged` or `error`, as the summary writes it.
     pub fn name(self) -> &'static str {
-        match self {
-            UnitStatus::Pass => "pass",
-            UnitStatus::Fail => "fail",
-            UnitStatus::NotJudged => "not_judged",
-            UnitStatus::Error => "error",
-        }
+        self.into()
     }
 }
 
@@ -70,12 +77,6 @@ impl From<Verdict> for UnitStatus {
             Verdict::Fail => UnitStatus::Fail,
             Verdict::NotJudged => UnitStatus::NotJudged,
         }
-    }
-}
-
-impl std::fmt::Display for UnitStatus {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
     }
 }
 

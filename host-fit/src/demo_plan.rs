@@ -23,8 +23,20 @@ use firmware_core::temperature::Calibration;
 use serde::Serialize;
 
 /// How the plan's target was set.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
-#[serde(rename_all = "snake_case")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "snake_case")]
 pub enum TargetFrom {
     /// The paper test's own predicted worst |dg| (the same prediction as the
     /// candidates', on the same verification block): the shortest plan at least as

@@ -11,24 +11,43 @@ use crate::diagnose::EffectId;
 use crate::rng::Rng;
 use crate::simulate::{Bend, Fixture, Gradient, PerAxis, SimConfig, Stop, Warmup};
 
-/// What a case tests.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// What a case tests. Its own name (`blind --class`) is short; [`Class::name`] is the
+/// report's.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
 pub enum Class {
     /// Catalogue effects in the catalogue's own form (and clean recordings).
+    #[strum(serialize = "catalogue")]
     Catalogue,
     /// A catalogue effect in another physically plausible form.
+    #[strum(serialize = "other-forms")]
     OtherForm,
     /// An effect outside the catalogue.
+    #[strum(serialize = "outside")]
     Outside,
     /// A clean recording with a real-world nuisance.
+    #[strum(serialize = "nuisances")]
     Nuisance,
     /// A slow disturbance of the bias with no power-on behind it.
+    #[strum(serialize = "slow")]
     SlowDisturbance,
     /// A digital output of a few counts per g.
+    #[strum(serialize = "digital")]
     Digital,
     /// A fixture re-clamped between two stops.
+    #[strum(serialize = "re-clamped")]
     FixtureChange,
     /// Three catalogue effects at 0.3-1x their nominal sizes.
+    #[strum(serialize = "mixtures")]
     Mixture,
 }
 

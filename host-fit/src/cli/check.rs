@@ -18,7 +18,7 @@ use std::io::Write;
 struct Verified<'a> {
     unit: &'a str,
     blob_serial: &'a str,
-    method: &'a str,
+    method: String,
     dwells: &'a [DwellCheck],
     max_by_temperature: &'a [TempMax],
     #[serde(flatten)]

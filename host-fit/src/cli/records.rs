@@ -66,7 +66,17 @@ impl Command {
             Command::Verify(a) => Some(&mut a.record),
             Command::Diagnose(a) => Some(&mut a.record),
             Command::Batch(a) => Some(&mut a.record),
-            _ => None,
+            Command::TempFit(_)
+            | Command::Identify(_)
+            | Command::Report(_)
+            | Command::Blind(_)
+            | Command::Simulate(_)
+            | Command::Plan(_)
+            | Command::Demo(_)
+            | Command::FwVectors(_)
+            | Command::Inspect(_)
+            | Command::History(_)
+            | Command::Trend(_) => None,
         }
     }
 }

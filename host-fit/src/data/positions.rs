@@ -6,22 +6,34 @@ use serde::Serialize;
 use std::path::Path;
 
 /// What a position's dwells are used for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(ascii_case_insensitive)]
 pub enum Role {
     /// Fitted: identification and temperature models (TP1..TP6 by default).
+    #[strum(to_string = "calibration", serialize = "cal")]
     Calibration,
     /// Held out of every fit and used to judge it, formula (13) (PP1..PP6 by default).
+    #[strum(to_string = "verification", serialize = "check")]
     Verification,
 }
 
 impl Role {
+    /// The role a positions file's `role` column names (either case; `cal` and `check`
+    /// for short).
     fn parse(s: &str) -> Option<Role> {
-        match s.to_ascii_lowercase().as_str() {
-            "calibration" | "cal" => Some(Role::Calibration),
-            "verification" | "check" => Some(Role::Verification),
-            _ => None,
-        }
+        s.parse().ok()
     }
 }
 

@@ -10,11 +10,22 @@ use crate::diagnose::search::Research;
 use crate::diagnose::Diagnosis;
 use firmware_core::model::AXES;
 use serde::Serialize;
-use std::fmt;
 
 /// What the diagnosis concludes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "snake_case")]
 pub enum Verdict {
     /// At the floor, nothing found: the model fits to the noise.
     None,
@@ -39,12 +50,7 @@ impl Verdict {
 
     /// The contract's name.
     pub fn as_str(self) -> &'static str {
-        match self {
-            Verdict::None => "none",
-            Verdict::Explained => "explained",
-            Verdict::PartlyExplained => "partly_explained",
-            Verdict::Unexplained => "unexplained",
-        }
+        self.into()
     }
 
     /// What it means, in words.
@@ -57,12 +63,6 @@ impl Verdict {
                 "above the floor, and nothing in the catalogue explains it; located above"
             }
         }
-    }
-}
-
-impl fmt::Display for Verdict {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
     }
 }
 

@@ -28,7 +28,18 @@ pub enum ModelKind {
 }
 
 /// Identification route.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[strum(serialize_all = "kebab-case")]
 pub enum Route {
     /// The dwells taken in thermal equilibrium (temperature span <= 0.5 C), each window
     /// at its own temperature, all at once.
@@ -46,12 +57,7 @@ pub enum Route {
 impl Route {
     /// The name used in outputs.
     pub fn name(self) -> &'static str {
-        match self {
-            Route::Static => "static",
-            Route::Joint => "joint",
-            Route::PerStop => "per-stop",
-            Route::Dynamic => "dynamic",
-        }
+        self.into()
     }
 }
 

@@ -277,7 +277,7 @@ pub(crate) fn check_coverage(basis: &Basis, temps: &[f64]) -> Result<()> {
             }
             Ok(())
         }
-        _ => Ok(()),
+        Basis::Poly { .. } => Ok(()),
     }
 }
 

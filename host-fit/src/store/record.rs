@@ -47,8 +47,20 @@ impl std::fmt::Display for RunId {
 }
 
 /// The command that made a record (a closed set; the store's `command` column).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "lowercase")]
 pub enum Command {
     /// `host-fit fit`.
     Fit,
@@ -74,18 +86,12 @@ impl Command {
 
     /// Its name on the command line and in the store.
     pub fn name(self) -> &'static str {
-        match self {
-            Command::Fit => "fit",
-            Command::Verify => "verify",
-            Command::Diagnose => "diagnose",
-            Command::Batch => "batch",
-            Command::Demo => "demo",
-        }
+        self.into()
     }
 
     /// The command of a name in the store.
     pub fn from_name(s: &str) -> Option<Command> {
-        Command::ALL.into_iter().find(|c| c.name() == s)
+        s.parse().ok()
     }
 }
 

@@ -220,7 +220,7 @@ fn fit_unit(path: &Path, out: &Path, o: &BatchOptions, r: &mut UnitResult) -> Re
     if let Some(t) = &o.store {
         let mut rc = t.record(Recorded::Batch, &r.unit, path)?;
         rc.input_sha256 = Some(sha);
-        rc.output_unit = Some(rec.output_unit.clone());
+        rc.output_unit = Some(rec.output_unit.to_string());
         rc.model = Some(r.model.clone());
         rc.at_t0 = Some(AtT0 {
             t0_c: cal.t0_c,

@@ -1,14 +1,13 @@
 //! From a fitted model to a flashed blob and back: f32 tables, the f32-vs-f64 check,
 //! encoding, reading a blob file, and what `inspect` shows of it.
+use crate::data::output_unit::OutputUnit;
 use crate::data::recording::Recording;
 use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::noise::Noise;
 use crate::fit::pipeline::FitOutcome;
 use crate::fit::predict::{directions, sigma_dwell_noise};
 use crate::fit::temperature::ModelFit;
-use firmware_core::blob::{
-    Blob, OutputUnit, RunId, FORMAT_VERSION, MAGIC, MAX_BLOB_LEN, MAX_SERIAL_LEN,
-};
+use firmware_core::blob::{Blob, RunId, FORMAT_VERSION, MAGIC, MAX_BLOB_LEN, MAX_SERIAL_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
 use firmware_core::model::{Coeffs, COEFF_NAMES};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
@@ -237,7 +236,7 @@ pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Resu
 /// path against [`F32_BOUND_G`]. Returns the blob, its bytes and the measured departure.
 pub fn build_blob(
     serial: &str,
-    output_unit: &str,
+    output_unit: &OutputUnit,
     cal64: &Calibration<f64>,
 ) -> Result<(Blob, Vec<u8>, f64)> {
     let (blob, bytes, (inside, _)) = build_blob_checked(serial, output_unit, cal64)?;
@@ -247,13 +246,13 @@ pub fn build_blob(
 /// [`build_blob`], returning the departure inside the range and beyond it.
 pub fn build_blob_checked(
     serial: &str,
-    output_unit: &str,
+    output_unit: &OutputUnit,
     cal64: &Calibration<f64>,
 ) -> Result<(Blob, Vec<u8>, (f64, f64))> {
     let s = blob_serial(serial)?;
     let blob = Blob {
         serial: s,
-        output_unit: OutputUnit::from_label(output_unit),
+        output_unit: output_unit.in_blob(),
         run_id: RunId::NONE,
         calibration: cal64.convert(),
     };

@@ -58,6 +58,34 @@ fn clap_round_trip<E: clap::ValueEnum + PartialEq + Debug>(names: &[&str]) {
     }
 }
 
+/// A set named by serde alone (a configuration's): each variant is written as its name
+/// and read back from it.
+fn serde_round_trip<E>(named: &[(E, &str)])
+where
+    E: Serialize + serde::de::DeserializeOwned + PartialEq + Debug,
+{
+    for (e, name) in named {
+        let json = serde_json::to_value(e).unwrap();
+        assert_eq!(json, serde_json::Value::String(name.to_string()));
+        assert_eq!(&serde_json::from_value::<E>(json).unwrap(), e);
+    }
+}
+
+#[test]
+fn simulator_unit_model_and_interpolation() {
+    use host_fit::simulate::config::{Interp, UnitModel};
+    serde_round_trip(&[(UnitModel::Paper, "paper"), (UnitModel::Table, "table")]);
+    serde_round_trip(&[(Interp::Poly, "poly"), (Interp::Pwl, "pwl")]);
+    // a configuration naming another is refused at its line
+    let e = host_fit::simulate::parse_config(
+        std::path::Path::new("u.toml"),
+        "[unit]\nmodel = \"paper\"\ninterp = \"spline\"\n",
+    )
+    .unwrap_err();
+    assert_eq!(e.kind(), host_fit::error::ErrorKind::Malformed);
+    assert!(e.to_string().starts_with("u.toml:3:"), "{e}");
+}
+
 #[test]
 fn unit_status() {
     // the summary's and the acceptance verdict's `not_judged` (serde once said `notjudged`)

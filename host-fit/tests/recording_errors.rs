@@ -553,12 +553,11 @@ fn a_100_mb_recording_is_read_with_bounded_memory() {
 }
 
 /// recording-format.md's `output_unit` values (both spellings of m/s2, counts as integers)
-/// are read as they are; any other value is kept as the label and reported once, naming
+/// are read as the unit they name; any other value is kept as the label and reported once, naming
 /// the line.
 #[test]
 fn output_unit_values_are_read_and_an_unknown_one_is_reported() {
-    use host_fit::data::positions::Positions;
-    use host_fit::data::recording::Recording;
+    use host_fit::data::output_unit::OutputUnit;
     let rec = |unit: &str, rows: &str| {
         let text = format!(
             "# format=at-recording/1\n# output_unit={unit}\nt_s,position,temp_c,ux_v,uy_v,uz_v\n{rows}"
@@ -566,11 +565,19 @@ fn output_unit_values_are_read_and_an_unknown_one_is_reported() {
         Recording::from_reader(Path::new("u.csv"), text.as_bytes(), Positions::default()).unwrap()
     };
     let counts = rec("counts", "0,TP1,20.0,12,-7,1003\n1,TP1,20.0,13,-7,1002\n");
-    assert_eq!(counts.output_unit, "counts");
+    assert_eq!(counts.output_unit, OutputUnit::Counts);
     assert_eq!(counts.rows[1].u, [13.0, -7.0, 1002.0]);
-    for u in ["V", "mV", "m/s2", "m/s^2", "g", "mg", "counts"] {
+    for (u, unit) in [
+        ("V", OutputUnit::Volt),
+        ("mV", OutputUnit::Millivolt),
+        ("m/s2", OutputUnit::MetresPerS2),
+        ("m/s^2", OutputUnit::MetresPerS2),
+        ("g", OutputUnit::G),
+        ("mg", OutputUnit::MilliG),
+        ("counts", OutputUnit::Counts),
+    ] {
         let r = rec(u, &good_rows(0));
-        assert_eq!(r.output_unit, u);
+        assert_eq!(r.output_unit, unit, "{u}");
         assert!(
             r.warnings.iter().all(|w| !w.contains("output_unit")),
             "{u}: {:?}",
@@ -578,7 +585,8 @@ fn output_unit_values_are_read_and_an_unknown_one_is_reported() {
         );
     }
     let r = rec("LSB", &good_rows(0));
-    assert_eq!(r.output_unit, "LSB");
+    assert_eq!(r.output_unit, OutputUnit::Other("LSB".into()));
+    assert_eq!(r.output_unit.to_string(), "LSB");
     let w: Vec<&String> = r
         .warnings
         .iter()

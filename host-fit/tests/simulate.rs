@@ -8,7 +8,8 @@ use host_fit::error::ErrorKind;
 use host_fit::fit::identify::{identify_stop, stops};
 use host_fit::fit::noise::noise;
 use host_fit::simulate::{
-    parse_config, simulate, Curvature, Effects, Fixture, PerAxis, SimConfig, Stop, TrueUnit, Warmup,
+    parse_config, simulate, Curvature, Effects, Fixture, Interp, PerAxis, SimConfig, Stop,
+    TrueUnit, UnitModel, Warmup,
 };
 use std::path::Path;
 
@@ -604,10 +605,10 @@ fn every_option() -> SimConfig {
         },
         unit: Unit {
             serial: "S".into(),
-            model: "table".into(),
+            model: UnitModel::Table,
             temps_c: vec![20.0],
             coeffs: vec![[0.0; 12]],
-            interp: "pwl".into(),
+            interp: Interp::Pwl,
             noise_v: 2e-5,
             resolution_v: 1e-7,
             noise_corr_s: 1.0,

@@ -2,6 +2,7 @@
 use super::args::{FitArgs, IdentifyArgs, RouteArg, TempFitArgs};
 use super::common::{load_to_fit, oriented, serial, w};
 use crate::blob::{build_blob, Cache, F32_BOUND_G};
+use crate::data::output_unit::OutputUnit;
 use crate::data::table::{read_table, to_csv, TableRow};
 use crate::diagnose::dynamic::{auto, fit_dynamic, Candidate, DynamicFit, Routed, Shape};
 use crate::error::{ErrorKind, HostError, Result};
@@ -64,7 +65,7 @@ pub(super) fn temp_fit(a: TempFitArgs, out: &mut dyn Write) -> Result<()> {
 struct Identified<'a> {
     unit: &'a str,
     /// The outputs' unit: K is in it per g, U0 in it.
-    output_unit: &'a str,
+    output_unit: &'a OutputUnit,
     /// None when no dwell has two samples (a dwell-averaged recording).
     noise_sigma: Option<[f64; 3]>,
     stops: Vec<IdentifiedStop<'a>>,
@@ -132,7 +133,7 @@ pub(super) fn identify(a: IdentifyArgs, out: &mut dyn Write, err: &mut dyn Write
             "no dwell has two samples: the noise is not known, and the standard errors below are for unit noise (relative only)".to_string()
         };
         w(out, format!("unit {}  {noise_line}", rec.unit))?;
-        w(out, identified_text(&st, &rec.output_unit))
+        w(out, identified_text(&st, rec.output_unit.as_str()))
     }
 }
 

@@ -136,7 +136,7 @@ impl Run<'_> {
         let mut store = Store::open(&t.db)?;
         let mut r = t.record(command, self.serial, &self.rec.path)?;
         r.input_sha256 = Some(sha256_file(&self.rec.path)?);
-        r.output_unit = Some(self.rec.output_unit.clone());
+        r.output_unit = Some(self.rec.output_unit.to_string());
         fill(&mut r)?;
         store.append(std::slice::from_mut(&mut r))?;
         let _ = writeln!(

@@ -1,5 +1,6 @@
 //! The recording reader, exactly per recording-format.md (version 1), and its dwells.
 use crate::data::fields::{self, number as parse_num, temperature as parse_temp};
+use crate::data::output_unit::OutputUnit;
 use crate::data::positions::Positions;
 use crate::error::{ErrorKind, HostError, Result};
 use std::collections::BTreeMap;
@@ -107,8 +108,8 @@ pub struct Recording {
     pub unit: String,
     /// Reference temperature (`t0_c`, default 20).
     pub t0_c: f64,
-    /// Output unit (`output_unit`, default `V`).
-    pub output_unit: String,
+    /// Output unit (`output_unit`, default `V`; any other label kept as it is).
+    pub output_unit: OutputUnit,
     /// Spans `[start, end]` (s, on `t_s`) the unit was powered off (`power_off_s`): each
     /// end is a power-on, where the in-flight terms' machines start again.
     pub power_off: Vec<[f64; 2]>,
@@ -158,7 +159,7 @@ impl Recording {
             metadata: BTreeMap::new(),
             unit: String::new(),
             t0_c: 20.0,
-            output_unit: "V".into(),
+            output_unit: OutputUnit::Volt,
             power_off: Vec::new(),
             positions,
             rows: Vec::new(),
@@ -264,14 +265,14 @@ impl Recording {
             "t0_c" => self.t0_c = parse_temp(&self.path, line, "t0_c", &v)?,
             "unit" => self.unit = v.clone(),
             "output_unit" => {
-                let u = crate::data::output_unit::OutputUnit::parse(&v);
+                let u = OutputUnit::parse(&v);
                 if !u.is_known() {
                     self.warnings.push(format!(
                         "{}:{line}: output_unit `{v}` is not one of the format's (V, mV, m/s2, g, mg, counts): kept as the label of the outputs",
                         self.path.display()
                     ));
                 }
-                self.output_unit = v.clone();
+                self.output_unit = u;
             }
             "power_off_s" => self.power_off = power_off_spans(&self.path, line, &v)?,
             _ => {}

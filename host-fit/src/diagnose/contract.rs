@@ -2,6 +2,7 @@
 //! the same structs). Fields beyond the first version: `floor`, `dispersion`, `quality`,
 //! `unexplained`, the verdict `unexplained`, and per finding `form`, `share`,
 //! `heldout_gain`.
+use crate::data::output_unit::OutputUnit;
 use crate::diagnose::findings::{Ambiguity, Finding};
 use crate::diagnose::location::Hotspot;
 use crate::diagnose::metrics::{dispersion, max_dg, normalized_rms, residual_rms};
@@ -77,7 +78,7 @@ pub struct Contract {
     /// not measurable).
     pub noise_sigma_per_sample: [f64; 3],
     /// The recording's output unit.
-    pub output_unit: String,
+    pub output_unit: OutputUnit,
     /// The error floor.
     pub floor: FloorFigures,
     /// Residual chi-square per degree of freedom in floor units (at least 1).
@@ -347,7 +348,7 @@ impl Contract {
             s.push_str("where the baseline residual exceeds the floor (RMS in floor units):\n");
         }
         for x in self.located.iter().take(8) {
-            s.push_str(&hotspot_line(x, &self.output_unit));
+            s.push_str(&hotspot_line(x, self.output_unit.as_str()));
         }
         for n in &self.not_identifiable {
             s.push_str(&format!("not identifiable: {n}\n"));
@@ -383,7 +384,7 @@ impl Contract {
                 u.residual_rms_over_noise
             ));
             for x in u.located.iter().take(6) {
-                s.push_str(&hotspot_line(x, &self.output_unit));
+                s.push_str(&hotspot_line(x, self.output_unit.as_str()));
             }
         }
         for r in &self.research {
@@ -401,7 +402,7 @@ impl Contract {
                 }
             ));
             for x in r.region.iter().take(4) {
-                s.push_str(&hotspot_line(x, &self.output_unit));
+                s.push_str(&hotspot_line(x, self.output_unit.as_str()));
             }
         }
         let fl = &self.flashed;

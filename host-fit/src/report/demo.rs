@@ -355,7 +355,7 @@ fn coeff_plot(oc: &DemoOutcome, c: usize, grid: &[f64], diff: bool) -> Plot {
     let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
         (a.min(v), b.max(v))
     });
-    let unit = &oc.recording.output_unit;
+    let unit = oc.recording.output_unit.as_str();
     // departures by their size; values by how much they change (kxx in mV/g, not V/g)
     let scale_by = if diff {
         lo.abs().max(hi.abs())
@@ -476,7 +476,7 @@ fn residual_plots(oc: &DemoOutcome, model: &DemoModel) -> Vec<Plot> {
         }
     }
     let max_abs = axes.iter().flatten().fold(0.0f64, |a, p| a.max(p.1.abs()));
-    let (k, unit) = prefixed(max_abs, &rec.output_unit);
+    let (k, unit) = prefixed(max_abs, rec.output_unit.as_str());
     let mut series: Vec<Series> = axes
         .iter()
         .enumerate()
@@ -551,7 +551,7 @@ pub fn demo_report(oc: &DemoOutcome) -> Result<String> {
         "<p>Unit {}, {} samples, output in {}. Models: {}. Compensation by firmware-core in f32 (method 1: correct the constants; method 2: correct the result).</p>\n<pre>{}</pre>\n{}<p>Data-chosen model: {} by {}; {}</p>\n",
         esc(&oc.recording.unit),
         oc.recording.rows.len(),
-        esc(&oc.recording.output_unit),
+        esc(oc.recording.output_unit.as_str()),
         oc.models.iter().map(|m| esc(&m.name)).collect::<Vec<_>>().join(", "),
         esc(&table),
         verdict_table(oc),

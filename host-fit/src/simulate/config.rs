@@ -265,13 +265,13 @@ pub struct Unit {
     /// Serial written as metadata.
     pub serial: String,
     /// `paper` (the built-in paper unit) or `table` (`temps_c` + `coeffs`).
-    pub model: String,
+    pub model: UnitModel,
     /// Table temperatures, C.
     pub temps_c: Vec<f64>,
     /// Table rows, 12 coefficients each (kxx kyy kzz kxy kxz kyx kyz kzx kzy u0x u0y u0z).
     pub coeffs: Vec<[f64; 12]>,
     /// Between table rows: `poly` (the polynomial through all rows) or `pwl`.
-    pub interp: String,
+    pub interp: Interp,
     /// Voltmeter white noise, V (1 sigma).
     pub noise_v: f64,
     /// Voltmeter resolution, V (0 = none).
@@ -283,6 +283,26 @@ pub struct Unit {
     pub spike_rate: f64,
     /// Spike amplitude, V (random sign).
     pub spike_v: f64,
+}
+
+/// Where the twin's true coefficients come from (`unit.model`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum UnitModel {
+    /// The paper's unit, built in.
+    Paper,
+    /// The table `unit.temps_c` x `unit.coeffs`.
+    Table,
+}
+
+/// How the twin's table is read between its rows (`unit.interp`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Interp {
+    /// The polynomial through all rows.
+    Poly,
+    /// Piecewise-linear between rows.
+    Pwl,
 }
 
 /// Every effect of physics-catalogue.md; all off by default. Per-axis arrays are x, y, z.
@@ -521,10 +541,10 @@ impl Default for Unit {
     fn default() -> Self {
         Unit {
             serial: "PAPER-UNIT".into(),
-            model: "paper".into(),
+            model: UnitModel::Paper,
             temps_c: Vec::new(),
             coeffs: Vec::new(),
-            interp: "poly".into(),
+            interp: Interp::Poly,
             noise_v: 2e-5,
             resolution_v: 1e-7,
             noise_corr_s: 0.0,

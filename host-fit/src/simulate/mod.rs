@@ -12,8 +12,8 @@ mod writer;
 
 pub use config::{
     parse_config, Bend, BiasStep, Chamber, Curvature, Effects, Fixture, FixtureChange, Flight,
-    Gradient, Leg, Logger, Output, PerAxis, Periodic, Schedule, Sensor, Settle, SimConfig, Stop,
-    Sweep, Unit, Warmup,
+    Gradient, Interp, Leg, Logger, Output, PerAxis, Periodic, Schedule, Sensor, Settle, SimConfig,
+    Stop, Sweep, Unit, UnitModel, Warmup,
 };
 pub use unit::{TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
 pub use writer::Simulation;

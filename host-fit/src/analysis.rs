@@ -137,7 +137,22 @@ pub fn chosen_name(b: &Basis) -> String {
 
 /// The models compared: the paper's (when its stops exist), the one the data choose,
 /// and the pwl through every stop, the last two from the dwells in equilibrium.
-type Fits = (Vec<(String, &'static str, ModelFit)>, Selection);
+struct Fits {
+    /// Each model: its name, its blob's file name and its fit.
+    models: Vec<Fitted>,
+    /// How the data chose theirs.
+    selection: Selection,
+}
+
+/// One model of the comparison, fitted.
+struct Fitted {
+    /// Its name in the summary.
+    name: String,
+    /// Its blob's file name.
+    file: &'static str,
+    /// The fit.
+    fit: ModelFit,
+}
 
 fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Fits> {
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
@@ -160,13 +175,18 @@ fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Fits> {
             path: &rec.path,
         },
     )?;
-    let mut out = Vec::new();
+    let fitted = |name: String, file, fit| Fitted { name, file, fit };
+    let mut models = Vec::new();
     if let Ok(p) = paper_pwl2(stops, rec.t0_c) {
-        out.push(("paper-pwl2".to_string(), "paper-pwl2.blob", p));
+        models.push(fitted("paper-pwl2".to_string(), "paper-pwl2.blob", p));
     }
-    out.push((chosen_name(&chosen.fit.basis), "chosen.blob", chosen.fit));
-    out.push(("pwl-all".to_string(), "pwl-all.blob", pwl_all));
-    Ok((out, selection))
+    models.push(fitted(
+        chosen_name(&chosen.fit.basis),
+        "chosen.blob",
+        chosen.fit,
+    ));
+    models.push(fitted("pwl-all".to_string(), "pwl-all.blob", pwl_all));
+    Ok(Fits { models, selection })
 }
 
 /// Compare the models on `rec` (see the module doc).
@@ -181,8 +201,11 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
     let mut models: Vec<DemoModel> = Vec::new();
     let mut rows = Vec::new();
     let spec = Spec::default();
-    let (list, selection) = fits(&rec, &stops)?;
-    for (name, file, fit) in list {
+    let Fits {
+        models: list,
+        selection,
+    } = fits(&rec, &stops)?;
+    for Fitted { name, file, fit } in list {
         let mut cal = fit.calibration(0.0, false);
         let model = crate::blob::Model {
             rec: &rec,

@@ -138,8 +138,18 @@ pub fn fit_as_fit_does(rec: &Recording) -> Result<(Calibration<f64>, String)> {
     }
 }
 
+/// A test of the comparison, before it is judged.
+struct Tested {
+    /// `paper test` or the chosen plan's description.
+    test: String,
+    /// Chamber hours of its calibration recording.
+    hours: f64,
+    /// What was fitted (route and model).
+    fitted: String,
+}
+
 /// Verify `blob` on the block `ver` with method 1 and judge it.
-fn judged(ver: &Recording, blob: &Blob, what: (String, f64, String)) -> Result<Judged> {
+fn judged(ver: &Recording, blob: &Blob, what: Tested) -> Result<Judged> {
     let check = |p: usize| ver.positions.has_role(p, Role::Verification);
     let v = verify(ver, blob, Method::CorrectConstants, &check)
         .ok_or_else(|| HostError::new(ErrorKind::Numerical, "singular K(T0)"))?;
@@ -162,9 +172,9 @@ fn judged(ver: &Recording, blob: &Blob, what: (String, f64, String)) -> Result<J
         (f64::from(cal.t_min_c), f64::from(cal.t_max_c)),
     );
     Ok(Judged {
-        test: what.0,
-        hours: what.1,
-        fitted: what.2,
+        test: what.test,
+        hours: what.hours,
+        fitted: what.fitted,
         valid_c: (f64::from(cal.t_min_c), f64::from(cal.t_max_c)),
         worst_mg,
         acceptance,
@@ -228,23 +238,23 @@ pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> 
         judged(
             &ver,
             &paper_b,
-            (
-                "paper test".to_string(),
-                paper_hours,
-                format!(
+            Tested {
+                test: "paper test".to_string(),
+                hours: paper_hours,
+                fitted: format!(
                     "static route, {}",
                     paper_blob.1.trim_start_matches("chosen-")
                 ),
-            ),
+            },
         )?,
         judged(
             &ver,
             &blob,
-            (
-                format!("plan: {}", c[chosen].kind.describe()),
-                c[chosen].hours,
+            Tested {
+                test: format!("plan: {}", c[chosen].kind.describe()),
+                hours: c[chosen].hours,
                 fitted,
-            ),
+            },
         )?,
     ];
     Ok(Beside {

@@ -267,7 +267,11 @@ impl Positions {
                 continue;
             };
             let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-            let (name, v, role) = parse_row(path, line_no, &fields, cols, role_col)?;
+            let PositionRow {
+                name,
+                vector: v,
+                role,
+            } = parse_row(path, line_no, &fields, cols, role_col)?;
             let Some(v) = v else {
                 pos.set_unknown(name, role);
                 n_rows += 1;
@@ -317,7 +321,15 @@ impl Positions {
     }
 }
 
-type PositionRow<'a> = (&'a str, Option<[f64; 3]>, Option<Role>);
+/// One line of a positions file, checked.
+struct PositionRow<'a> {
+    /// The position's name.
+    name: &'a str,
+    /// Its vector of specific force, g; None for a pose whose orientation is unknown.
+    vector: Option<[f64; 3]>,
+    /// The role the line gives it, if any.
+    role: Option<Role>,
+}
 
 fn parse_row<'a>(
     path: &Path,
@@ -378,7 +390,11 @@ fn parse_row<'a>(
             )
         })?),
     };
-    Ok((name, v, role))
+    Ok(PositionRow {
+        name,
+        vector: v,
+        role,
+    })
 }
 
 #[cfg(test)]

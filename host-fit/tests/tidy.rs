@@ -731,8 +731,8 @@ fn tuple_aliases(code: &str) -> Vec<String> {
         .collect()
 }
 
-/// Files that still hold a tuple alias while another branch rewrites them (issue 30's
-/// store and engine helpers); each entry must still hold one (the test says when to drop
+/// Files that still hold a tuple alias while another branch rewrites them (the store's
+/// and the search's rewrites); each entry must still hold one (the test says when to drop
 /// it), so the list only shrinks.
 const TUPLE_ALIASES_REWRITTEN_ELSEWHERE: [&str; 2] = ["store::trend", "diagnose::search"];
 
@@ -756,6 +756,67 @@ fn no_tuple_type_aliases() {
     assert!(
         bad.is_empty(),
         "tuple type aliases (a struct names its fields):\n{}",
+        bad.join("\n")
+    );
+}
+
+/// Where `text` names a thing after an issue number: an identifier `issue_N` (in the
+/// code), or a comment line's `issue N's`, `of issue N`, `for issue N` (the number says
+/// when a thing was asked for, not what it is; a citation such as `(issue N)` is fine).
+fn named_after_issues(text: &str) -> Vec<String> {
+    let code = code_only(text);
+    let ident = |s: &str, i: usize| {
+        i > 0 && (s.as_bytes()[i - 1].is_ascii_alphanumeric() || s.as_bytes()[i - 1] == b'_')
+    };
+    let mut out: Vec<String> = code
+        .match_indices("issue_")
+        .filter(|(i, m)| {
+            !ident(&code, *i) && code[i + m.len()..].starts_with(|c: char| c.is_ascii_digit())
+        })
+        .map(|(i, _)| {
+            code[i..]
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect()
+        })
+        .collect();
+    for line in text
+        .lines()
+        .map(str::trim_start)
+        .filter(|l| l.starts_with("//"))
+    {
+        let lower = line.to_ascii_lowercase();
+        for (i, m) in lower.match_indices("issue ") {
+            let n: String = lower[i + m.len()..]
+                .chars()
+                .take_while(char::is_ascii_digit)
+                .collect();
+            let before = lower[..i].trim_end();
+            let names = lower[i + m.len() + n.len()..].starts_with("'s")
+                || before.ends_with(" of")
+                || before.ends_with(" for");
+            if !n.is_empty() && !ident(&lower, i) && names {
+                out.push(format!("issue {n}"));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn nothing_is_named_after_an_issue_number() {
+    let mut bad = Vec::new();
+    for dir in all_code() {
+        for (m, p) in files(&dir) {
+            let found = named_after_issues(&std::fs::read_to_string(&p).unwrap());
+            if !found.is_empty() {
+                bad.push(format!("{}: {m}: {}", dir.display(), found.join(", ")));
+            }
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "names after issue numbers (say what the thing is):\n{}",
         bad.join("\n")
     );
 }
@@ -972,6 +1033,10 @@ fn the_checks_catch_what_they_are_for() {
     assert_eq!(
         tuple_aliases("type A = (f64, f64);\npub type B<'a> = (&'a str, u8);\ntype C = Vec<u8>;\nlet subtype = (1, 2);"),
         ["A", "B<'a>"]
+    );
+    assert_eq!(
+        named_after_issues("fn issue_18() {}\n// the forms of issue 18's classes\n//! The twin (issue 19), of issue 17\nlet tissue_3 = \"of issue 4\";"),
+        ["issue_18", "issue 18", "issue 17"]
     );
     assert!(uses("let x = std::env::var(\"A\");", "std::env::var"));
     assert!(!uses("my_clap::f()", "clap"));

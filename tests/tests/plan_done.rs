@@ -1,4 +1,4 @@
-//! Issue 19's done-criteria on the twin: for a unit with no lag and units whose element
+//! What `plan` must achieve, on the twin: for a unit with no lag and units whose element
 //! lags its sensor by 5 and 20 minutes, the plan `host-fit plan --hours 2` chooses (the
 //! unit type's lag stated), run on the same unit and fitted by default, passes acceptance
 //! on an equilibrium verification block with its worst |dg| within 1.5x of the 6-h

@@ -1,7 +1,7 @@
 //! The blind suite's cases beyond the catalogue's own forms, written from physics (not
 //! from the diagnosis): other forms of each effect, effects outside the catalogue, and
-//! clean recordings with the nuisances real data has; and the classes of issue 18
-//! ([`crate::blind::kinds`]). Each class is its own enum, so every form is concealed by
+//! clean recordings with the nuisances real data has; and the classes that run on test
+//! profiles of their own ([`crate::blind::kinds`]). Each class is its own enum, so every form is concealed by
 //! an exhaustive match: a form without physics cannot compile.
 use crate::blind::draw::{axes3, main_axis};
 use crate::blind::kinds::{Digital, Mixture, Refixed, Slow};
@@ -172,9 +172,9 @@ impl Form {
         Form::Nuisance(Nuisance::NoisyVoltmeter),
     ];
 
-    /// The forms of issue 18's classes, in the order of their report: slow
-    /// disturbances, digital outputs, re-clamped fixtures, mixtures.
-    pub fn issue_18() -> Vec<Form> {
+    /// The forms of the classes that run on test profiles of their own, in the order of
+    /// their report: slow disturbances, digital outputs, re-clamped fixtures, mixtures.
+    pub fn on_own_profiles() -> Vec<Form> {
         let mut v: Vec<Form> = Slow::ALL.map(Form::Slow).to_vec();
         v.extend(Digital::ALL.map(Form::Digital));
         v.extend(Refixed::ALL.map(Form::Refixed));
@@ -512,9 +512,9 @@ mod tests {
                 form.name()
             );
         }
-        // issue 18's forms run on profiles of their own: against the same profile without
+        // these forms run on profiles of their own: against the same profile without
         // effects (a digital clean form conceals nothing but its output unit)
-        for form in Form::issue_18() {
+        for form in Form::on_own_profiles() {
             let cfg = configure(&Case::of_form(form, seed));
             let mut bare = cfg.clone();
             bare.effects = crate::simulate::Effects::default();
@@ -534,7 +534,10 @@ mod tests {
 
     #[test]
     fn form_names_are_distinct() {
-        let all: Vec<Form> = Form::ALL.into_iter().chain(Form::issue_18()).collect();
+        let all: Vec<Form> = Form::ALL
+            .into_iter()
+            .chain(Form::on_own_profiles())
+            .collect();
         for (i, a) in all.iter().enumerate() {
             for b in &all[i + 1..] {
                 assert_ne!(a.name(), b.name());

@@ -101,7 +101,7 @@ pub fn limits(cfg: &SimConfig) -> Limits {
     Limits {
         lo_c: stops.clone().fold(f64::INFINITY, f64::min),
         hi_c: stops.fold(f64::NEG_INFINITY, f64::max),
-        max_ramp_c_per_min: 3.0,
+        max_ramp_c_per_min: crate::plan::DEFAULT_MAX_RAMP_C_PER_MIN,
         positions: cfg.schedule.positions.clone(),
         dwell_s: cfg.schedule.dwell_s,
         move_s: cfg.schedule.move_s,
@@ -129,11 +129,8 @@ pub fn fit_as_fit_does(rec: &Recording) -> Result<(Calibration<f64>, String)> {
         Routed::Static(oc) => {
             let mut cal = oc.fit.calibration(0.0, false);
             Cache::for_fit(rec, &oc, &mut cal, None);
-            let name = crate::analysis::chosen_name(&oc.fit.basis);
-            Ok((
-                cal,
-                format!("static route, {}", name.trim_start_matches("chosen-")),
-            ))
+            let model = crate::analysis::Compared::Chosen(oc.fit.basis.clone());
+            Ok((cal, format!("static route, {}", model.family())))
         }
     }
 }
@@ -183,7 +180,11 @@ fn judged(ver: &Recording, blob: &Blob, what: Tested) -> Result<Judged> {
 
 /// The plan beside the paper test `paper` (its recording, its data-chosen blob's bytes
 /// and model name) of the unit `cfg`.
-pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> Result<Beside> {
+pub fn beside(
+    cfg: &SimConfig,
+    paper: &Recording,
+    paper_blob: (&[u8], &crate::analysis::Compared),
+) -> Result<Beside> {
     let l = limits(cfg);
     let temps = verification_temps(&l);
     let dwell_samples = l.dwell_s * l.rate_hz;
@@ -222,12 +223,7 @@ pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> 
     let (recording_csv, rec) = run(cfg, &cal_steps, "plan-recording.csv")?;
     let (verification_csv, ver) = run(cfg, &verification(&l, 0.0, last), "verification.csv")?;
     let (cal, fitted) = fit_as_fit_does(&rec)?;
-    let serial = if rec.unit.is_empty() {
-        "UNKNOWN"
-    } else {
-        rec.unit.as_str()
-    };
-    let (blob, bytes, _) = build_blob(serial, &rec.output_unit, &cal)?;
+    let (blob, bytes, _) = build_blob(rec.serial(), &rec.output_unit, &cal)?;
     let paper_b = Blob::decode(paper_blob.0).map_err(|e| {
         HostError::new(
             ErrorKind::Internal,
@@ -241,10 +237,7 @@ pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> 
             Tested {
                 test: "paper test".to_string(),
                 hours: paper_hours,
-                fitted: format!(
-                    "static route, {}",
-                    paper_blob.1.trim_start_matches("chosen-")
-                ),
+                fitted: format!("static route, {}", paper_blob.1.family()),
             },
         )?,
         judged(

@@ -455,7 +455,7 @@ pub struct PlanArgs {
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true, default_values_t = [-40.0, 70.0])]
     pub range_c: Vec<f64>,
     /// The chamber's fastest ramp, C/min.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = crate::plan::DEFAULT_MAX_RAMP_C_PER_MIN)]
     pub max_ramp_c_per_min: f64,
     /// The tilter's positions, in the order visited.
     #[arg(

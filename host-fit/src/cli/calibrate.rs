@@ -1,6 +1,6 @@
 //! `temp-fit`, `identify` and `fit`: from data to coefficients and blobs.
 use super::args::{FitArgs, IdentifyArgs, RouteArg, TempFitArgs};
-use super::common::{load_to_fit, oriented, serial, w};
+use super::common::{load_to_fit, oriented, w};
 use crate::blob::{build_blob, Cache, F32_BOUND_G};
 use crate::data::output_unit::OutputUnit;
 use crate::data::table::{read_table, to_csv, TableRow};
@@ -381,7 +381,7 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     };
     let mut cal = oc.fit.calibration(0.0, a.clamp);
     let cache = Cache::for_fit(&rec, &oc, &mut cal, a.update_step);
-    let serial_name = a.serial.as_deref().unwrap_or(serial(&rec));
+    let serial_name = a.serial.as_deref().unwrap_or(rec.serial());
     let (blob, bytes, dep) = build_blob(serial_name, &rec.output_unit, &cal)?;
     let run = super::records::Run {
         args: &a.record,
@@ -459,7 +459,7 @@ fn fit_dynamic_cli(
     if let Some(step) = a.update_step {
         cal.update_step_c = step;
     }
-    let serial_name = a.serial.as_deref().unwrap_or(serial(rec));
+    let serial_name = a.serial.as_deref().unwrap_or(rec.serial());
     let (blob, bytes, dep) = build_blob(serial_name, &rec.output_unit, &cal)?;
     let run = super::records::Run {
         args: &a.record,

@@ -2,7 +2,7 @@
 //! the firmware's expected outputs.
 use super::args::{ErrModel, FwVectorsArgs, InspectArgs, MethodArg, VerifyArgs};
 use super::common::Outcome;
-use super::common::{load, serial, w};
+use super::common::{load, w};
 use crate::acceptance::{judge, Acceptance, Verdict};
 use crate::blob::{read_blob, singular_k, Inspection, F32_BOUND_G};
 use crate::data::positions::Role;
@@ -45,7 +45,7 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
     let spec = a.accept.spec()?;
     let (b, blob_bytes) = read_blob(&a.blob)?;
     let rec = load(&a.input, err)?;
-    let unit = serial(&rec);
+    let unit = rec.serial();
     if b.serial.as_str() != unit {
         if !a.force {
             return Err(HostError::in_file(

@@ -106,12 +106,3 @@ pub(super) fn oriented(rec: Recording, err: &mut dyn Write) -> Result<Recording>
         Cow::Borrowed(_) => rec,
     })
 }
-
-/// The unit's serial, `UNKNOWN` when the recording has none.
-pub(super) fn serial(rec: &Recording) -> &str {
-    if rec.unit.is_empty() {
-        "UNKNOWN"
-    } else {
-        rec.unit.as_str()
-    }
-}

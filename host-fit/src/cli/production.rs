@@ -314,7 +314,7 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
         dwell_s: a.dwell_s,
         move_s: a.move_s,
         rate_hz: a.rate_hz,
-        noise_v: noise.unwrap_or(2e-5),
+        noise_v: noise.unwrap_or(crate::simulate::config::UNIT_NOISE_V),
         tau_s: tau_s.unwrap_or(0.0),
     };
     let c = candidates(&l, a.seed)?;

@@ -1,6 +1,6 @@
 //! `diagnose`, `report` and `blind`: looking into a recording, and testing the looking.
 use super::args::{BlindArgs, DiagnoseArgs, ReportArgs};
-use super::common::{load_to_fit, oriented, serial, w};
+use super::common::{load_to_fit, oriented, w};
 use crate::analysis::{analyse, table};
 use crate::blob::build_blob;
 use crate::data::recording::Recording;
@@ -20,7 +20,7 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
     let rec = oriented(load_to_fit(&a.input, err)?, err)?;
     let d = crate::diagnose::diagnose(&rec)?;
     let mut c = d.contract();
-    let name = a.serial.as_deref().unwrap_or(serial(&rec));
+    let name = a.serial.as_deref().unwrap_or(rec.serial());
     let built = match &a.out {
         Some(_) => Some(build_blob(
             name,

@@ -104,7 +104,7 @@ pub struct Recording {
     pub path: PathBuf,
     /// All metadata (`# key=value`), known and unknown.
     pub metadata: BTreeMap<String, String>,
-    /// Unit serial (`unit`), empty if absent.
+    /// Unit serial (`unit`), empty if absent (see [`Recording::serial`]).
     pub unit: String,
     /// Reference temperature (`t0_c`, default 20).
     pub t0_c: f64,
@@ -145,7 +145,20 @@ const KNOWN_META: [&str; 6] = [
 ];
 const REQUIRED: [&str; 6] = ["t_s", "position", "temp_c", "ux_v", "uy_v", "uz_v"];
 
+/// The serial of a unit whose recording names none (no `# unit=`): what its blob and
+/// its records carry.
+pub const UNKNOWN_SERIAL: &str = "UNKNOWN";
+
 impl Recording {
+    /// The unit's serial: `unit`, or [`UNKNOWN_SERIAL`] when the recording has none.
+    pub fn serial(&self) -> &str {
+        if self.unit.is_empty() {
+            UNKNOWN_SERIAL
+        } else {
+            &self.unit
+        }
+    }
+
     /// Read a recording file.
     pub fn read(path: &Path, positions: Positions) -> Result<Recording> {
         let f = std::fs::File::open(path).map_err(|e| HostError::io(path, &e))?;

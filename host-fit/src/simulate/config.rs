@@ -166,6 +166,15 @@ pub struct Leg {
     pub hold_s: f64,
 }
 
+/// The time constant of a unit's case following the chamber air, s: the twin's chamber
+/// (a case of a few hundred grams in forced air); `plan` assumes it, as it cannot measure
+/// the case before the test.
+pub const CASE_TAU_S: f64 = 600.0;
+
+/// The unit type's output noise, V (1 sigma per sample): the twin's voltmeter, and the
+/// noise `plan` assumes when none is given or diagnosed.
+pub const UNIT_NOISE_V: f64 = 2e-5;
+
 /// Chamber air and unit case: first-order lags.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -495,7 +504,7 @@ impl Default for Chamber {
         Chamber {
             start_c: 20.0,
             tau_air_s: 120.0,
-            tau_case_s: 600.0,
+            tau_case_s: CASE_TAU_S,
         }
     }
 }
@@ -545,7 +554,7 @@ impl Default for Unit {
             temps_c: Vec::new(),
             coeffs: Vec::new(),
             interp: Interp::Poly,
-            noise_v: 2e-5,
+            noise_v: UNIT_NOISE_V,
             resolution_v: 1e-7,
             noise_corr_s: 0.0,
             spike_rate: 0.0,

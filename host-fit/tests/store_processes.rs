@@ -5,15 +5,17 @@
 use host_fit::simulate::{simulate, SimConfig};
 use host_fit::store::record::Command;
 use host_fit::store::Store;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command as Process, Stdio};
 use std::time::{Duration, Instant};
 
-fn tempdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hf-store-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A folder of the test's own, named after it, removed when the test ends (passed or
+/// failed).
+fn tempdir(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("hf-store-{name}-"))
+        .tempdir()
+        .unwrap()
 }
 
 /// `n` simulated units of the paper's profile (serials `PREFIX-i`) in `dir`.
@@ -70,7 +72,8 @@ fn integrity(db: &Path) -> String {
 
 #[test]
 fn two_batches_writing_one_store_at_once_lose_nothing() {
-    let root = tempdir("two");
+    let tmp = tempdir("two");
+    let root = tmp.path();
     let (a, b) = (root.join("lot-a"), root.join("lot-b"));
     // 40 units each: several seconds of work, so that each writer commits several
     // chunks (one a second) while the other runs
@@ -116,12 +119,12 @@ fn two_batches_writing_one_store_at_once_lose_nothing() {
     assert!(a0 < b1 && b0 < a1, "not concurrent: ids {ia:?} {ib:?}");
     assert_whole(&s);
     assert_eq!(integrity(&db), "ok");
-    let _ = std::fs::remove_dir_all(&root);
 }
 
 #[test]
 fn a_batch_killed_mid_way_leaves_whole_records_and_a_store_that_goes_on() {
-    let root = tempdir("kill");
+    let tmp = tempdir("kill");
+    let root = tmp.path();
     let dir = root.join("lot");
     // more units than a few chunks: on a quiet machine the first commit (a chunk, or
     // what was done when the flush timer ran) must still leave units to kill
@@ -161,5 +164,4 @@ fn a_batch_killed_mid_way_leaves_whole_records_and_a_store_that_goes_on() {
     let s = Store::open_existing(&db).unwrap();
     assert_eq!(s.count().unwrap(), n + n_units as i64);
     assert_whole(&s);
-    let _ = std::fs::remove_dir_all(&root);
 }

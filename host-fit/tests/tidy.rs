@@ -821,6 +821,68 @@ fn nothing_is_named_after_an_issue_number() {
     );
 }
 
+/// Temporary folders are `tempfile`'s (removed when the test ends, passed or failed, and
+/// never shared by two runs): no folder is made by hand under the system's temp dir.
+#[test]
+fn temporary_folders_are_tempfiles() {
+    let mut bad = Vec::new();
+    for dir in all_code() {
+        for (m, p) in files(&dir) {
+            if uses(
+                &code_only(&std::fs::read_to_string(&p).unwrap()),
+                "temp_dir()",
+            ) {
+                bad.push(format!("{}: {m}", dir.display()));
+            }
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "folders made by hand in temp_dir() (use tempfile):\n{}",
+        bad.join("\n")
+    );
+}
+
+/// The size lints of the workspace (function length, argument count) hold in every
+/// crate: each takes the workspace's lints, or names them in its own.
+#[test]
+fn every_crate_has_the_size_lints() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let workspace = std::fs::read_to_string(root.join("Cargo.toml")).unwrap();
+    let members = workspace
+        .split("members = [")
+        .nth(1)
+        .and_then(|s| s.split(']').next())
+        .expect("the workspace lists its members");
+    let size = ["too_many_lines", "too_many_arguments"];
+    assert!(
+        size.iter().all(|l| workspace.contains(l)),
+        "the workspace's lints name {size:?}"
+    );
+    let mut bad = Vec::new();
+    for m in members
+        .split(',')
+        .map(|m| m.trim().trim_matches('"'))
+        .filter(|m| !m.is_empty())
+    {
+        let toml = std::fs::read_to_string(root.join(m).join("Cargo.toml")).unwrap();
+        let lints = toml
+            .split("[lints")
+            .skip(1)
+            .collect::<Vec<_>>()
+            .join("[lints");
+        let inherits =
+            lints.starts_with(']') && lints[1..].trim_start().starts_with("workspace = true");
+        if !inherits && !size.iter().all(|l| lints.contains(l)) {
+            bad.push(m.to_string());
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "crates without the size lints {size:?}: {bad:?}"
+    );
+}
+
 /// Whether `code` uses the path `what` (`clap`, `std::env::var`).
 fn uses(code: &str, what: &str) -> bool {
     code.match_indices(what).any(|(i, _)| {

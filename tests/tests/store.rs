@@ -14,11 +14,13 @@ use tests::{cli, cli_json};
 
 mod reports;
 
-fn tempdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hf-store-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A folder of the test's own, named after it, removed when the test ends (passed or
+/// failed).
+fn tempdir(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("hf-store-{name}-"))
+        .tempdir()
+        .unwrap()
 }
 
 fn s(p: &Path) -> &str {
@@ -247,7 +249,8 @@ fn assert_history_and_blobs(root: &Path, db: &Path, all: &[Record], (fb, dblob):
 /// `fit`, `verify` and `diagnose` with `--db`: one record each, holding what each made.
 #[test]
 fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
-    let root = tempdir("commands");
+    let tmp = tempdir("commands");
+    let root = tmp.path();
     let rec = root.join("unit.csv");
     let (code, _, err) = cli(&["simulate", "--seed", "3", "--out", s(&rec)]);
     assert_eq!(code, 0, "{err}");
@@ -281,7 +284,7 @@ fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
     let all = records(&db);
     assert_records_hold_what_was_made(&all, &rec, (&fb, &dblob), (&fit, &ver, &diag));
 
-    assert_history_and_blobs(&root, &db, &all, (&fb, &dblob));
+    assert_history_and_blobs(root, &db, &all, (&fb, &dblob));
 
     // calibrated again: every record stays, the new fit is the latest
     let fb2 = root.join("fit2.blob");
@@ -312,7 +315,6 @@ fn fit_verify_and_diagnose_record_what_they_made_and_history_re_issues_blobs() {
         "{:?}",
         all2[3].model
     );
-    let _ = std::fs::remove_dir_all(&root);
 }
 
 /// The flagged points of chart `q` in a `trend --json`: (unit place, rules).
@@ -389,7 +391,8 @@ fn assert_default_store_matches_the_files(root: &Path, dir: &Path, n: usize) {
 /// often than the false-alarm rate stated for a reference of 20 units allows.
 #[test]
 fn batches_record_every_unit_and_trend_flags_a_shift_across_lots() {
-    let root = tempdir("trend");
+    let tmp = tempdir("trend");
+    let root = tmp.path();
     let shared = root.join("line.sqlite");
     let (stable, per_stable, per_shifted) = (4, 10, 8);
     let mut made = 0;
@@ -400,7 +403,7 @@ fn batches_record_every_unit_and_trend_flags_a_shift_across_lots() {
         } else {
             (per_shifted, 3e-6)
         };
-        let dir = lot(&root, &name, n, 1000 * l as u64, shift);
+        let dir = lot(root, &name, n, 1000 * l as u64, shift);
         let out = root.join(format!("out-{name}"));
         let (code, text, err) = cli(&[
             "batch",
@@ -419,7 +422,7 @@ fn batches_record_every_unit_and_trend_flags_a_shift_across_lots() {
         );
         made += n;
         if l == 1 {
-            assert_default_store_matches_the_files(&root, &dir, n);
+            assert_default_store_matches_the_files(root, &dir, n);
         }
     }
     assert_eq!(records(&shared).len(), made);
@@ -516,14 +519,14 @@ fn batches_record_every_unit_and_trend_flags_a_shift_across_lots() {
     ]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains(&format!("({made} units)")), "{out}");
-    let _ = std::fs::remove_dir_all(&root);
 }
 
 /// A store of a newer schema, cut short, not a database, empty or missing: every command
 /// refuses it naming the file and the reason, leaves it as it was, and writes nothing.
 #[test]
 fn bad_stores_are_refused_named_and_left_alone() {
-    let root = tempdir("bad");
+    let tmp = tempdir("bad");
+    let root = tmp.path();
     let rec = root.join("unit.csv");
     let (code, _, err) = cli(&["simulate", "--seed", "5", "--out", s(&rec)]);
     assert_eq!(code, 0, "{err}");
@@ -597,7 +600,6 @@ fn bad_stores_are_refused_named_and_left_alone() {
     // a newer store's version is named by name
     let (_, _, err) = cli(&["history", "PAPER-UNIT", "--db", s(&newer)]);
     assert!(err.contains("reads versions up to 1"), "{err}");
-    let _ = std::fs::remove_dir_all(&root);
 }
 
 /// The demo records every blob it writes in its folder's store and ends by printing the
@@ -605,7 +607,8 @@ fn bad_stores_are_refused_named_and_left_alone() {
 /// `--force` it appends.
 #[test]
 fn the_demo_records_its_blobs_and_shows_the_history() {
-    let root = tempdir("demo");
+    let tmp = tempdir("demo");
+    let root = tmp.path();
     let dir = root.join("demo-out");
     let (code, out, err) = cli(&["demo", "--out", s(&dir)]);
     assert_eq!(code, 0, "{err}");
@@ -651,5 +654,4 @@ fn the_demo_records_its_blobs_and_shows_the_history() {
     let (code, _, err) = cli(&["demo", "--out", s(&dir), "--force"]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(records(&db).len(), 8);
-    let _ = std::fs::remove_dir_all(&root);
 }

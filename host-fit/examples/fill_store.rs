@@ -23,9 +23,10 @@ fn main() {
     };
     let number = |s: &str| -> usize {
         s.parse().unwrap_or_else(|_| {
-            fail(host_fit::error::HostError::msg(format!(
-                "`{s}` is not a number"
-            )))
+            fail(host_fit::error::HostError::new(
+                host_fit::error::ErrorKind::Invalid,
+                format!("`{s}` is not a number"),
+            ))
         })
     };
     let n = number(n);
@@ -36,7 +37,8 @@ fn main() {
         .and_then(|mut s| s.all())
         .unwrap_or_else(|e| fail(e));
     if src.is_empty() {
-        fail(host_fit::error::HostError::msg(
+        fail(host_fit::error::HostError::new(
+            host_fit::error::ErrorKind::Insufficient,
             "the source store has no records",
         ));
     }

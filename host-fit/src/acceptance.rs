@@ -10,13 +10,26 @@
 //! has no judged dwell (the band near T0 always; the band over the range when the
 //! valid range reaches beyond T0 +- `t0_band_c`): what was not judged cannot pass;
 //! `pass` otherwise.
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::verify::Verification;
 use serde::Serialize;
 
 /// What becomes of verification dwells outside the blob's valid range.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    Default,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "lowercase")]
 pub enum OutsideRange {
     /// They make the verdict `fail`: the unit was tested where its blob claims nothing.
     #[default]
@@ -55,9 +68,10 @@ impl Spec {
     pub fn new(t0_mg: f64, range_mg: f64) -> Result<Spec> {
         for (v, name) in [(t0_mg, "--accept-t0-mg"), (range_mg, "--accept-range-mg")] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(HostError::msg(format!(
-                    "{name} must be a positive number of mg, got {v}"
-                )));
+                return Err(HostError::new(
+                    ErrorKind::Invalid,
+                    format!("{name} must be a positive number of mg, got {v}"),
+                ));
             }
         }
         Ok(Spec {
@@ -85,8 +99,20 @@ impl Spec {
 }
 
 /// The verdict.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "snake_case")]
 pub enum Verdict {
     /// Every band judged, every judged dwell within its limit, none outside the valid
     /// range (or those reported apart).
@@ -101,17 +127,25 @@ pub enum Verdict {
 impl Verdict {
     /// `pass`, `fail` or `not_judged`.
     pub fn name(self) -> &'static str {
-        match self {
-            Verdict::Pass => "pass",
-            Verdict::Fail => "fail",
-            Verdict::NotJudged => "not_judged",
-        }
+        self.into()
     }
 }
 
 /// A band of the specification.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "snake_case")]
 pub enum Band {
     /// Within `t0_band_c` of T0.
     NearT0,

@@ -7,7 +7,7 @@ use crate::blob::build_blob;
 use crate::data::positions::Role;
 use crate::data::recording::Recording;
 use crate::data::table::TableRow;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::equilibrium::static_observations;
 use crate::fit::identify::StopCoeffs;
 use crate::fit::noise::noise;
@@ -20,27 +20,43 @@ use firmware_core::compensate::{ErrorModel, Method};
 use serde::{Deserialize, Serialize};
 
 /// How a row's outputs were compensated.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str", try_from = "String")]
 pub enum Compensation {
     /// Not at all: the T0 constants.
-    #[serde(rename = "none")]
+    #[strum(serialize = "none")]
     None,
     /// Method 1: correct the constants.
-    #[serde(rename = "1")]
+    #[strum(serialize = "1")]
     Method1,
     /// Method 2: correct the result.
-    #[serde(rename = "2")]
+    #[strum(serialize = "2")]
     Method2,
 }
 
 impl Compensation {
     /// `none`, `1` or `2`, as summary.json and the table write it.
     pub fn name(self) -> &'static str {
-        match self {
-            Compensation::None => "none",
-            Compensation::Method1 => "1",
-            Compensation::Method2 => "2",
-        }
+        self.into()
+    }
+}
+
+impl TryFrom<String> for Compensation {
+    type Error = strum::ParseError;
+    fn try_from(s: String) -> std::result::Result<Self, Self::Error> {
+        s.parse()
     }
 }
 
@@ -57,12 +73,73 @@ pub struct SummaryRow {
     pub max_abs_dg_mg: f64,
 }
 
+/// A model of the comparison, by what it is: its name in the summary and its blob's
+/// file follow from it (never the other way round).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Compared {
+    /// The paper's: piecewise-linear through its stops near -40, 20 and 70 C.
+    PaperPwl2,
+    /// The model the data chose on held-out dwells.
+    Chosen(Basis),
+    /// Piecewise-linear through every stop.
+    PwlAll,
+}
+
+impl Compared {
+    /// Its blob's file name.
+    pub fn file(&self) -> &'static str {
+        match self {
+            Compared::PaperPwl2 => "paper-pwl2.blob",
+            Compared::Chosen(_) => "chosen.blob",
+            Compared::PwlAll => "pwl-all.blob",
+        }
+    }
+
+    /// Its family and parameter count: `pwl2`, `poly3`, `pwl5`.
+    pub fn family(&self) -> String {
+        match self {
+            Compared::PaperPwl2 => "pwl2".to_string(),
+            Compared::Chosen(Basis::Poly { order }) => format!("poly{order}"),
+            Compared::Chosen(Basis::Pwl { breakpoints }) => format!("pwl{}", breakpoints.len()),
+            Compared::PwlAll => "pwl-all".to_string(),
+        }
+    }
+
+    /// Every blob file a comparison may write, in the order of the table.
+    pub fn files() -> [&'static str; 3] {
+        [
+            Compared::PaperPwl2.file(),
+            Compared::Chosen(Basis::Poly { order: 0 }).file(),
+            Compared::PwlAll.file(),
+        ]
+    }
+}
+
+/// The name in the summary and the table: `paper-pwl2`, `chosen-` and the family
+/// (`chosen-poly3`), `pwl-all`.
+impl std::fmt::Display for Compared {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let name = match self {
+            Compared::PaperPwl2 => "paper-pwl2".to_string(),
+            Compared::Chosen(_) => format!("chosen-{}", self.family()),
+            Compared::PwlAll => "pwl-all".to_string(),
+        };
+        // padding and alignment as for a string
+        f.pad(&name)
+    }
+}
+
+/// Written as its name.
+impl Serialize for Compared {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
 /// A fitted model of the comparison with its verifications.
 pub struct DemoModel {
-    /// Name in the summary.
-    pub name: String,
-    /// File name of its blob (`paper-pwl2.blob`, `chosen.blob`, `pwl-all.blob`).
-    pub file: &'static str,
+    /// Which model it is (its name and its blob's file).
+    pub model: Compared,
     /// The fit.
     pub fit: ModelFit,
     /// Its blob's bytes.
@@ -111,17 +188,22 @@ pub fn paper_pwl2(stops: &[StopCoeffs], t0: f64) -> Result<ModelFit> {
     fit_table(&rows, &Basis::Pwl { breakpoints: bps }, t0)
 }
 
-/// A model's name in the table: `chosen-` and the family with its parameter count.
-pub fn chosen_name(b: &Basis) -> String {
-    match b {
-        Basis::Poly { order } => format!("chosen-poly{order}"),
-        Basis::Pwl { breakpoints } => format!("chosen-pwl{}", breakpoints.len()),
-    }
-}
-
 /// The models compared: the paper's (when its stops exist), the one the data choose,
 /// and the pwl through every stop, the last two from the dwells in equilibrium.
-type Fits = (Vec<(String, &'static str, ModelFit)>, Selection);
+struct Fits {
+    /// Each model and its fit.
+    models: Vec<Fitted>,
+    /// How the data chose theirs.
+    selection: Selection,
+}
+
+/// One model of the comparison, fitted.
+struct Fitted {
+    /// Which model.
+    model: Compared,
+    /// The fit.
+    fit: ModelFit,
+}
 
 fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Fits> {
     let cal = |p: usize| rec.positions.has_role(p, Role::Calibration);
@@ -131,7 +213,7 @@ fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Fits> {
     let selection = chosen
         .selection
         .clone()
-        .ok_or_else(|| HostError::msg("internal: no selection"))?;
+        .ok_or_else(|| HostError::new(ErrorKind::Internal, "internal: no selection"))?;
     let pwl_all = fit_joint(
         &obs,
         &Basis::Pwl {
@@ -144,29 +226,32 @@ fn fits(rec: &Recording, stops: &[StopCoeffs]) -> Result<Fits> {
             path: &rec.path,
         },
     )?;
-    let mut out = Vec::new();
+    let fitted = |model, fit| Fitted { model, fit };
+    let mut models = Vec::new();
     if let Ok(p) = paper_pwl2(stops, rec.t0_c) {
-        out.push(("paper-pwl2".to_string(), "paper-pwl2.blob", p));
+        models.push(fitted(Compared::PaperPwl2, p));
     }
-    out.push((chosen_name(&chosen.fit.basis), "chosen.blob", chosen.fit));
-    out.push(("pwl-all".to_string(), "pwl-all.blob", pwl_all));
-    Ok((out, selection))
+    models.push(fitted(
+        Compared::Chosen(chosen.fit.basis.clone()),
+        chosen.fit,
+    ));
+    models.push(fitted(Compared::PwlAll, pwl_all));
+    Ok(Fits { models, selection })
 }
 
 /// Compare the models on `rec` (see the module doc).
 pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
     let stops = identify_stops(&rec)?;
-    let serial = if rec.unit.is_empty() {
-        "UNKNOWN".to_string()
-    } else {
-        rec.unit.clone()
-    };
+    let serial = rec.serial().to_string();
     let check = |p: usize| rec.positions.has_role(p, Role::Verification);
     let mut models: Vec<DemoModel> = Vec::new();
     let mut rows = Vec::new();
     let spec = Spec::default();
-    let (list, selection) = fits(&rec, &stops)?;
-    for (name, file, fit) in list {
+    let Fits {
+        models: list,
+        selection,
+    } = fits(&rec, &stops)?;
+    for Fitted { model: which, fit } in list {
         let mut cal = fit.calibration(0.0, false);
         let model = crate::blob::Model {
             rec: &rec,
@@ -177,7 +262,8 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
         crate::blob::Cache::for_model(&model, &mut cal, None);
         let (blob, bytes, _) = build_blob(&serial, &rec.output_unit, &cal)?;
         let run = |m: Method| -> Result<Verification> {
-            verify(&rec, &blob, m, &check).ok_or_else(|| HostError::msg("singular K(T0)"))
+            verify(&rec, &blob, m, &check)
+                .ok_or_else(|| HostError::new(ErrorKind::Numerical, "singular K(T0)"))
         };
         let v = [
             run(Method::CorrectConstants)?,
@@ -186,12 +272,12 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
         if models.is_empty() {
             rows.extend(summary_rows(T0_CONSTANTS, Compensation::None, &v[0]));
         }
+        let name = which.to_string();
         rows.extend(summary_rows(&name, Compensation::Method1, &v[0]));
         rows.extend(summary_rows(&name, Compensation::Method2, &v[1]));
         let acceptance = judge(&v[0], &spec, cal.t0_c, (cal.t_min_c, cal.t_max_c));
         models.push(DemoModel {
-            name,
-            file,
+            model: which,
             fit,
             blob: bytes,
             verifications: v,
@@ -221,7 +307,7 @@ pub fn verdicts(oc: &DemoOutcome) -> String {
     for m in &oc.models {
         let a = &m.acceptance;
         let line = format!("{}: {}", a.acceptance.name(), a.reason);
-        s.push_str(&format!("  {:<14} {line}\n", m.name));
+        s.push_str(&format!("  {:<14} {line}\n", m.model));
     }
     s
 }

@@ -7,13 +7,13 @@
 //! record store every unit's run is recorded (an error too), in chunks of
 //! [`RECORD_CHUNK`] units, one transaction each.
 use crate::acceptance::{judge, Acceptance, Spec, Verdict};
-use crate::blob::build_blob;
+use crate::blob::{build_blob, singular_k};
 use crate::data::positions::{Positions, Role};
 use crate::data::recording::Recording;
 use crate::diagnose::contract::Contract;
 use crate::diagnose::dynamic::{auto, Routed};
 use crate::diagnose::EffectId;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::pipeline::{ModelKind, ModelRequest};
 use crate::fit::predict::coefficient_sigma;
 use crate::fit::select::Selection;
@@ -195,7 +195,7 @@ fn fit_unit(
     if let Some(t) = &o.store {
         let mut rc = t.record(Recorded::Batch, &r.unit, path)?;
         rc.input_sha256 = Some(sha);
-        rc.output_unit = Some(rec.output_unit.clone());
+        rc.output_unit = Some(rec.output_unit.to_string());
         rc.model = Some(r.model.clone());
         rc.at_t0 = Some(AtT0 {
             t0_c: cal.t0_c,
@@ -212,8 +212,8 @@ fn fit_unit(
     }
     write_atomic(&out.join(format!("{stem}.blob")), &bytes, force)?;
     let check = |p: usize| rec.positions.has_role(p, Role::Verification);
-    let v = verify(&rec, &blob, Method::CorrectConstants, &check)
-        .ok_or_else(|| HostError::in_file(path, "K(T0) of the blob is singular"))?;
+    let v =
+        verify(&rec, &blob, Method::CorrectConstants, &check).ok_or_else(|| singular_k(path))?;
     let worst = |f: &dyn Fn(&TempMax) -> f64| {
         (!v.max_by_temperature.is_empty())
             .then(|| v.max_by_temperature.iter().map(f).fold(0.0, f64::max))
@@ -277,8 +277,12 @@ fn write_test_record(
         }
     };
     let tr = test_record::build(rc, unit);
-    let v = serde_json::to_value(&tr)
-        .map_err(|e| HostError::msg(format!("cannot encode the test record: {e}")))?;
+    let v = serde_json::to_value(&tr).map_err(|e| {
+        HostError::new(
+            ErrorKind::Internal,
+            format!("cannot encode the test record: {e}"),
+        )
+    })?;
     if let Some(rc) = &mut r.record {
         rc.test_record = Some(v);
     }
@@ -389,6 +393,7 @@ fn recordings(dir: &Path) -> Result<Vec<PathBuf>> {
     files.sort();
     if files.is_empty() {
         return Err(HostError::in_file(
+            ErrorKind::Insufficient,
             dir,
             "no *.csv recordings in this folder",
         ));
@@ -614,7 +619,7 @@ pub fn run(dir: &Path, out: &Path, o: &BatchOptions) -> Result<BatchOutcome> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(o.jobs.unwrap_or(0))
         .build()
-        .map_err(|e| HostError::msg(e.to_string()))?;
+        .map_err(|e| HostError::new(ErrorKind::Io, e.to_string()))?;
     let bar = if std::io::stderr().is_terminal() {
         ProgressBar::new(files.len() as u64)
     } else {

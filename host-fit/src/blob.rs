@@ -1,14 +1,13 @@
 //! From a fitted model to a flashed blob and back: f32 tables, the f32-vs-f64 check,
 //! encoding, reading a blob file, and what `inspect` shows of it.
+use crate::data::output_unit::OutputUnit;
 use crate::data::recording::Recording;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::noise::Noise;
 use crate::fit::pipeline::FitOutcome;
 use crate::fit::predict::{directions, sigma_dwell_noise};
 use crate::fit::temperature::ModelFit;
-use firmware_core::blob::{
-    Blob, OutputUnit, RunId, FORMAT_VERSION, MAGIC, MAX_BLOB_LEN, MAX_SERIAL_LEN,
-};
+use firmware_core::blob::{Blob, RunId, FORMAT_VERSION, MAGIC, MAX_BLOB_LEN, MAX_SERIAL_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
 use firmware_core::model::{Coeffs, COEFF_NAMES};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
@@ -204,10 +203,10 @@ pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Resu
         Method::CorrectResult(ErrorModel::Full),
     ] {
         // one sample a second: the physics terms' machines follow the sweep alike in both
-        let mut m64 =
-            Compensator::new(&c64, method, 1.0).map_err(|e| HostError::msg(e.to_string()))?;
-        let mut m32 =
-            Compensator::new(&c32, method, 1.0).map_err(|e| HostError::msg(e.to_string()))?;
+        let mut m64 = Compensator::new(&c64, method, 1.0)
+            .map_err(|e| HostError::new(ErrorKind::Numerical, e.to_string()))?;
+        let mut m32 = Compensator::new(&c32, method, 1.0)
+            .map_err(|e| HostError::new(ErrorKind::Numerical, e.to_string()))?;
         let mut t = cal64.t_min_c - 10.0;
         while t <= cal64.t_max_c + 10.0 {
             let t32 = t as f32;
@@ -237,7 +236,7 @@ pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Resu
 /// path against [`F32_BOUND_G`]. Returns the blob, its bytes and the measured departure.
 pub fn build_blob(
     serial: &str,
-    output_unit: &str,
+    output_unit: &OutputUnit,
     cal64: &Calibration<f64>,
 ) -> Result<(Blob, Vec<u8>, f64)> {
     let (blob, bytes, (inside, _)) = build_blob_checked(serial, output_unit, cal64)?;
@@ -247,23 +246,23 @@ pub fn build_blob(
 /// [`build_blob`], returning the departure inside the range and beyond it.
 pub fn build_blob_checked(
     serial: &str,
-    output_unit: &str,
+    output_unit: &OutputUnit,
     cal64: &Calibration<f64>,
 ) -> Result<(Blob, Vec<u8>, (f64, f64))> {
     let s = blob_serial(serial)?;
     let blob = Blob {
         serial: s,
-        output_unit: OutputUnit::from_label(output_unit),
+        output_unit: output_unit.in_blob(),
         run_id: RunId::NONE,
         calibration: cal64.convert(),
     };
     let mut buf = [0u8; MAX_BLOB_LEN];
     let n = blob
         .encode(&mut buf)
-        .map_err(|e| HostError::msg(format!("cannot build the blob: {e}")))?;
+        .map_err(|e| HostError::new(ErrorKind::Blob, format!("cannot build the blob: {e}")))?;
     let (dep, beyond) = f32_departure(cal64, &blob.calibration)?;
     if dep.is_nan() || dep > F32_BOUND_G {
-        return Err(HostError::msg(format!(
+        return Err(HostError::new(ErrorKind::Numerical, format!(
             "the f32 firmware path departs from the f64 model by {dep:.3e} g, over the bound {F32_BOUND_G:.1e} g: the unit's K is too ill-conditioned for f32"
         )));
     }
@@ -275,18 +274,23 @@ pub fn build_blob_checked(
 /// breaks.
 pub fn blob_serial(serial: &str) -> Result<heapless::String<MAX_SERIAL_LEN>> {
     if let Some(c) = serial.chars().find(|c| !(' '..='~').contains(c)) {
-        return Err(HostError::msg(format!(
+        return Err(HostError::new(ErrorKind::Blob, format!(
             "unit serial `{serial}` has `{c}`: the blob stores printable ASCII only (the firmware checks it in place); give another (`fit --serial`, `diagnose --serial`)"
         )));
     }
     let mut s = heapless::String::<MAX_SERIAL_LEN>::new();
     s.push_str(serial).map_err(|_| {
-        HostError::msg(format!(
+        HostError::new(ErrorKind::Blob, format!(
             "unit serial `{serial}` is {} bytes; the blob format holds at most {MAX_SERIAL_LEN} bytes (firmware_core::blob::MAX_SERIAL_LEN): give a shorter one (`fit --serial`, `diagnose --serial`)",
             serial.len()
         ))
     })?;
     Ok(s)
+}
+
+/// The error of a blob (or the blob fitted from `path`) whose K(T0) cannot be inverted.
+pub fn singular_k(path: &Path) -> HostError {
+    HostError::in_file(ErrorKind::Numerical, path, "K(T0) of the blob is singular")
 }
 
 /// Read and decode a blob file; the error names the file and why it is invalid. A file
@@ -295,10 +299,14 @@ pub fn blob_serial(serial: &str) -> Result<heapless::String<MAX_SERIAL_LEN>> {
 pub fn read_blob(path: &Path) -> Result<(Blob, Vec<u8>)> {
     let bytes = std::fs::read(path).map_err(|e| HostError::io(path, &e))?;
     if !bytes.starts_with(&MAGIC) {
-        return Err(HostError::in_file(path, not_a_blob(&bytes)));
+        return Err(HostError::in_file(
+            ErrorKind::Blob,
+            path,
+            not_a_blob(&bytes),
+        ));
     }
-    let b =
-        Blob::decode(&bytes).map_err(|e| HostError::in_file(path, format!("invalid blob: {e}")))?;
+    let b = Blob::decode(&bytes)
+        .map_err(|e| HostError::in_file(ErrorKind::Blob, path, format!("invalid blob: {e}")))?;
     Ok((b, bytes))
 }
 

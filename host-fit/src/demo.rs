@@ -4,11 +4,11 @@
 //! to when the demo runs again with `--force`); then the plan `host-fit plan` chooses for
 //! the same accuracy, run on the same unit, beside it ([`crate::demo_plan`]).
 use crate::acceptance::{Acceptance, Spec};
-use crate::analysis::{analyse, DemoOutcome, SummaryRow};
+use crate::analysis::{analyse, Compared, DemoOutcome, SummaryRow};
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::demo_plan::{beside, Beside, TargetFrom};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::select::Selection;
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::simulate::{simulate, SimConfig, TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
@@ -54,7 +54,7 @@ struct PlanSummary<'a> {
 /// One model's verdict in summary.json.
 #[derive(Serialize)]
 struct ModelAcceptance<'a> {
-    model: &'a str,
+    model: &'a Compared,
     judged: &'a Acceptance,
 }
 
@@ -88,9 +88,9 @@ pub fn outputs(dir: &Path) -> Vec<PathBuf> {
     [
         "recording.csv",
         "truth.json",
-        "paper-pwl2.blob",
-        "chosen.blob",
-        "pwl-all.blob",
+        Compared::files()[0],
+        Compared::files()[1],
+        Compared::files()[2],
         PLAN_PROGRAM,
         PLAN_RECORDING,
         PLAN_VERIFICATION,
@@ -121,10 +121,10 @@ fn records(
     for m in &oc.models {
         let mut r = Record::new(Command::Demo, None, &oc.recording.unit, rec_path)?;
         r.time_utc.clone_from(&started);
-        r.options = serde_json::json!({ "seed": seed, "model": m.name, "blob": m.file });
+        r.options = serde_json::json!({ "seed": seed, "model": m.model.to_string(), "blob": m.model.file() });
         r.input_sha256 = Some(sha.clone());
-        r.output_unit = Some(oc.recording.output_unit.clone());
-        r.model = Some(m.name.clone());
+        r.output_unit = Some(oc.recording.output_unit.to_string());
+        r.model = Some(m.model.to_string());
         let cal = m.fit.calibration(0.1, false);
         r.at_t0 = Some(AtT0 {
             t0_c: cal.t0_c,
@@ -175,7 +175,7 @@ fn plan_record(
         "plan": plan.candidates[plan.chosen].kind.describe(),
     });
     r.input_sha256 = Some(sha);
-    r.output_unit = Some(plan.recording.output_unit.clone());
+    r.output_unit = Some(plan.recording.output_unit.to_string());
     r.model = Some(format!("plan ({})", j.fitted));
     r.at_t0 = Some(AtT0 {
         t0_c: plan.calibration.t0_c,
@@ -217,9 +217,9 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<(DemoOutcome, Beside)> 
     let paper = oc
         .models
         .iter()
-        .find(|m| m.file == "chosen.blob")
-        .ok_or_else(|| HostError::msg("internal: no data-chosen model"))?;
-    let plan = beside(&cfg, &oc.recording, (&paper.blob, &paper.name))?;
+        .find(|m| matches!(m.model, Compared::Chosen(_)))
+        .ok_or_else(|| HostError::new(ErrorKind::Internal, "internal: no data-chosen model"))?;
+    let plan = beside(&cfg, &oc.recording, (&paper.blob, &paper.model))?;
     b.finish_and_clear();
     let mut recorded = records(&oc, &plan, &rec_path, &sim.csv, seed)?;
     store.append(&mut recorded)?;
@@ -227,10 +227,10 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<(DemoOutcome, Beside)> 
     for m in &oc.models {
         let blob = recorded
             .iter()
-            .find(|r| r.options["blob"] == m.file)
+            .find(|r| r.options["blob"] == m.model.file())
             .and_then(|r| r.blob.as_deref())
             .unwrap_or(&m.blob);
-        write_atomic(&dir.join(m.file), blob, force)?;
+        write_atomic(&dir.join(m.model.file()), blob, force)?;
     }
     let plan_blob = recorded
         .iter()
@@ -255,7 +255,7 @@ pub fn run(dir: &Path, seed: u64, force: bool) -> Result<(DemoOutcome, Beside)> 
             .models
             .iter()
             .map(|m| ModelAcceptance {
-                model: &m.name,
+                model: &m.model,
                 judged: &m.acceptance,
             })
             .collect(),

@@ -8,7 +8,7 @@ use crate::blob::{build_blob, Cache};
 use crate::data::positions::Role;
 use crate::data::recording::Recording;
 use crate::diagnose::dynamic::{auto, Routed};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::pipeline::ModelRequest;
 use crate::plan::{
     candidates, choose, predict, program, run, verification, verification_temps, Candidate, Limits,
@@ -23,8 +23,20 @@ use firmware_core::temperature::Calibration;
 use serde::Serialize;
 
 /// How the plan's target was set.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
-#[serde(rename_all = "snake_case")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "snake_case")]
 pub enum TargetFrom {
     /// The paper test's own predicted worst |dg| (the same prediction as the
     /// candidates', on the same verification block): the shortest plan at least as
@@ -89,7 +101,7 @@ pub fn limits(cfg: &SimConfig) -> Limits {
     Limits {
         lo_c: stops.clone().fold(f64::INFINITY, f64::min),
         hi_c: stops.fold(f64::NEG_INFINITY, f64::max),
-        max_ramp_c_per_min: 3.0,
+        max_ramp_c_per_min: crate::plan::DEFAULT_MAX_RAMP_C_PER_MIN,
         positions: cfg.schedule.positions.clone(),
         dwell_s: cfg.schedule.dwell_s,
         move_s: cfg.schedule.move_s,
@@ -117,22 +129,30 @@ pub fn fit_as_fit_does(rec: &Recording) -> Result<(Calibration<f64>, String)> {
         Routed::Static(oc) => {
             let mut cal = oc.fit.calibration(0.0, false);
             Cache::for_fit(rec, &oc, &mut cal, None);
-            let name = crate::analysis::chosen_name(&oc.fit.basis);
-            Ok((
-                cal,
-                format!("static route, {}", name.trim_start_matches("chosen-")),
-            ))
+            let model = crate::analysis::Compared::Chosen(oc.fit.basis.clone());
+            Ok((cal, format!("static route, {}", model.family())))
         }
     }
 }
 
+/// A test of the comparison, before it is judged.
+struct Tested {
+    /// `paper test` or the chosen plan's description.
+    test: String,
+    /// Chamber hours of its calibration recording.
+    hours: f64,
+    /// What was fitted (route and model).
+    fitted: String,
+}
+
 /// Verify `blob` on the block `ver` with method 1 and judge it.
-fn judged(ver: &Recording, blob: &Blob, what: (String, f64, String)) -> Result<Judged> {
+fn judged(ver: &Recording, blob: &Blob, what: Tested) -> Result<Judged> {
     let check = |p: usize| ver.positions.has_role(p, Role::Verification);
     let v = verify(ver, blob, Method::CorrectConstants, &check)
-        .ok_or_else(|| HostError::msg("singular K(T0)"))?;
+        .ok_or_else(|| HostError::new(ErrorKind::Numerical, "singular K(T0)"))?;
     if v.dwells.is_empty() {
-        return Err(HostError::msg(
+        return Err(HostError::new(
+            ErrorKind::Internal,
             "internal: the verification block has no verification dwells",
         ));
     }
@@ -149,9 +169,9 @@ fn judged(ver: &Recording, blob: &Blob, what: (String, f64, String)) -> Result<J
         (f64::from(cal.t_min_c), f64::from(cal.t_max_c)),
     );
     Ok(Judged {
-        test: what.0,
-        hours: what.1,
-        fitted: what.2,
+        test: what.test,
+        hours: what.hours,
+        fitted: what.fitted,
         valid_c: (f64::from(cal.t_min_c), f64::from(cal.t_max_c)),
         worst_mg,
         acceptance,
@@ -160,7 +180,11 @@ fn judged(ver: &Recording, blob: &Blob, what: (String, f64, String)) -> Result<J
 
 /// The plan beside the paper test `paper` (its recording, its data-chosen blob's bytes
 /// and model name) of the unit `cfg`.
-pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> Result<Beside> {
+pub fn beside(
+    cfg: &SimConfig,
+    paper: &Recording,
+    paper_blob: (&[u8], &crate::analysis::Compared),
+) -> Result<Beside> {
     let l = limits(cfg);
     let temps = verification_temps(&l);
     let dwell_samples = l.dwell_s * l.rate_hz;
@@ -178,11 +202,15 @@ pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> 
         None => {
             let t = Target::Hours(paper_hours);
             let i = choose(&c, t).ok_or_else(|| {
-                HostError::msg(format!(
-                    "{}:\n{}",
-                    crate::plan::why_none(&c, t, &l),
-                    crate::plan::table(&c, None)
-                ))
+                HostError::new(
+                    ErrorKind::Unmet,
+                    format!(
+                        "{}:
+{}",
+                        crate::plan::why_none(&c, t, &l),
+                        crate::plan::table(&c, None)
+                    ),
+                )
             })?;
             (TargetFrom::PaperHours, t, i)
         }
@@ -198,35 +226,31 @@ pub fn beside(cfg: &SimConfig, paper: &Recording, paper_blob: (&[u8], &str)) -> 
     let (recording_csv, rec) = run(cfg, &cal_steps, "plan-recording.csv")?;
     let (verification_csv, ver) = run(cfg, &verification(&l, 0.0, last), "verification.csv")?;
     let (cal, fitted) = fit_as_fit_does(&rec)?;
-    let serial = if rec.unit.is_empty() {
-        "UNKNOWN"
-    } else {
-        rec.unit.as_str()
-    };
-    let (blob, bytes, _) = build_blob(serial, &rec.output_unit, &cal)?;
-    let paper_b = Blob::decode(paper_blob.0)
-        .map_err(|e| HostError::msg(format!("internal: the paper test's blob: {e}")))?;
+    let (blob, bytes, _) = build_blob(rec.serial(), &rec.output_unit, &cal)?;
+    let paper_b = Blob::decode(paper_blob.0).map_err(|e| {
+        HostError::new(
+            ErrorKind::Internal,
+            format!("internal: the paper test's blob: {e}"),
+        )
+    })?;
     let judged = [
         judged(
             &ver,
             &paper_b,
-            (
-                "paper test".to_string(),
-                paper_hours,
-                format!(
-                    "static route, {}",
-                    paper_blob.1.trim_start_matches("chosen-")
-                ),
-            ),
+            Tested {
+                test: "paper test".to_string(),
+                hours: paper_hours,
+                fitted: format!("static route, {}", paper_blob.1.family()),
+            },
         )?,
         judged(
             &ver,
             &blob,
-            (
-                format!("plan: {}", c[chosen].kind.describe()),
-                c[chosen].hours,
+            Tested {
+                test: format!("plan: {}", c[chosen].kind.describe()),
+                hours: c[chosen].hours,
                 fitted,
-            ),
+            },
         )?,
     ];
     Ok(Beside {

@@ -1,6 +1,6 @@
 //! Output files: written atomically, never over an existing file without `--force`,
 //! and the one way JSON and CSV are produced.
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use serde::Serialize;
 use std::io::Write;
 use std::path::Path;
@@ -9,6 +9,7 @@ use std::path::Path;
 pub fn check_writable(path: &Path, force: bool) -> Result<()> {
     if path.is_dir() {
         return Err(HostError::in_file(
+            ErrorKind::Invalid,
             path,
             "is a folder: give the path of a file to write in it (e.g. this folder/unit.blob)",
         ));
@@ -21,6 +22,7 @@ pub fn check_writable(path: &Path, force: bool) -> Result<()> {
             "does not exist"
         };
         return Err(HostError::in_file(
+            ErrorKind::Io,
             path,
             format!(
                 "cannot be written: `{}` {why} (create the folder first, or give another path)",
@@ -30,6 +32,7 @@ pub fn check_writable(path: &Path, force: bool) -> Result<()> {
     }
     if !force && path.exists() {
         return Err(HostError::in_file(
+            ErrorKind::Exists,
             path,
             "exists; refusing to overwrite it (use --force)",
         ));
@@ -79,7 +82,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
 /// Pretty JSON of a typed output (every JSON the tool writes goes through here).
 pub fn json<T: Serialize + ?Sized>(value: &T) -> Result<String> {
     serde_json::to_string_pretty(value)
-        .map_err(|e| HostError::msg(format!("cannot encode JSON: {e}")))
+        .map_err(|e| HostError::new(ErrorKind::Internal, format!("cannot encode JSON: {e}")))
 }
 
 /// [`json`] written atomically to `path`.
@@ -94,7 +97,7 @@ where
     R: IntoIterator,
     R::Item: AsRef<[u8]>,
 {
-    let err = |e: csv::Error| HostError::msg(format!("cannot write CSV: {e}"));
+    let err = |e: csv::Error| HostError::new(ErrorKind::Internal, format!("cannot write CSV: {e}"));
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(header).map_err(err)?;
     for r in records {
@@ -102,8 +105,9 @@ where
     }
     let bytes = w
         .into_inner()
-        .map_err(|e| HostError::msg(format!("cannot write CSV: {e}")))?;
-    String::from_utf8(bytes).map_err(|e| HostError::msg(format!("CSV is not UTF-8: {e}")))
+        .map_err(|e| HostError::new(ErrorKind::Internal, format!("cannot write CSV: {e}")))?;
+    String::from_utf8(bytes)
+        .map_err(|e| HostError::new(ErrorKind::Internal, format!("CSV is not UTF-8: {e}")))
 }
 
 #[cfg(test)]
@@ -116,6 +120,8 @@ mod tests {
         let p = dir.path().join("out.bin");
         write_atomic(&p, b"one", false).unwrap();
         let e = write_atomic(&p, b"two", false).unwrap_err();
+        // the refusal says what to do
+        assert_eq!(e.kind(), ErrorKind::Exists);
         assert!(e.to_string().contains("--force"), "{e}");
         assert_eq!(std::fs::read(&p).unwrap(), b"one");
         write_atomic(&p, b"two", true).unwrap();
@@ -129,6 +135,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("nodir").join("u.blob");
         let e = write_atomic(&p, b"x", false).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Io);
         let text = e.to_string();
         assert!(
             text.contains("nodir` does not exist") && !text.contains(".u.blob."),
@@ -136,7 +143,10 @@ mod tests {
         );
         std::fs::write(dir.path().join("file"), b"").unwrap();
         let e = check_writable(&dir.path().join("file").join("u.blob"), true).unwrap_err();
-        assert!(e.to_string().contains("is not a folder"), "{e}");
+        assert_eq!(e.kind(), ErrorKind::Io);
+        assert!(e.to_string().contains("file` is not a folder"), "{e}");
+        let e = check_writable(dir.path(), true).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Invalid);
     }
 
     #[test]

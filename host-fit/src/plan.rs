@@ -11,11 +11,22 @@ use crate::data::recording::Recording;
 use crate::diagnose::design::static_at;
 use crate::diagnose::dynamic::fit_dynamic;
 use crate::diagnose::metrics::dispersion;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
+use crate::simulate::config::CASE_TAU_S;
 use crate::simulate::program::Step;
 use crate::simulate::{simulate, PerAxis, SimConfig};
 use serde::Serialize;
 use std::path::Path;
+
+/// The chamber's fastest ramp `plan` assumes when none is given, C/min: a common
+/// production chamber's controlled rate (the demo's chamber too).
+pub const DEFAULT_MAX_RAMP_C_PER_MIN: f64 = 3.0;
+
+/// Soaks and settle times count the unit's thermal time constant plus its case's
+/// ([`CASE_TAU_S`]), s: the element lags the sensor, and the sensor the air.
+fn settle_tau_s(l: &Limits) -> f64 {
+    l.tau_s + CASE_TAU_S
+}
 
 /// What the engineer states about the chamber, the tilter and the unit type.
 #[derive(Debug, Clone, Serialize)]
@@ -225,7 +236,7 @@ pub fn program(kind: Kind, l: &Limits) -> (Vec<Step>, f64) {
 /// the equilibrium dwells are judged.
 pub fn verification(l: &Limits, mut t: f64, mut sp: f64) -> Vec<Step> {
     let mut steps = Vec::new();
-    let soak = (5.0 * (l.tau_s + 600.0)).max(1800.0);
+    let soak = (5.0 * settle_tau_s(l)).max(1800.0);
     for to in verification_temps(l) {
         let ramp = (to - sp).abs() / l.max_ramp_c_per_min * 60.0;
         if ramp > 0.0 {
@@ -297,7 +308,10 @@ pub fn predict(
     let cal = d.calibration()?;
     let f = &d.fit;
     let Some(cov) = &f.cov else {
-        return Err(HostError::msg("the fit carries no covariance"));
+        return Err(HostError::new(
+            ErrorKind::Numerical,
+            "the fit carries no covariance",
+        ));
     };
     let phi = dispersion(&d.data, f);
     let p = f.x.len();
@@ -384,7 +398,7 @@ pub fn cover_hold_min(cfg: &SimConfig, c_per_min: f64) -> f64 {
 /// bottom) and a settle time at the cold end, so that a sweep may cover the range asked
 /// for.
 pub fn kinds(l: &Limits) -> Vec<Kind> {
-    let settle_min = ((l.tau_s + 600.0) / 60.0).round();
+    let settle_min = (settle_tau_s(l) / 60.0).round();
     let mut v: Vec<Kind> = [10.0, 25.0, 40.0]
         .map(|soak_min| Kind::StopSoak { soak_min })
         .to_vec();
@@ -455,7 +469,8 @@ fn check(l: &Limits) -> Result<()> {
     if ok {
         Ok(())
     } else {
-        Err(HostError::msg(
+        Err(HostError::new(
+            ErrorKind::Invalid,
             "plan needs a range lo < hi, a ramp > 0, a rate > 0, a noise > 0, a time constant >= 0, a dwell > 0 and at least 6 positions",
         ))
     }

@@ -4,10 +4,12 @@
 //! same seed with and without them: the noise is identical, the difference is the effect.
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::{Recording, Row};
+use host_fit::error::ErrorKind;
 use host_fit::fit::identify::{identify_stop, stops};
 use host_fit::fit::noise::noise;
 use host_fit::simulate::{
-    parse_config, simulate, Curvature, Effects, Fixture, PerAxis, SimConfig, Stop, TrueUnit, Warmup,
+    parse_config, simulate, Curvature, Effects, Fixture, Interp, PerAxis, SimConfig, Stop,
+    TrueUnit, UnitModel, Warmup,
 };
 use std::path::Path;
 
@@ -85,6 +87,7 @@ fn toml_config_with_every_effect_parses_and_the_recording_reads() {
     assert!(rec.rows.len() > 1000);
     assert!(rec.dwells.len() > 10);
     let e = parse_config(Path::new("bad.toml"), "seed = 1\n[unit]\nnoise = 3\n").unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Malformed, "{e}");
     assert!(
         e.to_string().contains("bad.toml:3") && e.to_string().contains("noise"),
         "{e}"
@@ -531,7 +534,9 @@ fn a_program_drives_the_chamber_and_the_tilter() {
             "header",
         ),
     ] {
-        let e = parse_program(p, bad).unwrap_err().to_string();
+        let e = parse_program(p, bad).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Malformed, "{e}");
+        let e = e.to_string();
         assert!(
             e.contains(&format!("plan.csv:{line}")) && e.contains(field),
             "{e}"
@@ -543,8 +548,9 @@ fn a_program_drives_the_chamber_and_the_tilter() {
         "time_s,setpoint_c,position\n0,10,TP1\n5,10,XX9\n9,10,TP1\n",
     )
     .unwrap();
-    let e = simulate(&bad, |_| {}).err().unwrap().to_string();
-    assert!(e.contains("XX9"), "{e}");
+    let e = simulate(&bad, |_| {}).err().unwrap();
+    assert_eq!(e.kind(), ErrorKind::Invalid, "{e}");
+    assert!(e.to_string().contains("XX9"), "{e}");
 }
 
 /// A configuration with every option set (every `Option` `Some`, every list non-empty),
@@ -599,10 +605,10 @@ fn every_option() -> SimConfig {
         },
         unit: Unit {
             serial: "S".into(),
-            model: "table".into(),
+            model: UnitModel::Table,
             temps_c: vec![20.0],
             coeffs: vec![[0.0; 12]],
-            interp: "pwl".into(),
+            interp: Interp::Pwl,
             noise_v: 2e-5,
             resolution_v: 1e-7,
             noise_corr_s: 1.0,

@@ -1,4 +1,4 @@
-//! The four-stop twin of issue 17 (-30, 5, 25, 60 C; T0 = 25 C; 12 positions; seed 3), a
+//! The four-stop twin of a lab's test (-30, 5, 25, 60 C; T0 = 25 C; 12 positions; seed 3), a
 //! one-stop variant of it, and the recording with one dwell taken out, as a lab's
 //! recordings come: for the verdicts and the missing-dwell tests.
 use crate::{cli, s};

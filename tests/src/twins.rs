@@ -3,7 +3,9 @@
 //! fit they are compared with.
 use host_fit::data::positions::{Positions, Role};
 use host_fit::data::recording::{Recording, MAX_DWELL_DRIFT_C};
-use host_fit::simulate::{simulate, Curvature, SimConfig, TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
+use host_fit::simulate::{
+    simulate, Curvature, Interp, SimConfig, TrueUnit, UnitModel, PAPER_UNIT, PAPER_UNIT_TEMPS,
+};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use std::path::Path;
 
@@ -15,12 +17,12 @@ fn seeded(seed: u64) -> SimConfig {
 }
 
 /// A twin whose truth is the table `rows` at `temps`, interpolated by `interp`.
-fn table(seed: u64, temps: Vec<f64>, rows: Vec<[f64; 12]>, interp: &str) -> SimConfig {
+fn table(seed: u64, temps: Vec<f64>, rows: Vec<[f64; 12]>, interp: Interp) -> SimConfig {
     let mut c = seeded(seed);
-    c.unit.model = "table".into();
+    c.unit.model = UnitModel::Table;
     c.unit.temps_c = temps;
     c.unit.coeffs = rows;
-    c.unit.interp = interp.into();
+    c.unit.interp = interp;
     c
 }
 
@@ -40,7 +42,7 @@ pub fn all() -> Vec<(&'static str, SimConfig)> {
             4,
             idx.iter().map(|i| PAPER_UNIT_TEMPS[*i]).collect(),
             idx.iter().map(|i| PAPER_UNIT[*i]).collect(),
-            "poly",
+            Interp::Poly,
         ),
     ));
     // piecewise-linear with its kinks between the stops (-25, 5, 32 C)
@@ -61,7 +63,7 @@ pub fn all() -> Vec<(&'static str, SimConfig)> {
         .collect();
     out.push((
         "pwl truth, kinks off the stops",
-        table(5, kinks.to_vec(), rows, "pwl"),
+        table(5, kinks.to_vec(), rows, Interp::Pwl),
     ));
     let mut wavy = seeded(6);
     wavy.effects.temp_curvature = Some(Curvature {

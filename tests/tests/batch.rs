@@ -40,7 +40,7 @@ fn odd_unit() -> SimConfig {
         seed: 9,
         ..SimConfig::default()
     };
-    cfg.unit.model = "table".into();
+    cfg.unit.model = host_fit::simulate::UnitModel::Table;
     cfg.unit.temps_c = PAPER_UNIT_TEMPS.to_vec();
     cfg.unit.coeffs = PAPER_UNIT
         .iter()

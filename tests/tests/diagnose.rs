@@ -56,11 +56,11 @@ fn blind_suite_by_class() {
     // the TP-only recording cannot separate K2 from scale asymmetry: reported, not guessed
     let tp = outcomes.iter().find(|o| o.case.tp_only).unwrap();
     assert!(tp.found.is_empty() && !tp.ambiguous.is_empty(), "{text}");
-    issue_18_classes(&outcomes, &text);
+    classes_on_own_profiles(&outcomes, &text);
 }
 
-/// Issue 18's classes in the short suite (one seed, the cold-first profile): every class
-/// is there and reported apart; a digital output of a few counts per g is diagnosed like
+/// The classes on test profiles of their own in the short suite (one seed, the cold-first
+/// profile): every class is there and reported apart; a digital output of a few counts per g is diagnosed like
 /// any other; a fixture re-clamped between two stops is named with its position and stop
 /// (before the held-out chunks stopped holding a whole stop's positions, none of the
 /// three was: every chunk with that position's dwells was an extrapolation); a mixture
@@ -68,7 +68,7 @@ fn blind_suite_by_class() {
 /// may leave at most one of five cases named (a settling that starts mid-test is still
 /// called a warm-up: measured, not hidden, in the long suite's figure; before a trend in
 /// time had to be beaten, two were named).
-fn issue_18_classes(outcomes: &[host_fit::blind::Outcome], text: &str) {
+fn classes_on_own_profiles(outcomes: &[host_fit::blind::Outcome], text: &str) {
     let classes = [
         Class::SlowDisturbance,
         Class::Digital,

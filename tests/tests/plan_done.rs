@@ -1,8 +1,8 @@
-//! Issue 19's done-criteria on the twin: for a unit with no lag and units whose element
+//! What `plan` must achieve, on the twin: for a unit with no lag and units whose element
 //! lags its sensor by 5 and 20 minutes, the plan `host-fit plan --hours 2.5` chooses (the
-//! unit type's lag stated; since issue 29 only a plan whose blob covers the range
-//! -40..70 C: no sweep of 2 h brings the unit's sensor to +70 C and back), run on the
-//! same unit and fitted by default, passes acceptance
+//! unit type's lag stated; only a plan whose blob covers the range -40..70 C: no sweep of
+//! 2 h brings the unit's sensor to +70 C and back), run on the same unit and fitted by
+//! default, passes acceptance
 //! on an equilibrium verification block with its worst |dg| within 1.5x of the 6-h
 //! stop-and-soak test's (fitted on the route `fit` chooses for it, the default) on the
 //! same unit, and `plan`'s predicted accuracy covers the simulated one. The 20-min lag

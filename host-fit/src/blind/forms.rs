@@ -1,7 +1,7 @@
 //! The blind suite's cases beyond the catalogue's own forms, written from physics (not
 //! from the diagnosis): other forms of each effect, effects outside the catalogue, and
-//! clean recordings with the nuisances real data has; and the classes of issue 18
-//! ([`crate::blind::kinds`]). Each class is its own enum, so every form is concealed by
+//! clean recordings with the nuisances real data has; and the classes that run on test
+//! profiles of their own ([`crate::blind::kinds`]). Each class is its own enum, so every form is concealed by
 //! an exhaustive match: a form without physics cannot compile.
 use crate::blind::draw::{axes3, main_axis};
 use crate::blind::kinds::{Digital, Mixture, Refixed, Slow};
@@ -11,24 +11,43 @@ use crate::diagnose::EffectId;
 use crate::rng::Rng;
 use crate::simulate::{Bend, Fixture, Gradient, PerAxis, SimConfig, Stop, Warmup};
 
-/// What a case tests.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// What a case tests. Its own name (`blind --class`) is short; [`Class::name`] is the
+/// report's.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
 pub enum Class {
     /// Catalogue effects in the catalogue's own form (and clean recordings).
+    #[strum(serialize = "catalogue")]
     Catalogue,
     /// A catalogue effect in another physically plausible form.
+    #[strum(serialize = "other-forms")]
     OtherForm,
     /// An effect outside the catalogue.
+    #[strum(serialize = "outside")]
     Outside,
     /// A clean recording with a real-world nuisance.
+    #[strum(serialize = "nuisances")]
     Nuisance,
     /// A slow disturbance of the bias with no power-on behind it.
+    #[strum(serialize = "slow")]
     SlowDisturbance,
     /// A digital output of a few counts per g.
+    #[strum(serialize = "digital")]
     Digital,
     /// A fixture re-clamped between two stops.
+    #[strum(serialize = "re-clamped")]
     FixtureChange,
     /// Three catalogue effects at 0.3-1x their nominal sizes.
+    #[strum(serialize = "mixtures")]
     Mixture,
 }
 
@@ -153,9 +172,9 @@ impl Form {
         Form::Nuisance(Nuisance::NoisyVoltmeter),
     ];
 
-    /// The forms of issue 18's classes, in the order of their report: slow
-    /// disturbances, digital outputs, re-clamped fixtures, mixtures.
-    pub fn issue_18() -> Vec<Form> {
+    /// The forms of the classes that run on test profiles of their own, in the order of
+    /// their report: slow disturbances, digital outputs, re-clamped fixtures, mixtures.
+    pub fn on_own_profiles() -> Vec<Form> {
         let mut v: Vec<Form> = Slow::ALL.map(Form::Slow).to_vec();
         v.extend(Digital::ALL.map(Form::Digital));
         v.extend(Refixed::ALL.map(Form::Refixed));
@@ -493,9 +512,9 @@ mod tests {
                 form.name()
             );
         }
-        // issue 18's forms run on profiles of their own: against the same profile without
+        // these forms run on profiles of their own: against the same profile without
         // effects (a digital clean form conceals nothing but its output unit)
-        for form in Form::issue_18() {
+        for form in Form::on_own_profiles() {
             let cfg = configure(&Case::of_form(form, seed));
             let mut bare = cfg.clone();
             bare.effects = crate::simulate::Effects::default();
@@ -515,7 +534,10 @@ mod tests {
 
     #[test]
     fn form_names_are_distinct() {
-        let all: Vec<Form> = Form::ALL.into_iter().chain(Form::issue_18()).collect();
+        let all: Vec<Form> = Form::ALL
+            .into_iter()
+            .chain(Form::on_own_profiles())
+            .collect();
         for (i, a) in all.iter().enumerate() {
             for b in &all[i + 1..] {
                 assert_ne!(a.name(), b.name());

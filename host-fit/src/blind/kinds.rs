@@ -1,4 +1,4 @@
-//! The blind classes of issue 18, written from physics (not from the diagnosis): slow
+//! The blind classes that run on test profiles of their own, written from physics (not from the diagnosis): slow
 //! disturbances with no power-on behind them, digital outputs of a few counts per g,
 //! a fixture re-clamped between two stops, and mixtures of three catalogue effects at
 //! 0.3-1x their nominal sizes; all on the profiles of [`crate::blind::profiles`].

@@ -197,7 +197,10 @@ pub fn suite(long: bool) -> Vec<Case> {
             tp_only: true,
             ..Case::catalogue(vec![EffectId::NonlinearityK2], 1.0, seed)
         });
-        for f in forms::Form::ALL.into_iter().chain(forms::Form::issue_18()) {
+        for f in forms::Form::ALL
+            .into_iter()
+            .chain(forms::Form::on_own_profiles())
+        {
             v.push(Case::of_form(f, seed));
         }
     }

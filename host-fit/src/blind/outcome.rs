@@ -276,7 +276,7 @@ mod tests {
                 Profile::ColdFirst
             ]
         );
-        for form in Form::issue_18() {
+        for form in Form::on_own_profiles() {
             let c = configure(&Case::of_form(form, 2));
             assert_eq!(c.schedule.stops.len(), 4, "{}", form.name());
             assert_eq!(c.t0_c, 25.0, "{}", form.name());

@@ -1,4 +1,4 @@
-//! The test profiles of the blind classes added for issue 18, none of them the suite's own
+//! The test profiles of the blind classes of [`crate::blind::kinds`], none the suite's own
 //! (20 -> -20 -> 10 -> 40 -> 10 C): four stops from the coldest up, four from the hottest
 //! down with another T0, and four with long soaks; and when each stop happens.
 use crate::simulate::{SimConfig, Stop};

@@ -1,5 +1,6 @@
 //! The command line's grammar: every command and option, with its help text. Its enums
 //! are the command line's own (clap's `ValueEnum`); each maps onto the library's.
+use crate::blind::Class;
 use crate::fit::pipeline::{ModelKind, Route};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use firmware_core::compensate::ErrorModel;
@@ -44,12 +45,11 @@ pub enum MethodArg {
 }
 
 impl MethodArg {
-    /// `1` or `2`, as the outputs name it.
-    pub fn name(self) -> &'static str {
-        match self {
-            MethodArg::One => "1",
-            MethodArg::Two => "2",
-        }
+    /// `1` or `2`, as the outputs name it: its name on the command line.
+    pub fn name(self) -> String {
+        self.to_possible_value()
+            .map(|v| v.get_name().to_string())
+            .unwrap_or_default()
     }
 }
 
@@ -452,10 +452,19 @@ pub struct BlindArgs {
     /// Run only the cases whose name contains this, and print each one's diagnosis.
     #[arg(long)]
     pub only: Option<String>,
-    /// Run only the cases of the classes whose report name contains one of these
-    /// (comma-separated, e.g. `slow,digital,re-clamped,mixtures`).
-    #[arg(long, value_delimiter = ',')]
-    pub class: Vec<String>,
+    /// Run only the cases of these classes (comma-separated, e.g.
+    /// `slow,digital,re-clamped,mixtures`).
+    #[arg(long, value_delimiter = ',', value_parser = class_parser())]
+    pub class: Vec<Class>,
+}
+
+/// `--class`: one of the blind suite's classes by its name ([`Class`]'s own names, listed
+/// in `--help` and in the error for any other).
+fn class_parser() -> impl clap::builder::TypedValueParser<Value = Class> {
+    use clap::builder::{PossibleValuesParser, TypedValueParser};
+    use strum::IntoEnumIterator;
+    PossibleValuesParser::new(Class::iter().map(<&'static str>::from))
+        .try_map(|s| s.parse::<Class>())
 }
 
 /// `simulate`.
@@ -493,7 +502,7 @@ pub struct PlanArgs {
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true, default_values_t = [-40.0, 70.0])]
     pub range_c: Vec<f64>,
     /// The chamber's fastest ramp, C/min.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = crate::plan::DEFAULT_MAX_RAMP_C_PER_MIN)]
     pub max_ramp_c_per_min: f64,
     /// The tilter's positions, in the order visited.
     #[arg(

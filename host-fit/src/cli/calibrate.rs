@@ -1,10 +1,11 @@
 //! `temp-fit`, `identify` and `fit`: from data to coefficients and blobs.
 use super::args::{FitArgs, IdentifyArgs, RouteArg, TempFitArgs};
-use super::common::{load_for_blob, load_to_fit, oriented, serial, w};
+use super::common::{load_for_blob, load_to_fit, oriented, w};
 use crate::blob::{build_blob, Cache, F32_BOUND_G};
+use crate::data::output_unit::OutputUnit;
 use crate::data::table::{read_table, to_csv, TableRow};
 use crate::diagnose::dynamic::{auto, fit_dynamic, Candidate, DynamicFit, Routed, Shape};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::describe::ModelDescription;
 use crate::fit::equilibrium::Excluded;
 use crate::fit::identify::StopCoeffs;
@@ -64,7 +65,7 @@ pub(super) fn temp_fit(a: TempFitArgs, out: &mut dyn Write) -> Result<()> {
 struct Identified<'a> {
     unit: &'a str,
     /// The outputs' unit: K is in it per g, U0 in it.
-    output_unit: &'a str,
+    output_unit: &'a OutputUnit,
     /// None when no dwell has two samples (a dwell-averaged recording).
     noise_sigma: Option<[f64; 3]>,
     stops: Vec<IdentifiedStop<'a>>,
@@ -132,7 +133,7 @@ pub(super) fn identify(a: IdentifyArgs, out: &mut dyn Write, err: &mut dyn Write
             "no dwell has two samples: the noise is not known, and the standard errors below are for unit noise (relative only)".to_string()
         };
         w(out, format!("unit {}  {noise_line}", rec.unit))?;
-        w(out, identified_text(&st, &rec.output_unit))
+        w(out, identified_text(&st, rec.output_unit.as_str()))
     }
 }
 
@@ -338,7 +339,8 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     let rec = load_for_blob(&a.input, err)?;
     let route = Route::from(a.route);
     if route == Route::Dynamic && req.kind.is_some() {
-        return Err(HostError::msg(
+        return Err(HostError::new(
+            ErrorKind::Invalid,
             "the dynamic route chooses its model on held-out blocks of time; --model does not apply to it",
         ));
     }
@@ -362,7 +364,7 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
         }
         (_, RouteArg::Static) => fit_chosen(&rec, &req)?,
         (None, _) => {
-            return Err(HostError::msg(format!(
+            return Err(HostError::new(ErrorKind::Invalid, format!(
                 "the model is chosen by the data on the static route only; with --route {} give --model",
                 route.name()
             )))
@@ -379,7 +381,7 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     };
     let mut cal = oc.fit.calibration(0.0, a.clamp);
     let cache = Cache::for_fit(&rec, &oc, &mut cal, a.update_step);
-    let serial_name = a.serial.as_deref().unwrap_or(serial(&rec));
+    let serial_name = a.serial.as_deref().unwrap_or(rec.serial());
     let (blob, bytes, dep) = build_blob(serial_name, &rec.output_unit, &cal)?;
     let run = super::records::Run {
         args: &a.record,
@@ -457,7 +459,7 @@ fn fit_dynamic_cli(
     if let Some(step) = a.update_step {
         cal.update_step_c = step;
     }
-    let serial_name = a.serial.as_deref().unwrap_or(serial(rec));
+    let serial_name = a.serial.as_deref().unwrap_or(rec.serial());
     let (blob, bytes, dep) = build_blob(serial_name, &rec.output_unit, &cal)?;
     let run = super::records::Run {
         args: &a.record,

@@ -2,11 +2,11 @@
 //! the firmware's expected outputs.
 use super::args::{ErrModel, FwVectorsArgs, InspectArgs, MethodArg, VerifyArgs};
 use super::common::Outcome;
-use super::common::{load, serial, w};
+use super::common::{load, w};
 use crate::acceptance::{judge, Acceptance, Verdict};
-use crate::blob::{read_blob, Inspection, F32_BOUND_G};
+use crate::blob::{read_blob, singular_k, Inspection, F32_BOUND_G};
 use crate::data::positions::Role;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::output::{json, write_atomic};
 use crate::verify::{verify as run_verify, DwellCheck, TempMax};
 use firmware_core::compensate::Method;
@@ -18,7 +18,7 @@ use std::io::Write;
 struct Verified<'a> {
     unit: &'a str,
     blob_serial: &'a str,
-    method: &'a str,
+    method: String,
     dwells: &'a [DwellCheck],
     max_by_temperature: &'a [TempMax],
     #[serde(flatten)]
@@ -30,7 +30,8 @@ struct Verified<'a> {
 fn method(m: MethodArg, error_model: Option<ErrModel>) -> Result<Method> {
     match (m, error_model) {
         (MethodArg::One, None) => Ok(Method::CorrectConstants),
-        (MethodArg::One, Some(_)) => Err(HostError::msg(
+        (MethodArg::One, Some(_)) => Err(HostError::new(
+            ErrorKind::Invalid,
             "--error-model applies to method 2 (correct the result); method 1 corrects the constants and has no error model: give --method 2, or leave --error-model out",
         )),
         (MethodArg::Two, e) => Ok(Method::CorrectResult(
@@ -44,10 +45,11 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
     let spec = a.accept.spec()?;
     let (b, blob_bytes) = read_blob(&a.blob)?;
     let rec = load(&a.input, err)?;
-    let unit = serial(&rec);
+    let unit = rec.serial();
     if b.serial.as_str() != unit {
         if !a.force {
             return Err(HostError::in_file(
+                ErrorKind::Mismatch,
                 &a.blob,
                 format!(
                     "is the blob of unit `{}`, the recording is of unit `{unit}`: refusing to verify another unit's blob (give --force to verify it anyway)",
@@ -62,10 +64,10 @@ pub(super) fn verify(a: VerifyArgs, out: &mut dyn Write, err: &mut dyn Write) ->
         );
     }
     let check = |p: usize| rec.positions.has_role(p, Role::Verification);
-    let v = run_verify(&rec, &b, m, &check)
-        .ok_or_else(|| HostError::in_file(&a.blob, "K(T0) of the blob is singular"))?;
+    let v = run_verify(&rec, &b, m, &check).ok_or_else(|| singular_k(&a.blob))?;
     if v.dwells.is_empty() {
         return Err(HostError::in_file(
+            ErrorKind::Insufficient,
             &a.input.recording,
             format!(
                 "no dwells in the verification positions ({})",
@@ -179,12 +181,16 @@ pub(super) fn fw_vectors(a: FwVectorsArgs, out: &mut dyn Write) -> Result<()> {
             ),
         );
     }
-    let p = a
-        .inputs
-        .ok_or_else(|| HostError::msg("give --inputs FILE or --make-inputs FILE"))?;
+    let p = a.inputs.ok_or_else(|| {
+        HostError::new(
+            ErrorKind::Invalid,
+            "give --inputs FILE or --make-inputs FILE",
+        )
+    })?;
     let table = std::fs::read(&p).map_err(|e| HostError::io(&p, &e))?;
     if table.len() % crate::vectors::RECORD != 0 {
         return Err(HostError::in_file(
+            ErrorKind::Malformed,
             &p,
             "length is not a multiple of 20 bytes (ux uy uz temp dt, f32)",
         ));
@@ -198,9 +204,10 @@ pub(super) fn fw_vectors(a: FwVectorsArgs, out: &mut dyn Write) -> Result<()> {
         format!("f64-departure {worst:e} bound {F32_BOUND_G:e}"),
     )?;
     if !crate::vectors::within_bound(worst) {
-        return Err(HostError::msg(format!(
-            "f32 departs from f64 by {worst:e} g, over the bound {F32_BOUND_G:e}"
-        )));
+        return Err(HostError::new(
+            ErrorKind::Numerical,
+            format!("f32 departs from f64 by {worst:e} g, over the bound {F32_BOUND_G:e}"),
+        ));
     }
     Ok(())
 }

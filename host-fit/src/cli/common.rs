@@ -4,7 +4,7 @@ use super::args::{Input, PositionArgs};
 use crate::data::door::Check;
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use std::borrow::Cow;
 use std::io::Write;
 
@@ -23,7 +23,8 @@ pub enum Outcome {
 
 /// Write one line of output.
 pub(super) fn w(out: &mut dyn Write, s: impl std::fmt::Display) -> Result<()> {
-    writeln!(out, "{s}").map_err(|e| HostError::msg(format!("cannot write output: {e}")))
+    writeln!(out, "{s}")
+        .map_err(|e| HostError::new(ErrorKind::Io, format!("cannot write output: {e}")))
 }
 
 /// The positions of `p`: the built-ins and the positions file, the verification
@@ -118,13 +119,4 @@ pub(super) fn oriented(rec: Recording, err: &mut dyn Write) -> Result<Recording>
         Cow::Owned(r) => r,
         Cow::Borrowed(_) => rec,
     })
-}
-
-/// The unit's serial, `UNKNOWN` when the recording has none.
-pub(super) fn serial(rec: &Recording) -> &str {
-    if rec.unit.is_empty() {
-        "UNKNOWN"
-    } else {
-        rec.unit.as_str()
-    }
 }

@@ -4,7 +4,7 @@ use super::common::w;
 use super::common::Outcome;
 use crate::acceptance::Verdict;
 use crate::batch::{BatchOptions, UnitStatus};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::simulate::SimConfig;
 use serde::Serialize;
@@ -133,7 +133,8 @@ pub(super) fn simulate(a: SimulateArgs, out: &mut dyn Write) -> Result<()> {
         let text = std::fs::read_to_string(p).map_err(|e| HostError::io(p, &e))?;
         let steps = crate::simulate::program::parse_program(p, &text)?;
         if cfg.flight.is_some() {
-            return Err(HostError::msg(
+            return Err(HostError::new(
+                ErrorKind::Invalid,
                 "--plan runs a chamber program; the configuration is a [flight]",
             ));
         }
@@ -146,7 +147,8 @@ pub(super) fn simulate(a: SimulateArgs, out: &mut dyn Write) -> Result<()> {
         check_writable(p, a.force)?;
     }
     if cfg.flight.is_some() && a.positions_out.is_none() {
-        return Err(HostError::msg(
+        return Err(HostError::new(
+            ErrorKind::Invalid,
             "a [flight] configuration names its attitudes in a positions file: give --positions-out FILE",
         ));
     }
@@ -182,7 +184,12 @@ struct Planned<'a> {
 
 /// The plan's options checked one by one, so the error names the option at fault.
 fn check_plan_options(a: &PlanArgs) -> Result<()> {
-    let bad = |opt: &str, why: String| Err(HostError::msg(format!("plan: {opt} {why}")));
+    let bad = |opt: &str, why: String| {
+        Err(HostError::new(
+            ErrorKind::Invalid,
+            format!("plan: {opt} {why}"),
+        ))
+    };
     match a.range_c.as_slice() {
         [lo, hi] if lo.is_finite() && hi.is_finite() && lo < hi => {}
         r => {
@@ -231,7 +238,8 @@ pub(super) fn from_diagnosis(
     path: &std::path::Path,
     text: &str,
 ) -> Result<(Option<f64>, Option<f64>)> {
-    let bad = |why: &str| HostError::msg(format!("{}: {why}", path.display()));
+    let bad =
+        |why: &str| HostError::new(ErrorKind::Malformed, format!("{}: {why}", path.display()));
     let j: serde_json::Value =
         serde_json::from_str(text).map_err(|e| bad(&format!("not a diagnosis JSON ({e})")))?;
     let noise = j["noise_sigma_per_sample"].as_array().and_then(|v| {
@@ -266,24 +274,32 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
     let target = match (a.target_mg, a.hours) {
         (Some(mg), None) => Target::AccuracyMg(mg),
         (None, Some(h)) => Target::Hours(h),
-        _ => return Err(HostError::msg("give a target: --target-mg MG or --hours H")),
+        _ => {
+            return Err(HostError::new(
+                ErrorKind::Invalid,
+                "give a target: --target-mg MG or --hours H",
+            ))
+        }
     };
     check_plan_options(&a)?;
     let (mut tau_s, mut noise) = (a.tau_s, a.noise);
     if let Some(d) = &a.from_diagnosis {
         let text = std::fs::read_to_string(d)
-            .map_err(|e| HostError::msg(format!("{}: {e}", d.display())))?;
+            .map_err(|e| HostError::new(ErrorKind::Io, format!("{}: {e}", d.display())))?;
         let (t, n) = from_diagnosis(d, &text)?;
         let missing = |what: &str, opt: &str| {
-            HostError::msg(format!(
-                "{}: {what} missing (give {opt}{})",
-                d.display(),
-                if opt == "--tau-s" {
-                    ", --tau-s 0 for a unit found without lag"
-                } else {
-                    ""
-                }
-            ))
+            HostError::new(
+                ErrorKind::Insufficient,
+                format!(
+                    "{}: {what} missing (give {opt}{})",
+                    d.display(),
+                    if opt == "--tau-s" {
+                        ", --tau-s 0 for a unit found without lag"
+                    } else {
+                        ""
+                    }
+                ),
+            )
         };
         if tau_s.is_none() {
             tau_s = Some(t.ok_or_else(|| {
@@ -308,17 +324,21 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
         dwell_s: a.dwell_s,
         move_s: a.move_s,
         rate_hz: a.rate_hz,
-        noise_v: noise.unwrap_or(2e-5),
+        noise_v: noise.unwrap_or(crate::simulate::config::UNIT_NOISE_V),
         tau_s: tau_s.unwrap_or(0.0),
     };
     let c = candidates(&l, a.seed)?;
     let chosen = choose(&c, target);
     let text = table(&c, chosen);
     let Some(i) = chosen else {
-        return Err(HostError::msg(format!(
-            "{}:\n{text}",
-            crate::plan::why_none(&c, target, &l)
-        )));
+        return Err(HostError::new(
+            ErrorKind::Unmet,
+            format!(
+                "{}:
+{text}",
+                crate::plan::why_none(&c, target, &l)
+            ),
+        ));
     };
     let (mut steps, end) = program(c[i].kind, &l);
     let last = steps.pop().map(|s| s.setpoint_c).unwrap_or(l.lo_c);

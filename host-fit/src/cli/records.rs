@@ -9,7 +9,7 @@ use crate::blob::Inspection;
 use crate::data::recording::Recording;
 use crate::diagnose::contract::Contract;
 use crate::diagnose::Diagnosis;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::pipeline::FitOutcome;
 use crate::fit::predict::coefficient_sigma;
 use crate::output::{check_writable, json, write_atomic};
@@ -73,7 +73,18 @@ impl Command {
             Command::Verify(a) => Some(&mut a.record),
             Command::Diagnose(a) => Some(&mut a.record),
             Command::Batch(a) => Some(&mut a.record),
-            _ => None,
+            Command::TempFit(_)
+            | Command::Identify(_)
+            | Command::Report(_)
+            | Command::Blind(_)
+            | Command::Simulate(_)
+            | Command::Plan(_)
+            | Command::Demo(_)
+            | Command::FwVectors(_)
+            | Command::Inspect(_)
+            | Command::History(_)
+            | Command::Trend(_)
+            | Command::Store(_) => None,
         }
     }
 }
@@ -150,7 +161,7 @@ impl Run<'_> {
         let mut store = Store::open(&t.db)?;
         let mut r = t.record(command, self.serial, &self.rec.path)?;
         r.input_sha256 = Some(sha256_file(&self.rec.path)?);
-        r.output_unit = Some(self.rec.output_unit.clone());
+        r.output_unit = Some(self.rec.output_unit.to_string());
         fill(&mut r)?;
         store.append(std::slice::from_mut(&mut r))?;
         let _ = writeln!(
@@ -298,11 +309,14 @@ pub(super) fn history(a: HistoryArgs, out: &mut dyn Write) -> Result<()> {
     let h = unit_history(&mut store, &a.serial)?;
     if h.records.is_empty() {
         // the store's location as it prints (a URL without its password)
-        return Err(HostError::msg(format!(
+        return Err(HostError::new(
+            ErrorKind::Invalid,
+            format!(
             "{}: no records of unit `{}` in this store (serials are matched exactly, case and all)",
             Location::parse(&a.db)?,
             a.serial
-        )));
+        ),
+        ));
     }
     if a.json {
         w(out, json(&h)?)
@@ -324,6 +338,7 @@ fn test_record(store: &mut Store, serial: &str, run: Option<&str>) -> Result<Str
     match hit {
         Some(r) => json(&r.test_record),
         None => Err(HostError::in_file(
+            ErrorKind::Store,
             store.path(),
             format!(
                 "unit `{serial}` has no test record{} (batch units have one; serials are matched exactly)",
@@ -350,9 +365,10 @@ pub(super) fn store(a: StoreArgs, out: &mut dyn Write) -> Result<()> {
         StoreAction::Copy { src, dst } => {
             let (s, d) = (Location::parse(&src)?, Location::parse(&dst)?);
             if s == d {
-                return Err(HostError::msg(format!(
-                    "store copy: {s} is both source and destination"
-                )));
+                return Err(HostError::new(
+                    ErrorKind::Invalid,
+                    format!("store copy: {s} is both source and destination"),
+                ));
             }
             let mut from = Store::open_existing(s.clone())?;
             let mut to = Store::open(d.clone())?;
@@ -377,7 +393,8 @@ pub(super) fn trend(a: TrendArgs, out: &mut dyn Write) -> Result<()> {
             clock::bound("--reference-to", t, true)?,
         ),
         (_, _, Some(0)) => {
-            return Err(HostError::msg(
+            return Err(HostError::new(
+                ErrorKind::Invalid,
                 "--reference-first 0: the limits need reference units (2 or more)",
             ))
         }

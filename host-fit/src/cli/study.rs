@@ -1,11 +1,11 @@
 //! `diagnose`, `report` and `blind`: looking into a recording, and testing the looking.
 use super::args::{BlindArgs, DiagnoseArgs, ReportArgs};
-use super::common::{load_for_blob, load_to_fit, oriented, serial, w};
+use super::common::{load_for_blob, load_to_fit, oriented, w};
 use crate::analysis::{analyse, table};
 use crate::blob::build_blob;
 use crate::data::recording::Recording;
 use crate::diagnose::contract::BlobNote;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::output::{check_writable, json, write_atomic};
 use crate::progress::with_progress;
 use crate::simulate::{SimConfig, TrueUnit};
@@ -26,7 +26,7 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
     let rec = oriented(load(&a.input, err)?, err)?;
     let d = crate::diagnose::diagnose(&rec)?;
     let mut c = d.contract();
-    let name = a.serial.as_deref().unwrap_or(serial(&rec));
+    let name = a.serial.as_deref().unwrap_or(rec.serial());
     let built = match &a.out {
         Some(_) => Some(build_blob(
             name,
@@ -87,6 +87,7 @@ fn twin_truth(path: &Path, rec: &Recording) -> Result<TrueUnit> {
     let text = std::fs::read_to_string(path).map_err(|e| HostError::io(path, &e))?;
     let bad = |e: serde_json::Error| {
         HostError::in_file(
+            ErrorKind::Malformed,
             path,
             format!("is not a twin's truth (`simulate --truth`): {e}"),
         )
@@ -96,6 +97,7 @@ fn twin_truth(path: &Path, rec: &Recording) -> Result<TrueUnit> {
         SimConfig::deserialize(v.get("config").unwrap_or(&serde_json::Value::Null)).map_err(bad)?;
     if cfg.unit.serial != rec.unit {
         return Err(HostError::in_file(
+            ErrorKind::Mismatch,
             path,
             format!(
                 "is the truth of unit `{}`, the recording is of unit `{}`",
@@ -103,7 +105,7 @@ fn twin_truth(path: &Path, rec: &Recording) -> Result<TrueUnit> {
             ),
         ));
     }
-    TrueUnit::new(&cfg).map_err(|e| HostError::in_file(path, e.message))
+    TrueUnit::new(&cfg).map_err(|e| e.within(path))
 }
 
 pub(super) fn blind(a: BlindArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
@@ -111,11 +113,7 @@ pub(super) fn blind(a: BlindArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
     // every case is independent and deterministic: run them on all cores
     let mut cases = crate::blind::suite(a.long);
     if !a.class.is_empty() {
-        cases.retain(|c| {
-            a.class
-                .iter()
-                .any(|k| c.class().name().contains(k.as_str()))
-        });
+        cases.retain(|c| a.class.contains(&c.class()));
     }
     if let Some(only) = &a.only {
         cases.retain(|c| c.name().contains(only.as_str()));

@@ -12,7 +12,7 @@
 use crate::data::output_unit::OutputUnit;
 use crate::data::positions::Role;
 use crate::data::recording::{Dwell, Recording, MAX_DWELL_DRIFT_C};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use std::fmt::Write as _;
 
 /// A check at the door that data may legitimately fail, and be let past (`--allow`).
@@ -148,7 +148,7 @@ pub fn output_scale(rec: &Recording) -> Option<f64> {
 /// The outputs' scale against their stated unit: a finding when it is implausible,
 /// naming the units the numbers look like.
 pub fn output_scale_finding(rec: &Recording) -> Option<Finding> {
-    let unit = OutputUnit::parse(&rec.output_unit);
+    let unit = rec.output_unit.clone();
     let (lo, hi) = per_g_band(&unit)?;
     let s = output_scale(rec)?;
     if (lo..=hi).contains(&s) || !s.is_finite() {
@@ -407,10 +407,14 @@ pub fn admit(rec: &mut Recording, refuse: &[Check], allow: &[Check]) -> Result<(
         let refused = refuse.contains(&f.check);
         if refused && !allow.contains(&f.check) {
             return Err(match f.line {
-                Some(line) => HostError::at_field(&rec.path, line, f.field, f.message),
-                None => {
-                    HostError::in_file(&rec.path, format!("field `{}`: {}", f.field, f.message))
+                Some(line) => {
+                    HostError::at_field(ErrorKind::Malformed, &rec.path, line, f.field, f.message)
                 }
+                None => HostError::in_file(
+                    ErrorKind::Malformed,
+                    &rec.path,
+                    format!("field `{}`: {}", f.field, f.message),
+                ),
             });
         }
         let at = f.line.map(|l| format!(":{l}")).unwrap_or_default();

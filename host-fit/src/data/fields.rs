@@ -1,6 +1,6 @@
 //! The fields of input files: numbers and temperatures checked for range, CSV headers
 //! and data lines, every error naming the file, the line and the field.
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use std::path::Path;
 
 /// The positions of the `want`ed columns in a CSV header line (names case-insensitive),
@@ -8,7 +8,7 @@ use std::path::Path;
 /// semicolons is refused with that reason (no guessing at the separator).
 pub fn header_columns(path: &Path, line: usize, header: &str, want: &[&str]) -> Result<Vec<usize>> {
     if !header.contains(',') && header.contains(';') {
-        return Err(HostError::at(path, line, "the header is separated by semicolons; these files are comma-separated, convert the file"));
+        return Err(HostError::at(ErrorKind::Malformed, path, line, "the header is separated by semicolons; these files are comma-separated, convert the file"));
     }
     let names: Vec<String> = header
         .split(',')
@@ -18,6 +18,7 @@ pub fn header_columns(path: &Path, line: usize, header: &str, want: &[&str]) -> 
         .map(|w| {
             names.iter().position(|n| n == w).ok_or_else(|| {
                 HostError::at_field(
+                    ErrorKind::Malformed,
                     path,
                     line,
                     w,
@@ -45,6 +46,7 @@ pub fn number(path: &Path, line: usize, field: &str, s: &str) -> Result<f64> {
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() && v.abs() <= MAX_ABS_VALUE => Ok(v),
         Ok(v) if v.is_finite() => Err(HostError::at_field(
+            ErrorKind::Malformed,
             path,
             line,
             field,
@@ -54,6 +56,7 @@ pub fn number(path: &Path, line: usize, field: &str, s: &str) -> Result<f64> {
             ),
         )),
         _ => Err(HostError::at_field(
+            ErrorKind::Malformed,
             path,
             line,
             field,
@@ -67,6 +70,7 @@ pub fn temperature(path: &Path, line: usize, field: &str, s: &str) -> Result<f64
     let v = number(path, line, field, s)?;
     if v < ABSOLUTE_ZERO_C {
         return Err(HostError::at_field(
+            ErrorKind::Malformed,
             path,
             line,
             field,

@@ -1,27 +1,39 @@
 //! Positions: the built-in TP1..TP6 and PP1..PP6 (model.md section 1), positions files,
 //! and each position's role (calibration or verification), decided here once.
 use crate::data::fields;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use serde::Serialize;
 use std::path::Path;
 
 /// What a position's dwells are used for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(ascii_case_insensitive)]
 pub enum Role {
     /// Fitted: identification and temperature models (TP1..TP6 by default).
+    #[strum(to_string = "calibration", serialize = "cal")]
     Calibration,
     /// Held out of every fit and used to judge it, formula (13) (PP1..PP6 by default).
+    #[strum(to_string = "verification", serialize = "check")]
     Verification,
 }
 
 impl Role {
+    /// The role a positions file's `role` column names (either case; `cal` and `check`
+    /// for short).
     fn parse(s: &str) -> Option<Role> {
-        match s.to_ascii_lowercase().as_str() {
-            "calibration" | "cal" => Some(Role::Calibration),
-            "verification" | "check" => Some(Role::Verification),
-            _ => None,
-        }
+        s.parse().ok()
     }
 }
 
@@ -124,7 +136,7 @@ impl Positions {
         unknown.dedup();
         match unknown.first() {
             None => Ok(()),
-            Some(first) => Err(HostError::msg(format!(
+            Some(first) => Err(HostError::new(ErrorKind::Insufficient, format!(
                 "{what} needs the orientation of every position it uses; `{first}` ({} of unknown orientation in all) has none: estimate them first (fit::orientation)",
                 unknown.len()
             ))),
@@ -211,9 +223,12 @@ impl Positions {
     /// `--positions-for-check`); every other position becomes a calibration position.
     pub fn set_verification(&mut self, names: &[String], option: &str) -> Result<()> {
         if let Some(bad) = names.iter().find(|n| self.index(n).is_none()) {
-            return Err(HostError::msg(format!(
+            return Err(HostError::new(
+                ErrorKind::Invalid,
+                format!(
                 "unknown position `{bad}` in {option} (not built in and not in a positions file)"
-            )));
+            ),
+            ));
         }
         for p in &mut self.list {
             p.role = if names.contains(&p.name) {
@@ -229,8 +244,8 @@ impl Positions {
     /// `W0001,,,`, is a static pose of unknown orientation); returns the warnings.
     pub fn with_file(path: &Path) -> Result<(Positions, Vec<String>)> {
         let text = std::fs::read(path).map_err(|e| HostError::io(path, &e))?;
-        let text =
-            String::from_utf8(text).map_err(|_| HostError::in_file(path, "is not UTF-8 text"))?;
+        let text = String::from_utf8(text)
+            .map_err(|_| HostError::in_file(ErrorKind::Malformed, path, "is not UTF-8 text"))?;
         Self::parse(path, &text)
     }
 
@@ -252,7 +267,11 @@ impl Positions {
                 continue;
             };
             let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-            let (name, v, role) = parse_row(path, line_no, &fields, cols, role_col)?;
+            let PositionRow {
+                name,
+                vector: v,
+                role,
+            } = parse_row(path, line_no, &fields, cols, role_col)?;
             let Some(v) = v else {
                 pos.set_unknown(name, role);
                 n_rows += 1;
@@ -261,6 +280,7 @@ impl Positions {
             let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
             if norm == 0.0 || !norm.is_finite() {
                 return Err(HostError::at(
+                    ErrorKind::Malformed,
                     path,
                     line_no,
                     format!("position `{name}` has a zero-length vector"),
@@ -268,6 +288,7 @@ impl Positions {
             }
             if (norm - 1.0).abs() > MAX_LENGTH_ERROR {
                 return Err(HostError::at_field(
+                    ErrorKind::Malformed,
                     path,
                     line_no,
                     "fx,fy,fz",
@@ -287,7 +308,11 @@ impl Positions {
             n_rows += 1;
         }
         if header.is_none() {
-            return Err(HostError::in_file(path, "no header line `name,fx,fy,fz`"));
+            return Err(HostError::in_file(
+                ErrorKind::Malformed,
+                path,
+                "no header line `name,fx,fy,fz`",
+            ));
         }
         if n_rows == 0 {
             warnings.push(format!("{}: no positions defined", path.display()));
@@ -296,7 +321,15 @@ impl Positions {
     }
 }
 
-type PositionRow<'a> = (&'a str, Option<[f64; 3]>, Option<Role>);
+/// One line of a positions file, checked.
+struct PositionRow<'a> {
+    /// The position's name.
+    name: &'a str,
+    /// Its vector of specific force, g; None for a pose whose orientation is unknown.
+    vector: Option<[f64; 3]>,
+    /// The role the line gives it, if any.
+    role: Option<Role>,
+}
 
 fn parse_row<'a>(
     path: &Path,
@@ -307,12 +340,19 @@ fn parse_row<'a>(
 ) -> Result<PositionRow<'a>> {
     let get = |k: usize, name: &str| -> Result<&'a str> {
         fields.get(k).copied().ok_or_else(|| {
-            HostError::at_field(path, line_no, name, "missing value (too few fields)")
+            HostError::at_field(
+                ErrorKind::Malformed,
+                path,
+                line_no,
+                name,
+                "missing value (too few fields)",
+            )
         })
     };
     let name = get(ni, "name")?;
     if name.is_empty() || name == "-" {
         return Err(HostError::at_field(
+            ErrorKind::Malformed,
             path,
             line_no,
             "name",
@@ -342,6 +382,7 @@ fn parse_row<'a>(
         None => None,
         Some(s) => Some(Role::parse(s).ok_or_else(|| {
             HostError::at_field(
+                ErrorKind::Malformed,
                 path,
                 line_no,
                 "role",
@@ -349,7 +390,11 @@ fn parse_row<'a>(
             )
         })?),
     };
-    Ok((name, v, role))
+    Ok(PositionRow {
+        name,
+        vector: v,
+        role,
+    })
 }
 
 #[cfg(test)]
@@ -379,6 +424,7 @@ mod tests {
         // a vector far from unit length is refused (here 2, written for 1); one within
         // 1% is normalised
         let e = Positions::parse(Path::new("p.csv"), "name,fx,fy,fz\nW1,0,0,2\n").unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Malformed);
         assert_eq!(
             (e.line, e.field.as_deref()),
             (Some(2), Some("fx,fy,fz")),
@@ -391,15 +437,15 @@ mod tests {
         let tp1 = p.index("TP1").unwrap();
         assert!(!p.is_known(tp1));
         let e = p.require_known([tp1, w1], "the fit").unwrap_err();
-        assert!(
-            e.message.contains("`TP1`") && e.message.contains("2 of unknown"),
-            "{e}"
-        );
+        // it names the first position it lacks
+        assert_eq!(e.kind(), ErrorKind::Insufficient);
+        assert!(e.message.contains("`TP1`"), "{e}");
         let mut q = p.clone();
         q.set_estimated(w1, [1.0, 0.0, 0.0]);
         assert!(q.is_known(w1) && q.is_estimated(w1));
         // half a vector is an error naming the field
         let e = Positions::parse(Path::new("p.csv"), "name,fx,fy,fz\nW1,1,,\n").unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Malformed);
         assert_eq!((e.line, e.field.as_deref()), (Some(2), Some("fy")), "{e}");
     }
 }

@@ -1,7 +1,8 @@
 //! The recording reader, exactly per recording-format.md (version 1), and its dwells.
 use crate::data::fields::{self, number as parse_num, temperature as parse_temp};
+use crate::data::output_unit::OutputUnit;
 use crate::data::positions::Positions;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -45,6 +46,7 @@ fn power_off_spans(path: &Path, line: usize, v: &str) -> Result<Vec<[f64; 2]>> {
             .map(|(i, _)| i);
         let Some(cut) = cut else {
             return Err(HostError::at_field(
+                ErrorKind::Malformed,
                 path,
                 line,
                 "power_off_s",
@@ -55,6 +57,7 @@ fn power_off_spans(path: &Path, line: usize, v: &str) -> Result<Vec<[f64; 2]>> {
         let end = parse_num(path, line, "power_off_s", span[cut + 1..].trim())?;
         if end < start {
             return Err(HostError::at_field(
+                ErrorKind::Malformed,
                 path,
                 line,
                 "power_off_s",
@@ -101,12 +104,12 @@ pub struct Recording {
     pub path: PathBuf,
     /// All metadata (`# key=value`), known and unknown.
     pub metadata: BTreeMap<String, String>,
-    /// Unit serial (`unit`), empty if absent.
+    /// Unit serial (`unit`), empty if absent (see [`Recording::serial`]).
     pub unit: String,
     /// Reference temperature (`t0_c`, default 20).
     pub t0_c: f64,
-    /// Output unit (`output_unit`, default `V`).
-    pub output_unit: String,
+    /// Output unit (`output_unit`, default `V`; any other label kept as it is).
+    pub output_unit: OutputUnit,
     /// Spans `[start, end]` (s, on `t_s`) the unit was powered off (`power_off_s`): each
     /// end is a power-on, where the in-flight terms' machines start again.
     pub power_off: Vec<[f64; 2]>,
@@ -146,7 +149,20 @@ const KNOWN_META: [&str; 6] = [
 ];
 const REQUIRED: [&str; 6] = ["t_s", "position", "temp_c", "ux_v", "uy_v", "uz_v"];
 
+/// The serial of a unit whose recording names none (no `# unit=`): what its blob and
+/// its records carry.
+pub const UNKNOWN_SERIAL: &str = "UNKNOWN";
+
 impl Recording {
+    /// The unit's serial: `unit`, or [`UNKNOWN_SERIAL`] when the recording has none.
+    pub fn serial(&self) -> &str {
+        if self.unit.is_empty() {
+            UNKNOWN_SERIAL
+        } else {
+            &self.unit
+        }
+    }
+
     /// Read a recording file.
     pub fn read(path: &Path, positions: Positions) -> Result<Recording> {
         let f = std::fs::File::open(path).map_err(|e| HostError::io(path, &e))?;
@@ -160,7 +176,7 @@ impl Recording {
             metadata: BTreeMap::new(),
             unit: String::new(),
             t0_c: 20.0,
-            output_unit: "V".into(),
+            output_unit: OutputUnit::Volt,
             power_off: Vec::new(),
             positions,
             rows: Vec::new(),
@@ -182,8 +198,14 @@ impl Recording {
                 break;
             }
             line_no += 1;
-            let mut text = std::str::from_utf8(&buf)
-                .map_err(|_| HostError::at(path, line_no, "is not valid UTF-8 text"))?;
+            let mut text = std::str::from_utf8(&buf).map_err(|_| {
+                HostError::at(
+                    ErrorKind::Malformed,
+                    path,
+                    line_no,
+                    "is not valid UTF-8 text",
+                )
+            })?;
             if line_no == 1 {
                 text = text.strip_prefix('\u{feff}').unwrap_or(text);
             }
@@ -208,6 +230,7 @@ impl Recording {
                     let row = c.parse_row(path, line_no, line, &rec.positions)?;
                     if row.t_s < last_t {
                         return Err(HostError::at_field(
+                            ErrorKind::Malformed,
                             path,
                             line_no,
                             "t_s",
@@ -221,12 +244,14 @@ impl Recording {
         }
         if cols.is_none() {
             return Err(HostError::in_file(
+                ErrorKind::Malformed,
                 path,
                 "no header row: the file is empty or holds only comments (need t_s,position,temp_c,ux_v,uy_v,uz_v)",
             ));
         }
         if rec.rows.is_empty() {
             return Err(HostError::at(
+                ErrorKind::Insufficient,
                 path,
                 line_no,
                 "no data rows after the header",
@@ -247,6 +272,7 @@ impl Recording {
         match k.as_str() {
             "format" if v != "at-recording/1" => {
                 return Err(HostError::at_field(
+                    ErrorKind::Unsupported,
                     &self.path,
                     line,
                     "format",
@@ -256,14 +282,14 @@ impl Recording {
             "t0_c" => self.t0_c = parse_temp(&self.path, line, "t0_c", &v)?,
             "unit" => self.unit = v.clone(),
             "output_unit" => {
-                let u = crate::data::output_unit::OutputUnit::parse(&v);
+                let u = OutputUnit::parse(&v);
                 if !u.is_known() {
                     self.warnings.push(format!(
                         "{}:{line}: output_unit `{v}` is not one of the format's (V, mV, m/s2, g, mg, counts): kept as the label of the outputs",
                         self.path.display()
                     ));
                 }
-                self.output_unit = v.clone();
+                self.output_unit = u;
             }
             "power_off_s" => self.power_off = power_off_spans(&self.path, line, &v)?,
             _ => {}
@@ -516,6 +542,7 @@ impl Columns {
         for (i, n) in names.iter().enumerate() {
             if names.iter().take(i).any(|m| m == n) {
                 return Err(HostError::at_field(
+                    ErrorKind::Malformed,
                     path,
                     line,
                     n,
@@ -558,6 +585,7 @@ impl Columns {
                 ""
             };
             return Err(HostError::at(
+                ErrorKind::Malformed,
                 path,
                 line,
                 format!(
@@ -576,6 +604,7 @@ impl Columns {
         } else {
             Some(positions.index(pname).ok_or_else(|| {
                 HostError::at_field(
+                    ErrorKind::Malformed,
                     path,
                     line,
                     "position",

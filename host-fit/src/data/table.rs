@@ -1,7 +1,7 @@
 //! Coefficient tables (the format of paper-tables.csv): one row of the 12 coefficients
 //! per temperature, read by `temp-fit` and written by `identify --csv`.
 use crate::data::fields;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use firmware_core::model::COEFF_NAMES;
 use std::path::Path;
 
@@ -48,7 +48,11 @@ pub fn read_table(path: &Path) -> Result<Vec<TableRow>> {
         }
     }
     if rows.is_empty() {
-        return Err(HostError::in_file(path, "no coefficient rows"));
+        return Err(HostError::in_file(
+            ErrorKind::Insufficient,
+            path,
+            "no coefficient rows",
+        ));
     }
     rows.sort_by(|a, b| a.temp_c.total_cmp(&b.temp_c));
     Ok(rows)

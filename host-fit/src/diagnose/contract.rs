@@ -2,6 +2,7 @@
 //! the same structs). Fields beyond the first version: `floor`, `dispersion`, `quality`,
 //! `unexplained`, the verdict `unexplained`, and per finding `form`, `share`,
 //! `heldout_gain`.
+use crate::data::output_unit::OutputUnit;
 use crate::diagnose::findings::{Ambiguity, Finding};
 use crate::diagnose::location::Hotspot;
 use crate::diagnose::metrics::{dispersion, max_dg, normalized_rms, residual_rms};
@@ -10,11 +11,23 @@ use crate::diagnose::search::Research;
 use crate::diagnose::Diagnosis;
 use firmware_core::model::AXES;
 use serde::Serialize;
-use std::fmt;
 
 /// What the diagnosis concludes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    serde::Deserialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum Verdict {
     /// At the floor, nothing found: the model fits to the noise.
     None,
@@ -39,12 +52,7 @@ impl Verdict {
 
     /// The contract's name.
     pub fn as_str(self) -> &'static str {
-        match self {
-            Verdict::None => "none",
-            Verdict::Explained => "explained",
-            Verdict::PartlyExplained => "partly_explained",
-            Verdict::Unexplained => "unexplained",
-        }
+        self.into()
     }
 
     /// What it means, in words.
@@ -60,12 +68,6 @@ impl Verdict {
     }
 }
 
-impl fmt::Display for Verdict {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
 /// The whole contract.
 #[derive(Debug, Clone, Serialize)]
 pub struct Contract {
@@ -77,7 +79,7 @@ pub struct Contract {
     /// not measurable).
     pub noise_sigma_per_sample: [f64; 3],
     /// The recording's output unit.
-    pub output_unit: String,
+    pub output_unit: OutputUnit,
     /// The error floor.
     pub floor: FloorFigures,
     /// Residual chi-square per degree of freedom in floor units (at least 1).
@@ -347,7 +349,7 @@ impl Contract {
             s.push_str("where the baseline residual exceeds the floor (RMS in floor units):\n");
         }
         for x in self.located.iter().take(8) {
-            s.push_str(&hotspot_line(x, &self.output_unit));
+            s.push_str(&hotspot_line(x, self.output_unit.as_str()));
         }
         for n in &self.not_identifiable {
             s.push_str(&format!("not identifiable: {n}\n"));
@@ -389,7 +391,7 @@ impl Contract {
                 u.residual_rms_over_noise
             ));
             for x in u.located.iter().take(6) {
-                s.push_str(&hotspot_line(x, &self.output_unit));
+                s.push_str(&hotspot_line(x, self.output_unit.as_str()));
             }
         }
         for r in &self.research {
@@ -407,7 +409,7 @@ impl Contract {
                 }
             ));
             for x in r.region.iter().take(4) {
-                s.push_str(&hotspot_line(x, &self.output_unit));
+                s.push_str(&hotspot_line(x, self.output_unit.as_str()));
             }
         }
         let fl = &self.flashed;

@@ -19,7 +19,7 @@ use crate::diagnose::floor;
 use crate::diagnose::metrics::{self, judge};
 use crate::diagnose::profile::{self, time_constant, Grid};
 use crate::diagnose::Rules;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::route::{settling, Settling};
 use crate::fit::temperature::Basis;
 use firmware_core::temperature::Calibration;
@@ -232,6 +232,7 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
     let mut data = Data::new(rec, &fl, rules);
     if data.obs.len() < rules.min_windows {
         return Err(HostError::in_file(
+            ErrorKind::Insufficient,
             &rec.path,
             format!(
                 "{} windows of known positions: too few for the dynamic route (need {})",
@@ -242,12 +243,14 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
     }
     if !crate::diagnose::weigh(&mut data, &fl) {
         return Err(HostError::in_file(
+            ErrorKind::Insufficient,
             &rec.path,
             "the noise floor cannot be measured inside the dwells (too few samples per dwell): the dynamic route weighs every window by it",
         ));
     }
     let (base, _) = baseline::baseline(&data).ok_or_else(|| {
         HostError::in_file(
+            ErrorKind::Insufficient,
             &rec.path,
             "the positions present do not determine even the per-axis offset and scale (need each axis both along and across gravity)",
         )

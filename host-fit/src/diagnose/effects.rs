@@ -66,8 +66,23 @@ pub enum Extra {
 
 /// The catalogue's effects (physics-catalogue.md), by their ids; the JSON contract and
 /// the text name them by [`EffectId::as_str`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    PartialOrd,
+    Ord,
+    Hash,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "snake_case")]
 pub enum EffectId {
     /// The coefficients bend between the temperatures more than the baseline follows.
     TempCurvature,
@@ -102,16 +117,7 @@ impl EffectId {
 
     /// The catalogue id.
     pub fn as_str(self) -> &'static str {
-        match self {
-            EffectId::TempCurvature => "temp_curvature",
-            EffectId::ThermalLag => "thermal_lag",
-            EffectId::TempRate => "temp_rate",
-            EffectId::Hysteresis => "hysteresis",
-            EffectId::NonlinearityK2 => "nonlinearity_k2",
-            EffectId::ScaleAsymmetry => "scale_asymmetry",
-            EffectId::FixtureError => "fixture_error",
-            EffectId::WarmupDrift => "warmup_drift",
-        }
+        self.into()
     }
 
     /// A short name, distinct for every id (column heads).
@@ -130,7 +136,7 @@ impl EffectId {
 
     /// The effect of catalogue id `s`.
     pub fn parse(s: &str) -> Option<EffectId> {
-        EffectId::ALL.into_iter().find(|e| e.as_str() == s)
+        s.parse().ok()
     }
 
     /// How many times the effect may be added (a second warm-up time constant, a second
@@ -145,12 +151,6 @@ impl EffectId {
             | EffectId::NonlinearityK2
             | EffectId::ScaleAsymmetry => 1,
         }
-    }
-}
-
-impl std::fmt::Display for EffectId {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
     }
 }
 

@@ -223,7 +223,7 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
         uncertainties.insert(k, s);
     }
     let j = judge(data, reduced, full, e);
-    let ou = &data.rec.output_unit;
+    let ou = data.rec.output_unit.as_str();
     let units = parameters
         .keys()
         .map(|k| (k.clone(), unit_of(k, ou)))

@@ -12,7 +12,7 @@ use crate::diagnose::effects::Extra;
 use crate::diagnose::fit::{Depth, Fit};
 use crate::diagnose::params::{Param, Term};
 use crate::diagnose::profile::{time_constant, Grid};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::temperature::{Basis, POLY_SCALE_C};
 use firmware_core::model::{K_INDEX, U0_INDEX};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
@@ -97,7 +97,7 @@ impl Flashed {
         let mut ph = Physics::<f64>::neutral();
         ph.hysteresis_threshold_c = 0.5;
         let refuse = |what: &str| {
-            Err(HostError::msg(format!(
+            Err(HostError::new(ErrorKind::Unsupported, format!(
                 "the fitted {what} cannot be flashed by this firmware's physics block; the blob would not compensate what was fitted"
             )))
         };

@@ -6,42 +6,38 @@ use firmware_core::model::AXES;
 use serde::Serialize;
 
 /// How windows are grouped to locate a residual.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "lowercase")]
 pub enum Grouping {
     /// By position.
-    #[serde(rename = "position")]
     Position,
     /// By the stop temperature nearest the window's.
-    #[serde(rename = "temperature")]
     Temperature,
     /// By an eighth of the recording's time.
-    #[serde(rename = "time")]
     Time,
     /// Heating, cooling or steady.
-    #[serde(rename = "dT/dt")]
+    #[strum(serialize = "dT/dt")]
     Rate,
     /// After heating, after cooling, or before the first change.
-    #[serde(rename = "direction")]
     Direction,
 }
 
 impl Grouping {
-    /// The contract's name.
+    /// The contract's name (Display pads and aligns it as a string).
     pub fn as_str(self) -> &'static str {
-        match self {
-            Grouping::Position => "position",
-            Grouping::Temperature => "temperature",
-            Grouping::Time => "time",
-            Grouping::Rate => "dT/dt",
-            Grouping::Direction => "direction",
-        }
-    }
-}
-
-impl std::fmt::Display for Grouping {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        // padding and alignment as for a string
-        f.pad(self.as_str())
+        self.into()
     }
 }
 

@@ -39,7 +39,7 @@ pub use effects::EffectId;
 pub use rules::Rules;
 
 use crate::data::recording::Recording;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::temperature::{temperature_clusters, Basis};
 use data::Data;
 use design::Spec;
@@ -116,6 +116,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
     let mut data = Data::new(rec, &floor, rules);
     if data.obs.len() < rules.min_windows {
         return Err(HostError::in_file(
+            ErrorKind::Insufficient,
             &rec.path,
             format!(
                 "{} static windows of known positions: too few to diagnose (need {}, e.g. 6 positions)",
@@ -135,7 +136,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         } else {
             "the positions present do not determine even the per-axis offset and scale (need each axis both along and across gravity)"
         };
-        HostError::in_file(&rec.path, reason)
+        HostError::in_file(ErrorKind::Insufficient, &rec.path, reason)
     })?;
     let scope = scope(&data, measured, n_temps, &mut not_identifiable);
     let z = metrics::z(&data, &baseline);

@@ -10,8 +10,20 @@ use firmware_core::model::AXES;
 use serde::Serialize;
 
 /// What a note is about.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(into = "&'static str")]
+#[strum(serialize_all = "snake_case")]
 pub enum NoteKind {
     /// Samples far from their neighbours, left out.
     Spikes,
@@ -32,21 +44,7 @@ pub enum NoteKind {
 impl NoteKind {
     /// The contract's name.
     pub fn as_str(self) -> &'static str {
-        match self {
-            NoteKind::Spikes => "spikes",
-            NoteKind::Gaps => "gaps",
-            NoteKind::ColouredNoise => "coloured_noise",
-            NoteKind::SensorVsChamber => "sensor_vs_chamber",
-            NoteKind::OneSamplePerDwell => "one_sample_per_dwell",
-            NoteKind::OneTemperature => "one_temperature",
-            NoteKind::Quantised => "quantised",
-        }
-    }
-}
-
-impl std::fmt::Display for NoteKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
+        self.into()
     }
 }
 

@@ -1,7 +1,7 @@
 //! Identification of the 12 coefficients: observation windows, stops, and the per-stop
 //! least squares that reduces to the paper's formula (10).
 use crate::data::recording::{Dwell, Recording};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::lsq::weighted_lsq;
 use crate::fit::noise::Noise;
 use firmware_core::model::{K_INDEX, U0_INDEX};
@@ -154,8 +154,18 @@ pub struct StopCoeffs {
     pub positions: Vec<String>,
 }
 
-/// One axis's identified row: `(K row, U0, K2, stderr of K row and U0)`.
-pub type AxisFit = ([f64; 3], f64, Option<f64>, [f64; 4]);
+/// One axis's identified row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AxisFit {
+    /// The axis's row of K (its output per g along x, y and z).
+    pub k: [f64; 3],
+    /// Its offset U0.
+    pub u0: f64,
+    /// The even-order (K2) term, when the positions determine it.
+    pub k2: Option<f64>,
+    /// Standard errors of the row of K and of U0, in that order.
+    pub stderr: [f64; 4],
+}
 
 /// One axis's static least squares over observations `(a, u_i, weight)`: columns
 /// `a_x, a_y, a_z, 1` and, when the positions determine it, `a_i^2`. With TP1..TP6 and
@@ -190,12 +200,12 @@ pub fn axis_lsq(axis: usize, rows: &[([f64; 3], f64, f64)]) -> Option<AxisFit> {
         (build(false)?, false)
     };
     let se = |j: usize| s.cov[(j, j)].max(0.0).sqrt();
-    Some((
-        [s.x[0], s.x[1], s.x[2]],
-        s.x[3],
-        with_k2.then(|| s.x[4]),
-        [se(0), se(1), se(2), se(3)],
-    ))
+    Some(AxisFit {
+        k: [s.x[0], s.x[1], s.x[2]],
+        u0: s.x[3],
+        k2: with_k2.then(|| s.x[4]),
+        stderr: [se(0), se(1), se(2), se(3)],
+    })
 }
 
 /// Identify the 12 coefficients at one stop from its dwell means.
@@ -225,8 +235,9 @@ pub fn identify_stop(rec: &Recording, stop: &Stop, noise: &Noise) -> Result<Stop
                 )
             })
             .collect();
-        let (k, u0, e2, se) = axis_lsq(axis, &rows).ok_or_else(|| {
+        let fit = axis_lsq(axis, &rows).ok_or_else(|| {
             HostError::in_file(
+                ErrorKind::Insufficient,
                 &rec.path,
                 format!(
                     "at the stop at {:.2} C the positions present ({}) do not determine the coefficients: need at least 4 positions not in one plane (e.g. TP1..TP6)",
@@ -236,12 +247,12 @@ pub fn identify_stop(rec: &Recording, stop: &Stop, noise: &Noise) -> Result<Stop
             )
         })?;
         for j in 0..3 {
-            coeffs[K_INDEX[axis][j]] = k[j];
-            stderr[K_INDEX[axis][j]] = se[j];
+            coeffs[K_INDEX[axis][j]] = fit.k[j];
+            stderr[K_INDEX[axis][j]] = fit.stderr[j];
         }
-        coeffs[U0_INDEX[axis]] = u0;
-        stderr[U0_INDEX[axis]] = se[3];
-        k2[axis] = e2;
+        coeffs[U0_INDEX[axis]] = fit.u0;
+        stderr[U0_INDEX[axis]] = fit.stderr[3];
+        k2[axis] = fit.k2;
     }
     Ok(StopCoeffs {
         temp_c: stop.temp_c,

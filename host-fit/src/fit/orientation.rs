@@ -16,7 +16,7 @@
 //! unknown poses mix freely; then the known ones fix the frame.
 use crate::data::positions::{Positions, Role};
 use crate::data::recording::Recording;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::equilibrium::static_observations;
 use crate::fit::identify::Obs;
 use crate::fit::lsq::weighted_lsq;
@@ -188,6 +188,7 @@ pub fn estimate_with(rec: &Recording, basis: &Basis) -> Result<Orientation> {
     };
     let mut dirs = start.ok_or_else(|| {
         HostError::in_file(
+            ErrorKind::Insufficient,
             &rec.path,
             format!(
                 "cannot start estimating the {} poses of unknown orientation: their readings do not span the sphere (need at least 9 poses in different directions, or 4 known positions not in one plane)",

@@ -7,7 +7,7 @@
 use crate::data::positions::Role;
 use crate::data::recording::Recording;
 use crate::data::table::TableRow;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::equilibrium::{static_observations, Excluded, WINDOW_SPAN_C};
 use crate::fit::identify::{identify_stop, observations, stops, Obs, StopCoeffs};
 use crate::fit::noise::{noise, Noise};
@@ -28,7 +28,18 @@ pub enum ModelKind {
 }
 
 /// Identification route.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[strum(serialize_all = "kebab-case")]
 pub enum Route {
     /// The dwells taken in thermal equilibrium (temperature span <= 0.5 C), each window
     /// at its own temperature, all at once.
@@ -46,12 +57,7 @@ pub enum Route {
 impl Route {
     /// The name used in outputs.
     pub fn name(self) -> &'static str {
-        match self {
-            Route::Static => "static",
-            Route::Joint => "joint",
-            Route::PerStop => "per-stop",
-            Route::Dynamic => "dynamic",
-        }
+        self.into()
     }
 }
 
@@ -98,6 +104,7 @@ pub fn identify_stops(rec: &Recording) -> Result<Vec<StopCoeffs>> {
     let st = stops(rec, &cal, 3.0);
     if st.is_empty() {
         return Err(HostError::in_file(
+            ErrorKind::Insufficient,
             &rec.path,
             "no static calibration dwells (a calibration position held within 0.5 C): this is not a production test with stops; a recording without them (a soak, a field recording) is diagnosed with `host-fit diagnose REC --report R.html`",
         ));
@@ -138,13 +145,16 @@ impl ModelRequest {
     /// An option that does not apply to the family is an error, never ignored.
     pub fn check(&self) -> Result<()> {
         match (self.kind, &self.order, &self.breakpoints) {
-            (Some(ModelKind::Pwl), Some(_), _) => Err(HostError::msg(
+            (Some(ModelKind::Pwl), Some(_), _) => Err(HostError::new(
+                ErrorKind::Invalid,
                 "--order applies to a polynomial model, not to --model pwl (give --breakpoints)",
             )),
-            (Some(ModelKind::Poly), _, Some(_)) => Err(HostError::msg(
+            (Some(ModelKind::Poly), _, Some(_)) => Err(HostError::new(
+                ErrorKind::Invalid,
                 "--breakpoints apply to a piecewise-linear model, not to --model poly (give --order)",
             )),
-            (None, Some(_), Some(_)) => Err(HostError::msg(
+            (None, Some(_), Some(_)) => Err(HostError::new(
+                ErrorKind::Invalid,
                 "--order and --breakpoints belong to different models; give --model",
             )),
             _ => Ok(()),
@@ -159,11 +169,11 @@ impl ModelRequest {
             (Basis::Pwl { .. }, _, Some(b)) => Ok(Basis::Pwl {
                 breakpoints: b.clone(),
             }),
-            (Basis::Pwl { .. }, Some(_), _) => Err(HostError::msg(format!(
+            (Basis::Pwl { .. }, Some(_), _) => Err(HostError::new(ErrorKind::Invalid, format!(
                 "--order applies to a polynomial model; the data chose {} (give --model poly to insist)",
                 chosen.describe()
             ))),
-            (Basis::Poly { .. }, _, Some(_)) => Err(HostError::msg(format!(
+            (Basis::Poly { .. }, _, Some(_)) => Err(HostError::new(ErrorKind::Invalid, format!(
                 "--breakpoints apply to a piecewise-linear model; the data chose {} (give --model pwl to insist)",
                 chosen.describe()
             ))),
@@ -290,6 +300,7 @@ pub fn fit_chosen(rec: &Recording, req: &ModelRequest) -> Result<FitOutcome> {
 
 fn no_static(rec: &Recording, ex: &Excluded) -> HostError {
     HostError::in_file(
+        ErrorKind::Insufficient,
         &rec.path,
         format!(
             "no calibration dwell was taken in thermal equilibrium (temperature steady within {} C){}",
@@ -331,7 +342,8 @@ pub fn fit_recording(rec: &Recording, choice: &ModelChoice, route: Route) -> Res
     match route {
         Route::PerStop => fit_per_stop(rec, choice),
         Route::Static | Route::Joint => fit_windows(rec, choice, route),
-        Route::Dynamic => Err(HostError::msg(
+        Route::Dynamic => Err(HostError::new(
+            ErrorKind::Invalid,
             "the dynamic route chooses its own model on held-out blocks of time; --model does not apply to it",
         )),
     }

@@ -9,7 +9,7 @@
 //! ([`crate::fit::folds`]): every candidate is scored on the same held-out dwells, and
 //! none is lost to the fold design.
 use crate::data::positions::Positions;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::folds::{design, FoldDesign};
 use crate::fit::identify::Obs;
 use crate::fit::temperature::{fit_joint, temperature_clusters, Basis, ModelFit, Setting};
@@ -173,8 +173,13 @@ fn one_temperature(temps: &[f64]) -> Selection {
     }
 }
 
-/// One candidate: its basis, its score, or why it has none.
-type Scored = (Basis, std::result::Result<Score, String>);
+/// One candidate of the selection.
+struct Scored {
+    /// Its basis.
+    basis: Basis,
+    /// Its held-out score, or why it has none.
+    score: std::result::Result<Score, String>,
+}
 
 /// Score the candidates `keep` accepts among `all`, every one on the same held-out dwells
 /// of a fold design that keeps every candidate the full data determine (whatever `keep`
@@ -212,7 +217,7 @@ fn score(
                     .map(|e| rms_se(&e))
                     .ok_or_else(|| "a training fold does not determine it".to_string()),
             };
-            (b, s)
+            Scored { basis: b, score: s }
         })
         .collect();
     (scored, folds)
@@ -247,6 +252,7 @@ pub fn choose_among(
     let all = candidates(&temps);
     if !all.iter().any(keep) {
         return Err(HostError::in_file(
+            ErrorKind::Insufficient,
             path,
             format!(
                 "no model of that family can be fitted to calibration data at {} temperature(s)",
@@ -269,11 +275,12 @@ pub fn choose_among(
     let (scored, folds) = score(obs, all, setting, keep, k);
     let (best, bs) = scored
         .iter()
-        .filter_map(|(b, s)| s.as_ref().ok().map(|s| (b, *s)))
+        .filter_map(|c| c.score.as_ref().ok().map(|s| (&c.basis, *s)))
         .min_by(|x, y| x.1.rms.total_cmp(&y.1.rms))
         .map(|(b, s)| (b.clone(), s))
         .ok_or_else(|| {
             HostError::in_file(
+                ErrorKind::Insufficient,
                 path,
                 format!(
                     "no dwell of the {} calibration dwells can be held out without leaving the model undetermined: too few positions or temperatures for cross-validation (give --model)",
@@ -284,11 +291,12 @@ pub fn choose_among(
     let limit = bs.rms + bs.se;
     let (chosen, cs) = scored
         .iter()
-        .find_map(|(b, s)| {
-            s.as_ref()
+        .find_map(|c| {
+            c.score
+                .as_ref()
                 .ok()
                 .filter(|s| s.rms <= limit)
-                .map(|s| (b.clone(), *s))
+                .map(|s| (c.basis.clone(), *s))
         })
         .unwrap_or((best.clone(), bs));
     let never = never_held_out(obs, &folds, positions);
@@ -298,12 +306,12 @@ pub fn choose_among(
         reason: reason_text((&chosen, cs), (&best, bs)),
         candidates: scored
             .iter()
-            .map(|(b, s)| Candidate {
-                model: b.describe(),
-                params_per_coefficient: b.len(),
-                held_out_rms_dg_mg: s.as_ref().ok().map(|s| s.rms * 1e3),
-                standard_error_mg: s.as_ref().ok().map(|s| s.se * 1e3),
-                not_scored: s.as_ref().err().cloned(),
+            .map(|c| Candidate {
+                model: c.basis.describe(),
+                params_per_coefficient: c.basis.len(),
+                held_out_rms_dg_mg: c.score.as_ref().ok().map(|s| s.rms * 1e3),
+                standard_error_mg: c.score.as_ref().ok().map(|s| s.se * 1e3),
+                not_scored: c.score.as_ref().err().cloned(),
             })
             .collect(),
         held_out_dwells: folds.held_out(),

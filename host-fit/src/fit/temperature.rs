@@ -1,7 +1,7 @@
 //! Temperature models of the 12 coefficients: fitted jointly from all dwells, or from
 //! per-stop coefficient tables (the paper's route, formulas (11), (12)).
 use crate::data::table::TableRow;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::identify::Obs;
 use crate::fit::lsq::{weighted_lsq, Lsq};
 use crate::fit::noise::Noise;
@@ -60,22 +60,29 @@ impl Basis {
     pub fn check(&self) -> Result<()> {
         match self {
             Basis::Poly { order } if *order <= MAX_POLY_ORDER => Ok(()),
-            Basis::Poly { order } => Err(HostError::msg(format!(
-                "polynomial order {order} is outside 0..={MAX_POLY_ORDER}"
-            ))),
+            Basis::Poly { order } => Err(HostError::new(
+                ErrorKind::Invalid,
+                format!("polynomial order {order} is outside 0..={MAX_POLY_ORDER}"),
+            )),
             Basis::Pwl { breakpoints } => {
                 if !(2..=MAX_BREAKPOINTS).contains(&breakpoints.len()) {
-                    return Err(HostError::msg(format!(
+                    return Err(HostError::new(
+                        ErrorKind::Invalid,
+                        format!(
                         "a piecewise-linear model needs 2..={MAX_BREAKPOINTS} breakpoints, got {}",
                         breakpoints.len()
-                    )));
+                    ),
+                    ));
                 }
                 if breakpoints.windows(2).any(|w| w[0] >= w[1])
                     || breakpoints.iter().any(|b| !b.is_finite())
                 {
-                    return Err(HostError::msg(format!(
-                        "breakpoints must be finite and strictly increasing: {breakpoints:?}"
-                    )));
+                    return Err(HostError::new(
+                        ErrorKind::Invalid,
+                        format!(
+                            "breakpoints must be finite and strictly increasing: {breakpoints:?}"
+                        ),
+                    ));
                 }
                 Ok(())
             }
@@ -253,7 +260,7 @@ pub(crate) fn check_coverage(basis: &Basis, temps: &[f64]) -> Result<()> {
         .collect::<Vec<_>>()
         .join(", ");
     match basis {
-        Basis::Poly { order } if clusters.len() < order + 1 => Err(HostError::msg(format!(
+        Basis::Poly { order } if clusters.len() < order + 1 => Err(HostError::new(ErrorKind::Insufficient, format!(
             "a polynomial of order {order} needs data at {} or more temperatures; there are {} ({list} C)",
             order + 1,
             clusters.len()
@@ -263,14 +270,14 @@ pub(crate) fn check_coverage(basis: &Basis, temps: &[f64]) -> Result<()> {
                 let lo = if j == 0 { f64::NEG_INFINITY } else { breakpoints[j - 1] };
                 let hi = breakpoints.get(j + 1).copied().unwrap_or(f64::INFINITY);
                 if !temps.iter().any(|t| *t > lo && *t < hi) {
-                    return Err(HostError::msg(format!(
+                    return Err(HostError::new(ErrorKind::Insufficient, format!(
                         "no data between {lo} and {hi} C to determine the breakpoint at {b} C (data at {list} C)"
                     )));
                 }
             }
             Ok(())
         }
-        _ => Ok(()),
+        Basis::Poly { .. } => Ok(()),
     }
 }
 
@@ -466,6 +473,7 @@ fn rank_error(obs: &[Obs], path: &Path, basis: &Basis) -> HostError {
         parts.push(format!("{c:.1} C: {} positions", names.len()));
     }
     HostError::in_file(
+        ErrorKind::Insufficient,
         path,
         format!(
             "the data do not determine the {} model of the 12 coefficients (need >= 4 positions not in one plane at enough temperatures); have {}",
@@ -483,12 +491,15 @@ pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> 
     basis.check()?;
     let temps: Vec<f64> = rows.iter().map(|r| r.temp_c).collect();
     if rows.len() < basis.len() {
-        return Err(HostError::msg(format!(
-            "the {} model needs coefficients at {} or more temperatures; the table has {}",
-            basis.describe(),
-            basis.len(),
-            rows.len()
-        )));
+        return Err(HostError::new(
+            ErrorKind::Insufficient,
+            format!(
+                "the {} model needs coefficients at {} or more temperatures; the table has {}",
+                basis.describe(),
+                basis.len(),
+                rows.len()
+            ),
+        ));
     }
     check_coverage(basis, &temps)?;
     let nb = basis.len();
@@ -511,10 +522,13 @@ pub fn fit_table(rows: &[TableRow], basis: &Basis, t0: f64) -> Result<ModelFit> 
             })
             .collect();
         let s = weighted_lsq(&a, &b, &w).ok_or_else(|| {
-            HostError::msg(format!(
-                "the table does not determine the {} model",
-                basis.describe()
-            ))
+            HostError::new(
+                ErrorKind::Insufficient,
+                format!(
+                    "the table does not determine the {} model",
+                    basis.describe()
+                ),
+            )
         })?;
         params[c] = (0..nb).map(|k| unscale(basis, k, s.x[k])).collect();
         stderr[c] = (0..nb)

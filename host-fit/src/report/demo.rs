@@ -6,7 +6,7 @@
 //! the temperature.
 use crate::acceptance::{Spec, Verdict};
 use crate::analysis::{
-    names_text, verification_names, Compensation, DemoModel, DemoOutcome, T0_CONSTANTS,
+    names_text, verification_names, Compared, Compensation, DemoModel, DemoOutcome, T0_CONSTANTS,
 };
 use crate::data::positions::Role;
 use crate::error::Result;
@@ -105,11 +105,11 @@ fn max_dg_plot(oc: &DemoOutcome) -> Plot {
     for (i, m) in oc.models.iter().enumerate() {
         for (k, method, marker, dash) in METHODS {
             let mut s = Series::line(
-                format!("{} method {}", m.name, method.name()),
+                format!("{} method {}", m.model, method.name()),
                 model_color(i),
                 dash,
                 marker,
-                row_points(&m.name, method, dodge(1 + 2 * i + k, n) * 3.0),
+                row_points(&m.model.to_string(), method, dodge(1 + 2 * i + k, n) * 3.0),
             );
             s.marker_every = 1;
             series.push(s);
@@ -133,7 +133,7 @@ fn max_dg_plot(oc: &DemoOutcome) -> Plot {
     let verdicts: Vec<String> = oc
         .models
         .iter()
-        .map(|m| format!("{} {}", m.name, m.acceptance.acceptance.name()))
+        .map(|m| format!("{} {}", m.model, m.acceptance.acceptance.name()))
         .collect();
     Plot {
         id: "max-dg".into(),
@@ -241,7 +241,7 @@ fn dg_plot(oc: &DemoOutcome, names: &[String], ti: usize, t: f64) -> Plot {
                 .collect();
             max_abs = pts.iter().fold(max_abs, |a, p| a.max(p.1.abs()));
             series.push(Series::markers(
-                format!("{} method {}", m.name, method.name()),
+                format!("{} method {}", m.model, method.name()),
                 model_color(i),
                 marker,
                 pts,
@@ -323,7 +323,10 @@ fn curves(oc: &DemoOutcome, c: usize, grid: &[f64]) -> (Option<Vec<f64>>, Vec<Ve
 /// the chosen model, with the per-stop 1-sigma error bars).
 fn coeff_plot(oc: &DemoOutcome, c: usize, grid: &[f64], diff: bool) -> Plot {
     let (truth, models) = curves(oc, c, grid);
-    let chosen = oc.models.iter().position(|m| m.name.starts_with("chosen-"));
+    let chosen = oc
+        .models
+        .iter()
+        .position(|m| matches!(m.model, Compared::Chosen(_)));
     let at = |t: f64| -> f64 {
         match (&oc.truth, chosen) {
             (Some(tr), _) => tr.coeffs(t)[c],
@@ -355,7 +358,7 @@ fn coeff_plot(oc: &DemoOutcome, c: usize, grid: &[f64], diff: bool) -> Plot {
     let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
         (a.min(v), b.max(v))
     });
-    let unit = &oc.recording.output_unit;
+    let unit = oc.recording.output_unit.as_str();
     // departures by their size; values by how much they change (kxx in mV/g, not V/g)
     let scale_by = if diff {
         lo.abs().max(hi.abs())
@@ -380,7 +383,7 @@ fn coeff_plot(oc: &DemoOutcome, c: usize, grid: &[f64], diff: bool) -> Plot {
         .collect();
     series.extend(models.iter().enumerate().map(|(i, v)| {
         Series::line(
-            oc.models[i].name.clone(),
+            oc.models[i].model.to_string(),
             model_color(i),
             styles[i % styles.len()],
             Marker::ALL[(i + 2) % Marker::ALL.len()],
@@ -399,7 +402,7 @@ fn coeff_plot(oc: &DemoOutcome, c: usize, grid: &[f64], diff: bool) -> Plot {
     series.push(per_stop);
     let reference_name = match (&oc.truth, chosen) {
         (Some(_), _) => "the truth (the twin's)".to_string(),
-        (None, Some(i)) => oc.models[i].name.clone(),
+        (None, Some(i)) => oc.models[i].model.to_string(),
         _ => "0".to_string(),
     };
     Plot {
@@ -476,7 +479,7 @@ fn residual_plots(oc: &DemoOutcome, model: &DemoModel) -> Vec<Plot> {
         }
     }
     let max_abs = axes.iter().flatten().fold(0.0f64, |a, p| a.max(p.1.abs()));
-    let (k, unit) = prefixed(max_abs, &rec.output_unit);
+    let (k, unit) = prefixed(max_abs, rec.output_unit.as_str());
     let mut series: Vec<Series> = axes
         .iter()
         .enumerate()
@@ -504,7 +507,7 @@ fn residual_plots(oc: &DemoOutcome, model: &DemoModel) -> Vec<Plot> {
     vec![
         Plot {
             id: "residual-time".into(),
-            title: format!("dwell-mean residual against {}", model.name),
+            title: format!("dwell-mean residual against {}", model.model),
             x_label: "time, h".into(),
             y_label: format!("residual, {unit}"),
             x_range: span,
@@ -535,7 +538,7 @@ fn verdict_table(oc: &DemoOutcome) -> String {
         };
         s.push_str(&format!(
             "<tr><td>{}</td><td style=\"color:{color};font-weight:bold\">{v}</td><td>{}</td></tr>\n",
-            esc(&m.name),
+            esc(&m.model.to_string()),
             esc(&why)
         ));
     }
@@ -551,8 +554,8 @@ pub fn demo_report(oc: &DemoOutcome) -> Result<String> {
         "<p>Unit {}, {} samples, output in {}. Models: {}. Compensation by firmware-core in f32 (method 1: correct the constants; method 2: correct the result).</p>\n<pre>{}</pre>\n{}<p>Data-chosen model: {} by {}; {}</p>\n",
         esc(&oc.recording.unit),
         oc.recording.rows.len(),
-        esc(&oc.recording.output_unit),
-        oc.models.iter().map(|m| esc(&m.name)).collect::<Vec<_>>().join(", "),
+        esc(oc.recording.output_unit.as_str()),
+        oc.models.iter().map(|m| esc(&m.model.to_string())).collect::<Vec<_>>().join(", "),
         esc(&table),
         verdict_table(oc),
         esc(&oc.selection.chosen),
@@ -594,7 +597,7 @@ pub fn demo_report(oc: &DemoOutcome) -> Result<String> {
     if let Some(b) = best {
         sections.push(Section {
             head: "Residuals against time".into(),
-            text: format!("Dwell means minus the {} model at the dwell's temperature, per axis; the dwells held out of every fit (the verification positions {}) ringed; below, on the same time axis, the temperature.", b.name, names_text(&verification)),
+            text: format!("Dwell means minus the {} model at the dwell's temperature, per axis; the dwells held out of every fit (the verification positions {}) ringed; below, on the same time axis, the temperature.", b.model, names_text(&verification)),
             plots: residual_plots(oc, b),
             pairs: false,
         });

@@ -33,7 +33,7 @@ fn frame(rec: &Recording, d: &Diagnosis) -> Frame {
             .flat_map(|r| r.iter().copied())
     };
     let max_abs = all().fold(0.0f64, |a, v| a.max(v.abs()));
-    let (k, unit) = prefixed(max_abs, &rec.output_unit);
+    let (k, unit) = prefixed(max_abs, rec.output_unit.as_str());
     let floor = 2.0 * d.noise_rms * k;
     let y = padded_y(all().map(|v| v * k).chain([floor, -floor]));
     Frame { k, unit, y, floor }
@@ -179,7 +179,7 @@ pub fn diagnosis_report(d: &Diagnosis) -> Result<String> {
         "<p>Recording {}: {} samples, output in {}; {} window means of static positions. Verdict: <b>{}</b>.</p>\n<pre>{}</pre>",
         esc(&rec.path.display().to_string()),
         rec.rows.len(),
-        esc(&rec.output_unit),
+        esc(rec.output_unit.as_str()),
         d.data.obs.len(),
         esc(contract.verdict.as_str()),
         esc(&contract.text())

@@ -2,7 +2,7 @@
 //! that uses the page's width (2-3 columns on a desktop screen; plots along time span it
 //! all, one above the other, so that they line up), every plot's drawn data embedded
 //! beside it as JSON so a test can check the drawing against the numbers.
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::report::plot::{prepare, Plot};
 pub use crate::report::svg::esc;
 use crate::report::svg::svg;
@@ -33,7 +33,8 @@ figcaption{font-size:13px;color:#444;margin:2px 0 0 8px}";
 
 /// JSON text safe inside a `<script>` element of a page that is also well-formed XML.
 fn script_json(v: &impl serde::Serialize) -> Result<String> {
-    let s = serde_json::to_string(v).map_err(|e| HostError::msg(e.to_string()))?;
+    let s =
+        serde_json::to_string(v).map_err(|e| HostError::new(ErrorKind::Internal, e.to_string()))?;
     Ok(s.replace('<', "\\u003c")
         .replace('>', "\\u003e")
         .replace('&', "\\u0026"))

@@ -50,7 +50,18 @@ pub const ACCEPT: Rgb = Rgb(26, 128, 54);
 pub const FLOOR: Rgb = Rgb(110, 110, 110);
 
 /// A marker's shape.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[strum(serialize_all = "lowercase")]
 pub enum Marker {
     /// Filled circle.
     Circle,
@@ -81,20 +92,23 @@ impl Marker {
 
     /// Name in the JSON.
     pub fn name(self) -> &'static str {
-        match self {
-            Marker::Circle => "circle",
-            Marker::Square => "square",
-            Marker::Triangle => "triangle",
-            Marker::Diamond => "diamond",
-            Marker::Cross => "cross",
-            Marker::Ring => "ring",
-            Marker::None => "none",
-        }
+        self.into()
     }
 }
 
 /// A line's dash pattern.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[strum(serialize_all = "lowercase")]
 pub enum Dash {
     /// Solid.
     Solid,
@@ -109,12 +123,7 @@ pub enum Dash {
 impl Dash {
     /// Name in the JSON.
     pub fn name(self) -> &'static str {
-        match self {
-            Dash::Solid => "solid",
-            Dash::Dashed => "dashed",
-            Dash::Dotted => "dotted",
-            Dash::DashDot => "dashdot",
-        }
+        self.into()
     }
 
     /// The SVG `stroke-dasharray` (none for solid).

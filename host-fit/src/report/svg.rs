@@ -275,12 +275,16 @@ fn marker_def(id: &str, m: Marker, c: &str, r: f64, opacity: f64) -> String {
             w = f(r * 1.8)
         ),
         Marker::Ring => format!(r#"<circle r="{}"/>"#, f(RING * r)),
-        _ => format!(r#"<path d="{}"/>"#, marker(m, 0.0, 0.0, r)),
+        Marker::Triangle | Marker::Diamond | Marker::Cross | Marker::None => {
+            format!(r#"<path d="{}"/>"#, marker(m, 0.0, 0.0, r))
+        }
     };
     let paint = match m {
         Marker::Cross => format!(r#"fill="none" stroke="{c}" stroke-width="1.8""#),
         Marker::Ring => format!(r#"fill="none" stroke="{c}" stroke-width="1.6""#),
-        _ => format!(r#"fill="{c}" fill-opacity="{opacity}""#),
+        Marker::Circle | Marker::Square | Marker::Triangle | Marker::Diamond | Marker::None => {
+            format!(r#"fill="{c}" fill-opacity="{opacity}""#)
+        }
     };
     format!(
         r#"<marker id="{id}" viewBox="-6 -6 12 12" markerWidth="12" markerHeight="12" markerUnits="userSpaceOnUse" overflow="visible"><g {paint}>{shape}</g></marker>"#

@@ -3,7 +3,7 @@
 //! second power cycle, static attitudes all over the sphere), sampled at an MCU rate.
 //! What a blob diagnosed from the production recording must compensate, on a temperature
 //! history it was not fitted on.
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::rng::Rng;
 use crate::simulate::config::{Flight, SimConfig};
 use crate::simulate::readings::{sample, within, Disturbance};
@@ -61,7 +61,12 @@ fn duration(f: &Flight) -> f64 {
 // The negated comparisons are the point: NaN fails them.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn check(f: &Flight) -> Result<()> {
-    let bad = |what: &str| Err(HostError::msg(format!("flight: {what}")));
+    let bad = |what: &str| {
+        Err(HostError::new(
+            ErrorKind::Invalid,
+            format!("flight: {what}"),
+        ))
+    };
     if !(f.rate_hz > 0.0 && f.rate_hz.is_finite()) {
         return bad("rate_hz must be > 0");
     }

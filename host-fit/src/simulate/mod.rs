@@ -12,8 +12,8 @@ mod writer;
 
 pub use config::{
     parse_config, Bend, BiasStep, Chamber, Curvature, Effects, Fixture, FixtureChange, Flight,
-    Gradient, Leg, Logger, Output, PerAxis, Periodic, Schedule, Sensor, Settle, SimConfig, Stop,
-    Sweep, Unit, Warmup,
+    Gradient, Interp, Leg, Logger, Output, PerAxis, Periodic, Schedule, Sensor, Settle, SimConfig,
+    Stop, Sweep, Unit, UnitModel, Warmup,
 };
 pub use unit::{TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
 pub use writer::Simulation;
@@ -23,7 +23,7 @@ use thermal::Thermal;
 use writer::RecordingWriter;
 
 use crate::data::positions::Positions;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::rng::Rng;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -70,9 +70,10 @@ fn positions(cfg: &SimConfig) -> Result<Positions> {
     for (n, v) in &cfg.schedule.extra_positions {
         let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         if norm == 0.0 || !norm.is_finite() {
-            return Err(HostError::msg(format!(
-                "schedule.extra_positions `{n}` has a zero-length vector"
-            )));
+            return Err(HostError::new(
+                ErrorKind::Invalid,
+                format!("schedule.extra_positions `{n}` has a zero-length vector"),
+            ));
         }
         positions.set(n, v.map(|x| x / norm), None);
     }
@@ -80,9 +81,12 @@ fn positions(cfg: &SimConfig) -> Result<Positions> {
 }
 
 fn position_index(positions: &Positions, n: &str) -> Result<usize> {
-    positions
-        .index(n)
-        .ok_or_else(|| HostError::msg(format!("unknown position `{n}` in the schedule")))
+    positions.index(n).ok_or_else(|| {
+        HostError::new(
+            ErrorKind::Invalid,
+            format!("unknown position `{n}` in the schedule"),
+        )
+    })
 }
 
 /// The profile as segments: per stop a ramp and a soak at rest, then move/dwell through
@@ -99,10 +103,10 @@ fn plan(cfg: &SimConfig, positions: &Positions, rest: usize) -> Result<Vec<Segme
     };
     for stop in &sch.stops {
         if stop.ramp_c_per_min.is_nan() || stop.ramp_c_per_min <= 0.0 {
-            return Err(HostError::msg(format!(
-                "stop at {} C: ramp_c_per_min must be > 0",
-                stop.temp_c
-            )));
+            return Err(HostError::new(
+                ErrorKind::Invalid,
+                format!("stop at {} C: ramp_c_per_min must be > 0", stop.temp_c),
+            ));
         }
         let ramp_s = (stop.temp_c - set).abs() / stop.ramp_c_per_min * 60.0;
         segs.push(Segment {
@@ -141,9 +145,12 @@ fn sweep_plan(
     let mut knots = vec![(0.0, cfg.chamber.start_c)];
     for (i, leg) in sweep.legs.iter().enumerate() {
         if !(leg.c_per_min > 0.0 && leg.hold_s >= 0.0 && leg.to_c.is_finite()) {
-            return Err(HostError::msg(format!(
-                "schedule.sweep.legs[{i}]: needs c_per_min > 0, hold_s >= 0 and a finite to_c"
-            )));
+            return Err(HostError::new(
+                ErrorKind::Invalid,
+                format!(
+                    "schedule.sweep.legs[{i}]: needs c_per_min > 0, hold_s >= 0 and a finite to_c"
+                ),
+            ));
         }
         let (t, from) = knots[knots.len() - 1];
         let t1 = t + (leg.to_c - from).abs() / leg.c_per_min * 60.0;
@@ -153,7 +160,8 @@ fn sweep_plan(
     let end = knots[knots.len() - 1].0;
     let durations_ok = sch.dwell_s > 0.0 && sch.move_s >= 0.0;
     if sch.positions.is_empty() || !durations_ok || end <= 0.0 {
-        return Err(HostError::msg(
+        return Err(HostError::new(
+            ErrorKind::Invalid,
             "schedule.sweep needs legs of some duration, positions, dwell_s > 0 and move_s >= 0",
         ));
     }
@@ -265,14 +273,16 @@ impl Clock {
     fn new(cfg: &SimConfig, rate_hz: f64) -> Result<Self> {
         let l = &cfg.logger;
         if !(l.rest_rate_hz >= 0.0 && l.drop_rate >= 0.0 && l.drop_rate < 1.0) {
-            return Err(HostError::msg(
+            return Err(HostError::new(
+                ErrorKind::Invalid,
                 "logger needs rest_rate_hz >= 0 and 0 <= drop_rate < 1",
             ));
         }
         if !(l.jitter_s >= 0.0 && l.jitter_s < 1.0 / rate_hz) {
-            return Err(HostError::msg(format!(
-                "logger.jitter_s must be >= 0 and less than one tick (1 / {rate_hz} Hz)"
-            )));
+            return Err(HostError::new(
+                ErrorKind::Invalid,
+                format!("logger.jitter_s must be >= 0 and less than one tick (1 / {rate_hz} Hz)"),
+            ));
         }
         let rest_every = if l.rest_rate_hz > 0.0 {
             ((rate_hz / l.rest_rate_hz).round() as u64).max(1)
@@ -335,7 +345,8 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
         || sch.rate_hz <= 0.0
         || (sch.stops.is_empty() && sch.sweep.is_none() && sch.program.is_empty())
     {
-        return Err(HostError::msg(
+        return Err(HostError::new(
+            ErrorKind::Invalid,
             "schedule needs rate_hz > 0 and at least one stop (or a sweep)",
         ));
     }

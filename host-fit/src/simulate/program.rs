@@ -4,7 +4,7 @@
 //! row's position until the next row (`-`: it moves from the last named position to the
 //! next one); the last row ends the program. The unit starts soaked at the first set
 //! point.
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -32,10 +32,17 @@ pub fn parse_program(path: &Path, text: &str) -> Result<Vec<Step>> {
         .from_reader(text.as_bytes());
     let head = r
         .headers()
-        .map_err(|e| HostError::in_file(path, format!("cannot read the header: {e}")))?
+        .map_err(|e| {
+            HostError::in_file(
+                ErrorKind::Malformed,
+                path,
+                format!("cannot read the header: {e}"),
+            )
+        })?
         .clone();
     if head.iter().collect::<Vec<_>>() != HEADER {
         return Err(HostError::at(
+            ErrorKind::Malformed,
             path,
             1,
             format!(
@@ -47,7 +54,8 @@ pub fn parse_program(path: &Path, text: &str) -> Result<Vec<Step>> {
     }
     let mut out: Vec<Step> = Vec::new();
     for rec in r.records() {
-        let rec = rec.map_err(|e| HostError::in_file(path, format!("{e}")))?;
+        let rec =
+            rec.map_err(|e| HostError::in_file(ErrorKind::Malformed, path, format!("{e}")))?;
         let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
         let num = |i: usize| -> Result<f64> {
             let f = rec.get(i).unwrap_or("");
@@ -56,6 +64,7 @@ pub fn parse_program(path: &Path, text: &str) -> Result<Vec<Step>> {
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| {
                     HostError::at(
+                        ErrorKind::Malformed,
                         path,
                         line,
                         format!("{}: `{f}` is not a finite number", HEADER[i]),
@@ -66,6 +75,7 @@ pub fn parse_program(path: &Path, text: &str) -> Result<Vec<Step>> {
         let position = rec.get(2).unwrap_or("").to_string();
         if position.is_empty() {
             return Err(HostError::at(
+                ErrorKind::Malformed,
                 path,
                 line,
                 "position: empty (a name, or `-` while moving)",
@@ -74,6 +84,7 @@ pub fn parse_program(path: &Path, text: &str) -> Result<Vec<Step>> {
         match out.last() {
             None if t < 0.0 => {
                 return Err(HostError::at(
+                    ErrorKind::Malformed,
                     path,
                     line,
                     "time_s: the first row must be at t >= 0",
@@ -81,6 +92,7 @@ pub fn parse_program(path: &Path, text: &str) -> Result<Vec<Step>> {
             }
             Some(p) if t <= p.time_s => {
                 return Err(HostError::at(
+                    ErrorKind::Malformed,
                     path,
                     line,
                     format!(
@@ -99,6 +111,7 @@ pub fn parse_program(path: &Path, text: &str) -> Result<Vec<Step>> {
     }
     if out.len() < 2 {
         return Err(HostError::in_file(
+            ErrorKind::Insufficient,
             path,
             "a program needs at least two rows (the last one ends it)",
         ));

@@ -1,7 +1,7 @@
 //! The simulated unit's true coefficients against temperature: the paper unit (its
 //! Tables 1-2 and the rows designed in docs/paper-unit.md) or a configured table.
-use crate::error::{HostError, Result};
-use crate::simulate::config::{Bend, Curvature, SimConfig};
+use crate::error::{ErrorKind, HostError, Result};
+use crate::simulate::config::{Bend, Curvature, Interp, SimConfig, UnitModel};
 
 /// The built-in paper unit: the paper's Tables 1-2 at -40, +20, +70 C, and at -10 and
 /// +45 C the values designed in docs/paper-unit.md; the unit follows the quartic
@@ -96,28 +96,19 @@ pub struct TrueUnit {
 impl TrueUnit {
     /// From the configuration.
     pub fn new(cfg: &SimConfig) -> Result<TrueUnit> {
-        let (temps, rows) = match cfg.unit.model.as_str() {
-            "paper" => (PAPER_UNIT_TEMPS.to_vec(), PAPER_UNIT.to_vec()),
-            "table" => (cfg.unit.temps_c.clone(), cfg.unit.coeffs.clone()),
-            m => {
-                return Err(HostError::msg(format!(
-                    "unit.model `{m}`: expected `paper` or `table`"
-                )))
-            }
+        let (temps, rows) = match cfg.unit.model {
+            UnitModel::Paper => (PAPER_UNIT_TEMPS.to_vec(), PAPER_UNIT.to_vec()),
+            UnitModel::Table => (cfg.unit.temps_c.clone(), cfg.unit.coeffs.clone()),
         };
         if temps.is_empty() || temps.len() != rows.len() || temps.windows(2).any(|w| w[0] >= w[1]) {
-            return Err(HostError::msg(
+            return Err(HostError::new(
+                ErrorKind::Invalid,
                 "unit.temps_c must be strictly increasing, one per row of unit.coeffs",
             ));
         }
-        let poly = match cfg.unit.interp.as_str() {
-            "poly" => true,
-            "pwl" => false,
-            m => {
-                return Err(HostError::msg(format!(
-                    "unit.interp `{m}`: expected `poly` or `pwl`"
-                )))
-            }
+        let poly = match cfg.unit.interp {
+            Interp::Poly => true,
+            Interp::Pwl => false,
         };
         Ok(TrueUnit {
             temps,

@@ -1,6 +1,6 @@
 //! The recording as text (recording-format v1): metadata, then rows through a CSV writer.
 use crate::data::output_unit::OutputUnit;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::simulate::config::SimConfig;
 
 /// The simulated recording as text, with the positions used.
@@ -77,7 +77,10 @@ impl RecordingWriter {
     }
 
     fn err(e: csv::Error) -> HostError {
-        HostError::msg(format!("cannot write the recording: {e}"))
+        HostError::new(
+            ErrorKind::Internal,
+            format!("cannot write the recording: {e}"),
+        )
     }
 
     fn write(&mut self, t: f64, name: &str, ts: f64, air: f64, u: [f64; 3]) -> Result<()> {
@@ -156,11 +159,14 @@ impl RecordingWriter {
 
     pub(super) fn finish(mut self) -> Result<Simulation> {
         self.flush()?;
-        let body = self
-            .csv
-            .into_inner()
-            .map_err(|e| HostError::msg(format!("cannot write the recording: {e}")))?;
-        let body = String::from_utf8(body).map_err(|e| HostError::msg(e.to_string()))?;
+        let body = self.csv.into_inner().map_err(|e| {
+            HostError::new(
+                ErrorKind::Internal,
+                format!("cannot write the recording: {e}"),
+            )
+        })?;
+        let body = String::from_utf8(body)
+            .map_err(|e| HostError::new(ErrorKind::Internal, e.to_string()))?;
         Ok(Simulation {
             csv: self.head + &body,
             rows: self.rows,

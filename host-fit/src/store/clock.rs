@@ -2,7 +2,7 @@
 //! (`2026-12-01T18:29:03.123456Z`), one fixed width so that text order is time order
 //! (the store sorts and compares them as text); and the bounds of a reference period
 //! given on the command line (a date or such a time).
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 
 /// Days since 1970-01-01 of a proleptic Gregorian date (H. Hinnant's `days_from_civil`,
 /// exact for every year the store will meet).
@@ -114,9 +114,12 @@ pub fn parse(s: &str, end_of_day: bool) -> Option<i64> {
 /// A bound of a reference period given as `option` on the command line, as a store time.
 pub fn bound(option: &str, s: &str, end_of_day: bool) -> Result<String> {
     parse(s, end_of_day).map(rfc3339).ok_or_else(|| {
-        HostError::msg(format!(
-            "{option} `{s}` is not a date (YYYY-MM-DD) nor a UTC time (YYYY-MM-DDTHH:MM:SSZ)"
-        ))
+        HostError::new(
+            ErrorKind::Invalid,
+            format!(
+                "{option} `{s}` is not a date (YYYY-MM-DD) nor a UTC time (YYYY-MM-DDTHH:MM:SSZ)"
+            ),
+        )
     })
 }
 
@@ -165,6 +168,7 @@ mod tests {
             assert_eq!(parse(bad, false), None, "{bad}");
         }
         let e = bound("--reference-from", "March", false).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Invalid);
         assert!(e.message.contains("--reference-from `March`"), "{e}");
     }
 }

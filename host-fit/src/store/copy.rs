@@ -7,7 +7,7 @@
 //! copying each in turn. Then every run id of the source is checked to be in the
 //! destination.
 use super::db::{Filter, Store};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use std::collections::HashSet;
 
 /// Records read and written per transaction.
@@ -70,8 +70,7 @@ pub fn copy(src: &mut Store, dst: &mut Store) -> Result<Copied> {
         .filter(|r| !now.contains(r))
         .count();
     if missing > 0 {
-        return Err(HostError::in_file(
-            dst.path(),
+        return Err(HostError::in_file(ErrorKind::Store, dst.path(),
             format!("{missing} records of {} are not in the copy (written meanwhile?): run the copy again", src.location()),
         ));
     }

@@ -6,7 +6,7 @@ use super::location::Location;
 use super::record::{Command, Invocation, Record, RunId, Trace};
 use super::schema::{Dialect, Mode, CALIBRATION};
 use super::{pg, sqlite};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -93,7 +93,7 @@ impl Filter {
             bind(&mut cond, "lot = #", Value::Text(l.clone()));
         }
         if let Some(c) = self.command {
-            bind(&mut cond, "command = #", Value::Text(c.name()));
+            bind(&mut cond, "command = #", Value::Text(c.name().to_string()));
         }
         if let Some(id) = self.after_id {
             bind(&mut cond, "id > #", Value::Integer(id));
@@ -223,6 +223,7 @@ impl Store {
             .map(|r| {
                 Record::from_row(r).map_err(|m| {
                     HostError::in_file(
+                        ErrorKind::Store,
                         &self.at,
                         format!("record #{}: {m}", r.integer("id").unwrap_or(0)),
                     )
@@ -281,9 +282,12 @@ impl Writer {
     /// Write what is left and return how many records were written, or the first error.
     pub fn finish(self) -> Result<usize> {
         drop(self.tx);
-        self.handle
-            .join()
-            .map_err(|_| HostError::msg("the record store's writer stopped unexpectedly"))?
+        self.handle.join().map_err(|_| {
+            HostError::new(
+                ErrorKind::Internal,
+                "the record store's writer stopped unexpectedly",
+            )
+        })?
     }
 }
 

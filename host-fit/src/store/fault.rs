@@ -1,6 +1,6 @@
 //! Database errors said plainly, naming the store: not a database, corrupt, locked too
 //! long, not writable, disk full.
-use crate::error::HostError;
+use crate::error::{ErrorKind, HostError};
 use std::path::Path;
 use std::time::Duration;
 
@@ -27,5 +27,5 @@ pub fn db_error(path: &Path, e: rusqlite::Error) -> HostError {
         Some(C::DiskFull) => format!("the disk is full: the record was not written ({e})"),
         _ => format!("record store: {e}"),
     };
-    HostError::in_file(path, m)
+    HostError::in_file(ErrorKind::Store, path, m)
 }

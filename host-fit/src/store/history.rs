@@ -3,7 +3,7 @@
 //! after its CRC is checked (`--blob RUN`).
 use super::db::{Filter, Store};
 use super::record::{name_of, Record, RunId};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use serde::Serialize;
 
 /// One record in a unit's history.
@@ -176,9 +176,12 @@ struct Hit {
 pub fn stored_blob(store: &mut Store, serial: &str, run: &str) -> Result<(RunId, Vec<u8>)> {
     let run = run.to_ascii_lowercase();
     if run.len() < 6 || run.len() > 32 || !run.bytes().all(|c| c.is_ascii_hexdigit()) {
-        return Err(HostError::msg(format!(
-            "--blob `{run}` is not a run id (32 hex digits, or the first 6 or more of them)"
-        )));
+        return Err(HostError::new(
+            ErrorKind::Invalid,
+            format!(
+                "--blob `{run}` is not a run id (32 hex digits, or the first 6 or more of them)"
+            ),
+        ));
     }
     let f = Filter {
         run_prefix: Some(run.clone()),
@@ -209,6 +212,7 @@ pub fn stored_blob(store: &mut Store, serial: &str, run: &str) -> Result<(RunId,
     } = match hits.as_slice() {
         [] => {
             return Err(HostError::in_file(
+                ErrorKind::Store,
                 store.path(),
                 format!("no run `{run}` in the record store"),
             ))
@@ -216,6 +220,7 @@ pub fn stored_blob(store: &mut Store, serial: &str, run: &str) -> Result<(RunId,
         [one] => one.clone(),
         many => {
             return Err(HostError::in_file(
+                ErrorKind::Store,
                 store.path(),
                 format!(
                     "`{run}` starts {} run ids ({}): give more digits",
@@ -230,12 +235,14 @@ pub fn stored_blob(store: &mut Store, serial: &str, run: &str) -> Result<(RunId,
     };
     if unit != serial {
         return Err(HostError::in_file(
+            ErrorKind::Store,
             store.path(),
             format!("run {id} is of unit `{unit}`, not `{serial}`"),
         ));
     }
     let blob = blob.ok_or_else(|| {
         HostError::in_file(
+            ErrorKind::Store,
             store.path(),
             format!("run {id} made no blob (a run that failed, or a diagnosis without --out)"),
         )
@@ -244,13 +251,16 @@ pub fn stored_blob(store: &mut Store, serial: &str, run: &str) -> Result<(RunId,
     let trailer = super::record::blob_crc(&blob);
     let computed = (n >= 4).then(|| firmware_core::crc::crc32(&blob[..n - 4]));
     if trailer.is_none() || trailer != computed || crc != trailer.map(i64::from) {
-        return Err(HostError::in_file(
-            store.path(),
+        return Err(HostError::in_file(ErrorKind::Store, store.path(),
             format!("the stored blob of run {id} fails its CRC check (stored {crc:?}, trailer {trailer:?}, computed {computed:?}): not re-issued"),
         ));
     }
     let rid = RunId::parse(&id).ok_or_else(|| {
-        HostError::in_file(store.path(), format!("run id `{id}` is not 32 hex digits"))
+        HostError::in_file(
+            ErrorKind::Store,
+            store.path(),
+            format!("run id `{id}` is not 32 hex digits"),
+        )
     })?;
     Ok((rid, blob))
 }

@@ -5,7 +5,7 @@
 //! prints as its URL without the password, the form every message, record and report
 //! uses. The environment is read by `main`, once ([`set_environment`]); the library
 //! alone (tests, examples) knows only what the URL says.
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -145,9 +145,10 @@ fn percent_decode(s: &str, what: &str, shown: &str) -> Result<String> {
                 .get(i + 1..i + 3)
                 .and_then(|h| u8::from_str_radix(h, 16).ok());
             let Some(v) = hex else {
-                return Err(HostError::msg(format!(
-                    "--db {shown}: a `%` in its {what} is not followed by two hex digits"
-                )));
+                return Err(HostError::new(
+                    ErrorKind::Invalid,
+                    format!("--db {shown}: a `%` in its {what} is not followed by two hex digits"),
+                ));
             };
             out.push(v);
             i += 3;
@@ -156,8 +157,12 @@ fn percent_decode(s: &str, what: &str, shown: &str) -> Result<String> {
             i += 1;
         }
     }
-    String::from_utf8(out)
-        .map_err(|_| HostError::msg(format!("--db {shown}: its {what} is not UTF-8")))
+    String::from_utf8(out).map_err(|_| {
+        HostError::new(
+            ErrorKind::Invalid,
+            format!("--db {shown}: its {what} is not UTF-8"),
+        )
+    })
 }
 
 impl Location {
@@ -168,7 +173,7 @@ impl Location {
             .or_else(|| s.strip_prefix("postgres://"));
         match rest {
             Some(r) => PgUrl::parse(r).map(Location::Postgres),
-            None if s.contains("://") => Err(HostError::msg(format!(
+            None if s.contains("://") => Err(HostError::new(ErrorKind::Invalid, format!(
                 "--db `{}`: not a store this host-fit knows: give a file path (SQLite) or postgresql://user@host:port/database",
                 s.split("://").next().unwrap_or_default()
             ))),
@@ -241,7 +246,10 @@ impl PgUrl {
         };
         let (host, port) = if let Some(inner) = hostport.strip_prefix('[') {
             let (h, after) = inner.split_once(']').ok_or_else(|| {
-                HostError::msg(format!("--db {shown}: a `[` in its host is not closed"))
+                HostError::new(
+                    ErrorKind::Invalid,
+                    format!("--db {shown}: a `[` in its host is not closed"),
+                )
             })?;
             (h.to_string(), after.strip_prefix(':'))
         } else {
@@ -252,7 +260,10 @@ impl PgUrl {
         };
         let port = match port {
             Some(p) => p.parse::<u16>().map_err(|_| {
-                HostError::msg(format!("--db {shown}: port `{p}` is not a port number"))
+                HostError::new(
+                    ErrorKind::Invalid,
+                    format!("--db {shown}: port `{p}` is not a port number"),
+                )
             })?,
             None => PG_PORT,
         };
@@ -262,9 +273,10 @@ impl PgUrl {
             .or_else(|| env.pg_user.clone())
             .or_else(|| env.login.clone())
             .ok_or_else(|| {
-                HostError::msg(format!(
-                    "--db {shown}: no user: give postgresql://USER@host:port/database"
-                ))
+                HostError::new(
+                    ErrorKind::Invalid,
+                    format!("--db {shown}: no user: give postgresql://USER@host:port/database"),
+                )
             })?;
         let host = match host.as_str() {
             "" => env.pg_host.clone().unwrap_or_else(|| "localhost".into()),

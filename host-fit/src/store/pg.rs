@@ -6,7 +6,7 @@
 use super::columns::{index_of, type_of, Row, SqlType, Value};
 use super::location::PgUrl;
 use super::schema::{self, Dialect, Mode, APPLICATION_ID};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use postgres::error::SqlState;
 use postgres::types::ToSql;
 use postgres::{Client, NoTls};
@@ -46,7 +46,7 @@ pub fn pg_error(at: &Path, e: &postgres::Error) -> HostError {
             format!("cannot reach the record store's server: {m}")
         }
     };
-    HostError::in_file(at, m)
+    HostError::in_file(ErrorKind::Store, at, m)
 }
 
 /// Connect to the database of `url`.
@@ -69,8 +69,7 @@ fn version(c: &mut impl postgres::GenericClient, at: &Path) -> Result<(i64, bool
     let (marked, objects): (bool, i64) = (row.get(0), row.get(1));
     if !marked {
         if objects > 0 {
-            return Err(HostError::in_file(
-                at,
+            return Err(HostError::in_file(ErrorKind::Store, at,
                 format!("is a database with {objects} tables and views but not a host-fit record store: left as it is; give a database of its own for the store"),
             ));
         }
@@ -90,7 +89,7 @@ fn version(c: &mut impl postgres::GenericClient, at: &Path) -> Result<(i64, bool
 /// lock: stations that start at once on an empty database make the store once).
 pub fn prepare(c: &mut Client, at: &Path, shown: &str, mode: Mode, steps: &[String]) -> Result<()> {
     let target = steps.len() as i64;
-    let refuse = |m: String| HostError::in_file(at, m);
+    let refuse = |m: String| HostError::in_file(ErrorKind::Store, at, m);
     let (v, empty) = version(c, at)?;
     if !schema::decide(v, empty, target, mode, shown).map_err(refuse)? {
         return Ok(());
@@ -106,6 +105,7 @@ pub fn prepare(c: &mut Client, at: &Path, shown: &str, mode: Mode, steps: &[Stri
     for (i, step) in steps.iter().enumerate().skip(v as usize) {
         tx.batch_execute(step).map_err(|err| {
             HostError::in_file(
+                ErrorKind::Store,
                 at,
                 format!(
                     "migration of the record store to version {} failed (nothing changed): {}",
@@ -216,7 +216,11 @@ pub fn insert(
                 _ => None,
             });
             ids.push(run.ok_or_else(|| {
-                HostError::in_file(at, "the server did not return the id of a record it wrote")
+                HostError::in_file(
+                    ErrorKind::Store,
+                    at,
+                    "the server did not return the id of a record it wrote",
+                )
             })?);
         }
     }

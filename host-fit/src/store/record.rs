@@ -2,7 +2,7 @@
 //! unit) or `demo` (one per model) made of one unit, with where it came from (the run
 //! id, the tool's version and commit, the command and its options, the input's SHA-256).
 use crate::diagnose::contract::Verdict as DiagnosisVerdict;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use firmware_core::model::{COEFF_NAMES, N_COEFFS};
 use serde::de::DeserializeOwned;
 use serde::ser::SerializeStruct;
@@ -23,8 +23,12 @@ impl RunId {
     /// A fresh id from the operating system's random source.
     pub fn fresh() -> Result<RunId> {
         let mut b = [0u8; 16];
-        getrandom::fill(&mut b)
-            .map_err(|e| HostError::msg(format!("no random source for a run id: {e}")))?;
+        getrandom::fill(&mut b).map_err(|e| {
+            HostError::new(
+                ErrorKind::Internal,
+                format!("no random source for a run id: {e}"),
+            )
+        })?;
         Ok(RunId(b))
     }
 
@@ -49,8 +53,21 @@ impl std::fmt::Display for RunId {
 
 /// The command that made a record (a closed set; the store's `command` column holds its
 /// serde name).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
 #[serde(rename_all = "lowercase")]
+#[strum(serialize_all = "lowercase")]
 pub enum Command {
     /// `host-fit fit`.
     Fit,
@@ -75,8 +92,13 @@ impl Command {
     ];
 
     /// Its name on the command line and in the store (its serde name).
-    pub fn name(self) -> String {
-        name_of(&self)
+    pub fn name(self) -> &'static str {
+        self.into()
+    }
+
+    /// The command of a name in the store.
+    pub fn from_name(s: &str) -> Option<Command> {
+        s.parse().ok()
     }
 }
 
@@ -96,8 +118,21 @@ pub fn from_name<T: DeserializeOwned>(s: &str) -> Option<T> {
 
 /// How a unit of the batch ended, and the store's acceptance verdict (its serde name is
 /// the one spelling: summary, JSON and store).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum UnitStatus {
     /// Fitted, and its blob passed acceptance.
     Pass,
@@ -112,8 +147,8 @@ pub enum UnitStatus {
 impl UnitStatus {
     /// `pass`, `fail`, `not_judged` or `error`, as the summary writes it (its serde
     /// name).
-    pub fn name(self) -> String {
-        name_of(&self)
+    pub fn name(self) -> &'static str {
+        self.into()
     }
 }
 
@@ -125,12 +160,6 @@ impl From<crate::acceptance::Verdict> for UnitStatus {
             Verdict::Fail => UnitStatus::Fail,
             Verdict::NotJudged => UnitStatus::NotJudged,
         }
-    }
-}
-
-impl std::fmt::Display for UnitStatus {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.name())
     }
 }
 
@@ -224,7 +253,10 @@ pub fn blob_crc(blob: &[u8]) -> Option<u32> {
 pub fn stamp(blob: &[u8], run: RunId) -> Result<Vec<u8>> {
     use firmware_core::blob::{Blob, MAX_BLOB_LEN};
     let err = |e: firmware_core::error::Error| {
-        HostError::msg(format!("cannot stamp the blob with its run id: {e}"))
+        HostError::new(
+            ErrorKind::Internal,
+            format!("cannot stamp the blob with its run id: {e}"),
+        )
     };
     let mut b = Blob::decode(blob).map_err(err)?;
     b.run_id = firmware_core::blob::RunId(run.0);
@@ -376,8 +408,12 @@ impl Record {
 
     /// Fill the diagnosis columns from a diagnosis' JSON contract.
     pub fn with_diagnosis(&mut self, contract: &crate::diagnose::contract::Contract) -> Result<()> {
-        let v = serde_json::to_value(contract)
-            .map_err(|e| HostError::msg(format!("cannot encode the diagnosis: {e}")))?;
+        let v = serde_json::to_value(contract).map_err(|e| {
+            HostError::new(
+                ErrorKind::Internal,
+                format!("cannot encode the diagnosis: {e}"),
+            )
+        })?;
         self.diagnosis_verdict = Some(contract.verdict);
         self.findings = Some(v["findings"].clone());
         Ok(())

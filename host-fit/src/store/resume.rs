@@ -8,7 +8,7 @@
 //! known of the earlier run: its files are refused as ever without `--force`.
 use super::db::{Filter, Store};
 use super::record::{blob_run_id, sha256_file, Command, Record};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use crate::output::write_atomic;
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
@@ -81,8 +81,12 @@ pub fn restore_files(path: &Path, out: &Path, r: &Record) -> Result<()> {
     }
     let tr = super::test_record::path(out, &s);
     if let (false, Some(t)) = (tr.exists(), &r.test_record) {
-        let text = serde_json::to_string_pretty(t)
-            .map_err(|e| HostError::msg(format!("cannot encode the test record: {e}")))?;
+        let text = serde_json::to_string_pretty(t).map_err(|e| {
+            HostError::new(
+                ErrorKind::Internal,
+                format!("cannot encode the test record: {e}"),
+            )
+        })?;
         write_atomic(&tr, format!("{text}\n").as_bytes(), false)?;
     }
     Ok(())

@@ -6,7 +6,7 @@
 use super::columns::{index_of, Row, Value};
 use super::fault::{db_error, BUSY_TIMEOUT};
 use super::schema::{self, Dialect, Mode, APPLICATION_ID};
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use rusqlite::{params_from_iter, Connection, OpenFlags, TransactionBehavior};
 use std::path::{Path, PathBuf};
 
@@ -19,20 +19,19 @@ fn check_file(path: &Path) -> Result<()> {
     let mut f = std::fs::File::open(path).map_err(|e| HostError::io(path, &e))?;
     let len = f.metadata().map_err(|e| HostError::io(path, &e))?.len();
     if len == 0 {
-        return Err(HostError::in_file(
-            path,
+        return Err(HostError::in_file(ErrorKind::Store, path,
             "is empty (0 bytes): not a record store (a store cut to nothing?); it is left as it is: restore it, or give a path that does not exist yet for a new store",
         ));
     }
     let mut head = [0u8; 100];
     if len < 100 || f.read_exact(&mut head).is_err() {
-        return Err(HostError::in_file(
-            path,
+        return Err(HostError::in_file(ErrorKind::Store, path,
             format!("is {len} bytes: too short for an SQLite database header (100 bytes), not a record store or one cut short; it is left as it is"),
         ));
     }
     if &head[..16] != b"SQLite format 3\0" {
         return Err(HostError::in_file(
+            ErrorKind::Store,
             path,
             "is not a record store (not an SQLite database); it is left as it is",
         ));
@@ -47,8 +46,7 @@ fn check_file(path: &Path) -> Result<()> {
     let wal = PathBuf::from(format!("{}-wal", path.display()));
     let in_use = std::fs::metadata(&wal).is_ok_and(|m| m.len() > 0);
     if valid && !in_use && len < page * pages {
-        return Err(HostError::in_file(
-            path,
+        return Err(HostError::in_file(ErrorKind::Store, path,
             format!("the record store is cut short: its header states {pages} pages of {page} bytes ({} bytes), the file has {len}; it is left as it is: restore it from a copy", page * pages),
         ));
     }
@@ -112,8 +110,7 @@ fn version(conn: &Connection, path: &Path) -> Result<(i64, bool)> {
     let objects = q("SELECT count(*) FROM sqlite_schema")?;
     let empty = app == 0 && version == 0 && objects == 0;
     if !empty && app != APPLICATION_ID {
-        return Err(HostError::in_file(
-            path,
+        return Err(HostError::in_file(ErrorKind::Store, path,
             format!("is an SQLite database but not a host-fit record store (application id {app:#x}, {objects} tables and indexes): left as it is; give the path of a record store, or of a new file"),
         ));
     }
@@ -126,7 +123,9 @@ pub fn prepare(conn: &mut Connection, path: &Path, mode: Mode, steps: &[String])
     let target = steps.len() as i64;
     let shown = path.display().to_string();
     let (v, empty) = version(conn, path)?;
-    if !schema::decide(v, empty, target, mode, &shown).map_err(|m| HostError::in_file(path, m))? {
+    if !schema::decide(v, empty, target, mode, &shown)
+        .map_err(|m| HostError::in_file(ErrorKind::Store, path, m))?
+    {
         return Ok(());
     }
     // another process may be migrating at the same moment: decide inside the write lock
@@ -134,12 +133,15 @@ pub fn prepare(conn: &mut Connection, path: &Path, mode: Mode, steps: &[String])
         .transaction_with_behavior(TransactionBehavior::Immediate)
         .map_err(|e| db_error(path, e))?;
     let (v, empty) = version(&tx, path)?;
-    if !schema::decide(v, empty, target, mode, &shown).map_err(|m| HostError::in_file(path, m))? {
+    if !schema::decide(v, empty, target, mode, &shown)
+        .map_err(|m| HostError::in_file(ErrorKind::Store, path, m))?
+    {
         return Ok(());
     }
     for (i, step) in steps.iter().enumerate().skip(v as usize) {
         tx.execute_batch(step).map_err(|e| {
             HostError::in_file(
+                ErrorKind::Store,
                 path,
                 format!(
                     "migration of the record store to version {} failed (nothing changed): {e}",
@@ -160,14 +162,14 @@ pub fn prepare(conn: &mut Connection, path: &Path, mode: Mode, steps: &[String])
 pub fn open(path: &Path, mode: Mode) -> Result<Connection> {
     if path.is_dir() {
         return Err(HostError::in_file(
+            ErrorKind::Store,
             path,
             "is a folder: give the record store's file (e.g. this folder/records.sqlite)",
         ));
     }
     let exists = path.exists();
     if !exists && mode == Mode::Existing {
-        return Err(HostError::in_file(
-            path,
+        return Err(HostError::in_file(ErrorKind::Store, path,
             "no record store here: give the --db of a fit, verify, diagnose or batch (a batch writes records.sqlite in its output folder)",
         ));
     }

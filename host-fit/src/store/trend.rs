@@ -17,7 +17,7 @@
 //! Monte-Carlo tests hold every one of these rates.
 use super::db::{Filter, Order, Store};
 use super::record::Command;
-use crate::error::{HostError, Result};
+use crate::error::{ErrorKind, HostError, Result};
 use firmware_core::model::{COEFF_NAMES, U0_INDEX};
 use serde::Serialize;
 use std::collections::HashMap;
@@ -181,7 +181,7 @@ pub fn parse_rules(s: &str) -> Result<Vec<Rule>> {
             .ok()
             .and_then(Rule::from_number)
             .ok_or_else(|| {
-                HostError::msg(format!(
+                HostError::new(ErrorKind::Invalid, format!(
                     "--rules `{s}`: `{p}` is not a rule: Nelson's numbers 1 to 8, comma-separated, or `all`"
                 ))
             })?;
@@ -628,6 +628,7 @@ pub fn trend(store: &mut Store, reference: Reference, rules: &[Rule]) -> Result<
     let l = load(store)?;
     if l.units.is_empty() {
         return Err(HostError::in_file(
+            ErrorKind::Store,
             store.path(),
             "holds no calibration (no fit, diagnose --out, batch or demo record): nothing to chart",
         ));

@@ -121,6 +121,60 @@ struct UnitJson<'a> {
     diagnosis: Option<Contract>,
 }
 
+/// The blob's model of one unit (and its diagnosis when the batch diagnoses); fills the
+/// unit's model and uncertainty, the route's notes and the static route's selection.
+fn unit_model(
+    rec: &Recording,
+    o: &BatchOptions,
+    r: &mut UnitResult,
+    notes: &mut Vec<String>,
+    selection: &mut Option<Selection>,
+) -> Result<(
+    firmware_core::temperature::Calibration<f64>,
+    Option<Contract>,
+)> {
+    let req = ModelRequest {
+        kind: o.model,
+        order: None,
+        breakpoints: None,
+    };
+    // the blob's model, and its own uncertainty for the lot's statistics
+    Ok(if o.diagnose {
+        // the static fit still checks the data (its errors are the unit's); the route
+        // choice is not run, the diagnosed model makes the blob
+        crate::fit::pipeline::fit_chosen(rec, &req)?;
+        // the diagnosis needs every pose's vector: estimate those of unknown orientation
+        let oriented = crate::fit::pipeline::with_orientations(rec, None)?;
+        let d = crate::diagnose::diagnose(&oriented.rec)?;
+        r.findings = d.findings.iter().map(|f| f.effect).collect();
+        let names: Vec<&str> = r.findings.iter().map(|e| e.as_str()).collect();
+        r.model = if names.is_empty() {
+            "diagnosed (no findings)".to_string()
+        } else {
+            format!("diagnosed ({})", names.join("+"))
+        };
+        r.at_t0_sigma = d.coefficient_sigma(rec.t0_c);
+        (d.calibration(rec.t0_c)?, Some(d.contract()))
+    } else {
+        match auto(rec, &req, notes)? {
+            Routed::Static(oc) => {
+                r.model = oc.fit.basis.describe();
+                *selection = oc.selection.clone();
+                r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
+                let mut cal = oc.fit.calibration(0.0, false);
+                crate::blob::Cache::for_fit(rec, &oc, &mut cal, None);
+                (cal, None)
+            }
+            Routed::Dynamic { fit, .. } => {
+                r.model = format!("{} (dynamic route)", fit.describe());
+                r.at_t0_sigma =
+                    crate::diagnose::metrics::coefficient_sigma(&fit.data, &fit.fit, rec.t0_c);
+                (fit.calibration()?, None)
+            }
+        }
+    })
+}
+
 /// Fit one unit, write its blob, JSON and test record (over files of an earlier run
 /// when `force`); fills `r`.
 fn fit_unit(
@@ -148,48 +202,9 @@ fn fit_unit(
     if !rec.unit.is_empty() {
         r.unit = rec.unit.clone();
     }
-    let req = ModelRequest {
-        kind: o.model,
-        order: None,
-        breakpoints: None,
-    };
     let mut notes = Vec::new();
     let mut selection = None;
-    // the blob's model, and its own uncertainty for the lot's statistics
-    let (cal, diagnosis) = if o.diagnose {
-        // the static fit still checks the data (its errors are the unit's); the route
-        // choice is not run, the diagnosed model makes the blob
-        crate::fit::pipeline::fit_chosen(&rec, &req)?;
-        // the diagnosis needs every pose's vector: estimate those of unknown orientation
-        let oriented = crate::fit::pipeline::with_orientations(&rec, None)?;
-        let d = crate::diagnose::diagnose(&oriented.rec)?;
-        r.findings = d.findings.iter().map(|f| f.effect).collect();
-        let names: Vec<&str> = r.findings.iter().map(|e| e.as_str()).collect();
-        r.model = if names.is_empty() {
-            "diagnosed (no findings)".to_string()
-        } else {
-            format!("diagnosed ({})", names.join("+"))
-        };
-        r.at_t0_sigma = d.coefficient_sigma(rec.t0_c);
-        (d.calibration(rec.t0_c)?, Some(d.contract()))
-    } else {
-        match auto(&rec, &req, &mut notes)? {
-            Routed::Static(oc) => {
-                r.model = oc.fit.basis.describe();
-                selection = oc.selection.clone();
-                r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
-                let mut cal = oc.fit.calibration(0.0, false);
-                crate::blob::Cache::for_fit(&rec, &oc, &mut cal, None);
-                (cal, None)
-            }
-            Routed::Dynamic { fit, .. } => {
-                r.model = format!("{} (dynamic route)", fit.describe());
-                r.at_t0_sigma =
-                    crate::diagnose::metrics::coefficient_sigma(&fit.data, &fit.fit, rec.t0_c);
-                (fit.calibration()?, None)
-            }
-        }
-    };
+    let (cal, diagnosis) = unit_model(&rec, o, r, &mut notes, &mut selection)?;
     r.at_t0 = Some(cal.at_t0());
     let (blob, mut bytes, dep) = build_blob(&r.unit, &rec.output_unit, &cal)?;
     if let Some(t) = &o.store {

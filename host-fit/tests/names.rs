@@ -89,7 +89,15 @@ fn simulator_unit_model_and_interpolation() {
 #[test]
 fn unit_status() {
     // the summary's and the acceptance verdict's `not_judged` (serde once said `notjudged`)
-    round_trip::<host_fit::batch::UnitStatus>(&["pass", "fail", "not_judged", "error"]);
+    round_trip::<host_fit::store::record::UnitStatus>(&["pass", "fail", "not_judged", "error"]);
+}
+
+#[test]
+fn test_record_outcomes() {
+    // the OpenHTF-like test record's spellings
+    use host_fit::store::test_record::{MeasurementOutcome, Outcome};
+    round_trip::<Outcome>(&["PASS", "FAIL", "ERROR"]);
+    round_trip::<MeasurementOutcome>(&["PASS", "FAIL", "UNSET"]);
 }
 
 #[test]
@@ -257,7 +265,8 @@ fn output_units_keep_an_unknown_label() {
 #[test]
 fn command_line_enums() {
     use clap::ValueEnum;
-    use host_fit::cli::args::{ErrModel, MethodArg, ModelArg, OutsideArg, RouteArg};
+    use host_fit::cli::args::{AllowArg, ErrModel, MethodArg, ModelArg, OutsideArg, RouteArg};
+    clap_round_trip::<AllowArg>(&["output-scale", "temperature-scale", "partial"]);
     clap_round_trip::<ErrModel>(&["full", "simplified"]);
     clap_round_trip::<MethodArg>(&["1", "2"]);
     assert_eq!(MethodArg::Two.name(), "2");

@@ -26,7 +26,14 @@ fn server() -> &'static str {
                 .unwrap_or(cut.len());
             return Ok(format!("{}/", &cut[..at]));
         }
-        let c = cluster::Cluster::start(&std::env::temp_dir(), false)?;
+        // kept past the test process: the cluster's own watchdog removes it once this
+        // process has ended (stop_after)
+        let dir = tempfile::Builder::new()
+            .prefix("host-fit-pg-")
+            .tempdir()
+            .map_err(|e| format!("no temporary folder for the cluster: {e}"))?
+            .keep();
+        let c = cluster::Cluster::start(&dir, false)?;
         let base = c.url("");
         c.stop_after(std::process::id())?;
         Ok(base)

@@ -50,7 +50,7 @@ impl Value {
     fn text(&self) -> Option<&str> {
         match self {
             Value::Text(s) => Some(s),
-            _ => None,
+            Value::Null | Value::Real(_) | Value::Integer(_) | Value::Blob(_) => None,
         }
     }
 
@@ -58,7 +58,7 @@ impl Value {
         match self {
             Value::Real(v) => Some(*v),
             Value::Integer(i) => Some(*i as f64),
-            _ => None,
+            Value::Null | Value::Text(_) | Value::Blob(_) => None,
         }
     }
 }
@@ -173,7 +173,7 @@ impl Row {
     pub fn integer(&self, name: &str) -> Option<i64> {
         match self.get(name) {
             Value::Integer(i) => Some(*i),
-            _ => None,
+            Value::Null | Value::Text(_) | Value::Real(_) | Value::Blob(_) => None,
         }
     }
 }
@@ -320,7 +320,7 @@ impl Record {
             },
             blob: match row.get("blob") {
                 Value::Blob(b) => Some(b.clone()),
-                _ => None,
+                Value::Null | Value::Text(_) | Value::Real(_) | Value::Integer(_) => None,
             },
             judged,
             worst_dg_mg: row.real("worst_dg_mg"),

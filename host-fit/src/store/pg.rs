@@ -213,7 +213,7 @@ pub fn insert(
         for r in chunk {
             let run = run_col.and_then(|i| match &r[i] {
                 Value::Text(t) => by_run.get(t).copied(),
-                _ => None,
+                Value::Null | Value::Real(_) | Value::Integer(_) | Value::Blob(_) => None,
             });
             ids.push(run.ok_or_else(|| {
                 HostError::in_file(

@@ -22,8 +22,8 @@ pub use report::report;
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::diagnose::findings::Finding;
-use crate::diagnose::metrics::normalized_rms;
 use crate::diagnose::{diagnose_with, EffectId, Rules};
+use crate::model::metrics::normalized_rms;
 use crate::simulate::{simulate, SimConfig};
 use std::path::Path;
 

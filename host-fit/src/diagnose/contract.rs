@@ -4,10 +4,10 @@
 //! `heldout_gain`.
 use crate::diagnose::findings::{Ambiguity, Finding};
 use crate::diagnose::location::Hotspot;
-use crate::diagnose::metrics::{dispersion, max_dg, normalized_rms, residual_rms};
 use crate::diagnose::quality::QualityNote;
 use crate::diagnose::search::Research;
 use crate::diagnose::Diagnosis;
+use crate::model::metrics::{dispersion, max_dg, normalized_rms, residual_rms};
 use firmware_core::model::AXES;
 use serde::Serialize;
 use std::fmt;

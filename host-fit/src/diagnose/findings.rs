@@ -2,13 +2,13 @@
 //! the axes where it matters, its parameters with uncertainties scaled by the dispersion,
 //! where it shows, and how much it improves held-out data; and the candidates the data
 //! cannot tell apart, with the measurement that would.
-use crate::diagnose::data::Data;
-use crate::diagnose::design::Spec;
-use crate::diagnose::effects::{EffectId, Extra};
-use crate::diagnose::fit::{Depth, Fit};
 use crate::diagnose::location::{locate, Grouping};
-use crate::diagnose::metrics::{contribution, dispersion, judge, max_dg, residual_rms, sigma};
-use crate::diagnose::params::{Param, Term};
+use crate::model::data::Data;
+use crate::model::design::Spec;
+use crate::model::effects::{EffectId, Extra};
+use crate::model::metrics::{contribution, dispersion, judge, max_dg, residual_rms, sigma};
+use crate::model::params::{Param, Term};
+use crate::model::solve::{Depth, Fit};
 use firmware_core::model::AXES;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -273,7 +273,7 @@ fn unit_of(name: &str, ou: &str) -> String {
 /// Whether extra `e` shows the same signature on both halves of the data (even and odd
 /// time chunks, each spanning the whole recording): on each half alone, the residual
 /// without the effect projects onto the effect's contribution with an amplitude within
-/// [`crate::diagnose::rules::Rules::reproduced_amplitude`] of the joint fit's, at least
+/// [`crate::model::rules::Rules::reproduced_amplitude`] of the joint fit's, at least
 /// `z_significant` sigmas from zero. The rest of the model is held at the joint fit (a
 /// half alone need not determine it).
 pub fn reproduced(data: &Data, full: &Fit, reduced: &Fit) -> bool {

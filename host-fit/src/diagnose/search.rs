@@ -15,21 +15,21 @@
 //! again. A hysteresis, a warm-up or a temperature curvature must also beat a linear
 //! drift in time in its place ([`beats_drift`]), when added and in the backward check.
 //!
-//! Every rule is a field of [`crate::diagnose::rules::Rules`] (all scaled by the
+//! Every rule is a field of [`crate::model::rules::Rules`] (all scaled by the
 //! dispersion phi of the larger model, so a model still far from the data cannot buy
 //! findings with small improvements): the quasi-BIC drops by more than `q_margin`; the
 //! effect explains at least `material_share` of the chi-square above the floor; one of
 //! its parameters is at least `z_significant` scaled sigmas from zero; the held-out time
 //! chunks improve by more than `heldout_gain` per parameter (in floor units); its
 //! profiled structure (time constant, bend) is determined by the data.
-use crate::diagnose::baseline::reorder;
-use crate::diagnose::data::Data;
-use crate::diagnose::effects::{EffectId, Extra};
 use crate::diagnose::findings::reproduced;
-use crate::diagnose::fit::{Depth, Fit};
 use crate::diagnose::location::{locate, rows_of, Hotspot};
-use crate::diagnose::metrics::{adequate, dispersion, judge, normalized_rms, qbic, z, Judgement};
-use crate::diagnose::profile;
+use crate::model::baseline::reorder;
+use crate::model::data::Data;
+use crate::model::effects::{EffectId, Extra};
+use crate::model::metrics::{adequate, dispersion, judge, normalized_rms, qbic, z, Judgement};
+use crate::model::profile;
+use crate::model::solve::{Depth, Fit};
 use serde::Serialize;
 
 /// What the data can identify.
@@ -63,7 +63,7 @@ pub struct Research {
     /// first; the one the effect found explains, when one was found).
     pub region: Vec<Hotspot>,
     /// The effects proposed there: each explains at least
-    /// [`crate::diagnose::rules::Rules::material_share`] of the excess in a located group.
+    /// [`crate::model::rules::Rules::material_share`] of the excess in a located group.
     pub tried: Vec<EffectId>,
     /// The effect that passed every acceptance rule and stayed in the joint model; None:
     /// nothing passed.
@@ -166,7 +166,7 @@ impl Forward<'_, '_> {
     }
 
     /// Look again where the current model's residual is located: for each of the worst
-    /// [`crate::diagnose::rules::Rules::research_groups`] located groups, the ranked
+    /// [`crate::model::rules::Rules::research_groups`] located groups, the ranked
     /// proposals (effects not in `dropped`) that explain a material share of the excess
     /// there are judged in full by the acceptance rules, the share counted in that
     /// group. None when the residual is at the floor or nowhere located; else what was
@@ -438,7 +438,7 @@ fn regional_share(data: &Data, smaller: &Fit, larger: &Fit, rows: &[usize]) -> f
 /// pass for a trend in time (a hysteresis, a warm-up, a temperature curvature), explains
 /// the data better than a linear drift in time of the same coefficients would in its
 /// place: its quasi-BIC is lower than the drift's by more than
-/// [`crate::diagnose::rules::Rules::q_margin`], in its own dispersion. A slow disturbance
+/// [`crate::model::rules::Rules::q_margin`], in its own dispersion. A slow disturbance
 /// with no temperature reversal and no power-on behind it (bias or scale ageing, part of
 /// a slow cycle) is fitted by a direction switch, a long decay or a bend about as well as
 /// by the trend itself on a single pass through the temperatures; the effect must show

@@ -2,7 +2,7 @@
 //! each value (as argmin documents a solver's tuning fields). [`Rules::default`] is what
 //! `host-fit diagnose` uses; the blind suite varies them (`blind::run_with`) to show what
 //! each rule buys.
-use crate::fit::equilibrium::WINDOW_SPAN_C;
+use crate::data::stops::WINDOW_SPAN_C;
 use firmware_core::temperature::{MAX_BREAKPOINTS, MAX_POLY_ORDER};
 
 /// The diagnosis's rules. Units are in the field names (C, s, C/s); "floor units" are

@@ -93,6 +93,12 @@ impl<'a> Data<'a> {
         self.obs.iter().map(|o| o.chunk + 1).max().unwrap_or(1)
     }
 
+    /// The recording's span in time, first row to last, s.
+    pub fn span_s(&self) -> f64 {
+        let rows = &self.rec.rows;
+        rows.last().map(|r| r.t_s).unwrap_or(0.0) - rows.first().map(|r| r.t_s).unwrap_or(0.0)
+    }
+
     /// The lowest and highest window temperature, C.
     pub fn temperature_range(&self) -> (f64, f64) {
         self.obs

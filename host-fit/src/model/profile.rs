@@ -192,9 +192,7 @@ pub fn hysteresis(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
 /// longer one is a drift); and it has one sign per axis, so two warm-ups of opposite
 /// signs on one axis (a pair imitating a slow excursion) are not a warm-up.
 pub fn warmup(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
-    let rows = &data.rec.rows;
-    let span =
-        rows.last().map(|r| r.t_s).unwrap_or(0.0) - rows.first().map(|r| r.t_s).unwrap_or(0.0);
+    let span = data.span_s();
     let taken: Vec<Restart> = spec
         .extras
         .iter()

@@ -19,6 +19,7 @@ use crate::model::effects::Extra;
 use crate::model::flashed::Flashed;
 use crate::model::metrics::{self, judge};
 use crate::model::params::Term;
+use crate::model::precision::check;
 use crate::model::profile::{self, time_constant, Grid};
 use crate::model::rules::Rules;
 use crate::model::solve::{Depth, Fit};
@@ -58,6 +59,9 @@ pub struct DynamicFit<'a> {
     pub blocks: usize,
     /// The floor of a window mean (output units, RMS).
     pub noise_rms: f64,
+    /// Why the model chosen on the held-out blocks is not the one flashed (its f32
+    /// path departs beyond the bound), when it is not.
+    pub notes: Vec<String>,
 }
 
 impl DynamicFit<'_> {
@@ -133,12 +137,18 @@ fn refine_lag(data: &Data, f: &Fit) -> Fit {
     let make = |t: f64| data.fit(&f.spec.replaced(i, lag(t)), None, Depth::Profile);
     let grid = Grid {
         golden_steps: FLASHED_GOLDEN_STEPS,
+        max_s: max_lag_s(data),
         ..Grid::around(data, taus[0][0], 2, 5)
     };
     time_constant(&make, grid)
         .and_then(|(t, _)| data.fit(&f.spec.replaced(i, lag(t)), None, Depth::Full))
         .filter(|g| g.chi2 <= f.chi2)
         .unwrap_or_else(|| f.clone())
+}
+
+/// The longest lag this route keeps on `data` ([`Rules::lag_max_fraction`] of it).
+fn max_lag_s(data: &Data) -> f64 {
+    data.span_s() * data.rules.lag_max_fraction
 }
 
 /// `larger` (the last extra added to `smaller`) passes every acceptance rule of the
@@ -148,8 +158,9 @@ fn kept(data: &Data, smaller: &Fit, larger: &Fit) -> bool {
     judge(data, smaller, larger, e).accepted(data)
 }
 
-/// The polynomial order chosen on the held-out blocks with `f`'s extras.
-fn order_by_heldout(data: &Data, f: &Fit, cands: &mut Vec<Candidate>) -> Fit {
+/// The polynomial order chosen on the held-out blocks with `f`'s extras; every order
+/// fitted goes to `tried` too.
+fn order_by_heldout(data: &Data, f: &Fit, cands: &mut Vec<Candidate>, tried: &mut Vec<Fit>) -> Fit {
     let fits: Vec<Fit> = (0..=baseline::max_order(data))
         .filter_map(|order| {
             let mut spec = f.spec.clone();
@@ -168,6 +179,7 @@ fn order_by_heldout(data: &Data, f: &Fit, cands: &mut Vec<Candidate>) -> Fit {
     for g in &fits {
         cands.push(candidate(g, g.spec == best.spec));
     }
+    tried.extend(fits);
     best
 }
 
@@ -191,8 +203,10 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
     };
     let mut f = data.fit(&top, None, Depth::Full).unwrap_or(base);
     let mut cands = vec![];
+    let mut tried = vec![f.clone()];
     let grid = Grid {
         golden_steps: FLASHED_GOLDEN_STEPS,
+        max_s: max_lag_s(&data),
         ..Grid::new(&data, 20.0, 14)
     };
     if let Some(lagged) = with_lag(&data, &f.spec, &f, grid) {
@@ -201,6 +215,7 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
         cands.push(candidate(&lagged, keep));
         if keep {
             f = lagged;
+            tried.push(f.clone());
         }
     }
     if let Some(rated) =
@@ -212,8 +227,9 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
             f = rated;
         }
     }
-    let f = refine_lag(&data, &order_by_heldout(&data, &f, &mut cands));
+    let f = refine_lag(&data, &order_by_heldout(&data, &f, &mut cands, &mut tried));
     let noise_rms = metrics::floor_rms(&data);
+    let (f, flashed, notes) = flashable(&data, f, tried, noise_rms)?;
     let (mut lag_tau_s, mut rate) = (None, None);
     for (e, x) in f.spec.extras.iter().enumerate() {
         if let Extra::Lag { taus } = x {
@@ -223,7 +239,8 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
         }
     }
     Ok(DynamicFit {
-        flashed: Flashed::of(&data, &f, noise_rms),
+        flashed,
+        notes,
         blocks: data.n_chunks(),
         shape: Shape::of(rec),
         data,
@@ -233,4 +250,43 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
         candidates: cands,
         noise_rms,
     })
+}
+
+/// The model chosen, `f`, in the firmware's forms, when the firmware's f32 path carries
+/// it within the bound; else the first of `tried` that it carries (the richest first,
+/// then by held-out chi-square), with a note naming why `f` could not be flashed. An
+/// error naming the cause when none can be.
+fn flashable(
+    data: &Data,
+    f: Fit,
+    mut tried: Vec<Fit>,
+    noise_rms: f64,
+) -> Result<(Fit, Flashed, Vec<String>)> {
+    let check = |g: &Fit| -> Result<Flashed> {
+        let flashed = Flashed::of(data, g, noise_rms);
+        let (cal, _) = flashed.calibration(data.t0, None)?;
+        check(&cal).map(|_| flashed)
+    };
+    let first = match check(&f) {
+        Ok(flashed) => return Ok((f, flashed, Vec::new())),
+        Err(e) => e,
+    };
+    tried.sort_by(|a, b| {
+        b.spec
+            .extras
+            .len()
+            .cmp(&a.spec.extras.len())
+            .then(a.heldout.total_cmp(&b.heldout))
+    });
+    for g in tried {
+        if let Ok(flashed) = check(&g) {
+            let note = format!(
+                "the model chosen on the held-out blocks, {}, cannot be flashed ({first}): {} instead",
+                describe(&f),
+                describe(&g)
+            );
+            return Ok((g, flashed, vec![note]));
+        }
+    }
+    Err(first)
 }

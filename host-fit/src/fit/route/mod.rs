@@ -189,12 +189,7 @@ pub fn fit_on<'a>(
                 "the dynamic route chooses its model on held-out blocks of time; --model does not apply to it",
             ))
         }
-        Some(Route::Dynamic) => {
-            return Ok(Routed::Dynamic {
-                fit: Box::new(fit_dynamic(rec)?),
-                settling: None,
-            })
-        }
+        Some(Route::Dynamic) => return dynamic(rec, None, notes),
         Some(Route::Static) => {
             return Ok(Routed::Identified {
                 how: Identification::Static,
@@ -235,10 +230,7 @@ pub fn choose<'a>(
     notes: &mut Vec<String>,
 ) -> Result<Routed<'a>> {
     if req.kind.is_none() && Shape::of(rec).is_sweep() {
-        return Ok(Routed::Dynamic {
-            fit: Box::new(fit_dynamic(rec)?),
-            settling: None,
-        });
+        return dynamic(rec, None, notes);
     }
     let static_fit = fit_chosen(rec, req).and_then(|oc| {
         let cal = oc.fit.calibration(0.0, false);
@@ -252,10 +244,7 @@ pub fn choose<'a>(
                     notes.push(format!(
                         "the static route could not be taken ({e}): dynamic route, whose held-out blocks keep the dwells' dynamics"
                     ));
-                    Ok(Routed::Dynamic {
-                        fit: Box::new(d),
-                        settling: None,
-                    })
+                    Ok(taken(d, None, notes))
                 }
                 _ => Err(e),
             };
@@ -271,10 +260,7 @@ pub fn choose<'a>(
             );
             match fit_dynamic(rec) {
                 Ok(d) if d.lag_tau_s.is_some() || d.rate.is_some() => {
-                    return Ok(Routed::Dynamic {
-                        fit: Box::new(d),
-                        settling: Some(st),
-                    })
+                    return Ok(taken(d, Some(st), notes))
                 }
                 Ok(_) => notes.push(format!(
                     "{why}, but the held-out blocks keep no lag or rate term: static route"
@@ -289,6 +275,25 @@ pub fn choose<'a>(
         how: Identification::Static,
         outcome: Box::new(oc),
     })
+}
+
+/// `rec` on the dynamic route ([`taken`]).
+fn dynamic<'a>(
+    rec: &'a Recording,
+    settling: Option<Settling>,
+    notes: &mut Vec<String>,
+) -> Result<Routed<'a>> {
+    Ok(taken(fit_dynamic(rec)?, settling, notes))
+}
+
+/// The dynamic fit `d` as the route taken, its notes (why the model flashed is not the
+/// one chosen, when it is not) added to `notes`.
+fn taken<'a>(d: DynamicFit<'a>, settling: Option<Settling>, notes: &mut Vec<String>) -> Routed<'a> {
+    notes.extend(d.notes.iter().cloned());
+    Routed::Dynamic {
+        fit: Box::new(d),
+        settling,
+    }
 }
 
 /// Whether the firmware's f32 path carries `cal` within its bound; the error names why

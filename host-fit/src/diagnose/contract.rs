@@ -363,10 +363,12 @@ impl Contract {
                 x.heldout_gain,
                 if x.reproduced { "reproduced on both halves" } else { "NOT reproduced on both halves" }
             ));
-            for (k, v) in &x.parameters {
-                let u = x.uncertainties.get(k).copied().unwrap_or(f64::NAN);
-                let unit = x.units.get(k).map(String::as_str).unwrap_or("");
-                s.push_str(&format!("    {k} = {v:.4e} +- {u:.1e} {unit}\n"));
+            for (k, p) in x.parameters.by_name() {
+                let unit = x.parameters.unit_text(p);
+                s.push_str(&format!(
+                    "    {k} = {:.4e} +- {:.1e} {unit}\n",
+                    p.value, p.sigma
+                ));
             }
             s.push_str(&format!("    {}\n", x.evidence));
         }

@@ -18,6 +18,7 @@
 pub mod contract;
 pub mod findings;
 pub mod location;
+pub mod parameters;
 pub mod quality;
 pub mod search;
 

@@ -1,7 +1,7 @@
 //! The catalogue's effects as candidate extensions of the baseline model, each with the
 //! structural unknowns of its form (time constants, thresholds, initial states, restart
 //! events, where a bend sits), which the search profiles instead of assuming.
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// When a warm-up clock restarts (besides the start of the recording).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -66,7 +66,7 @@ pub enum Extra {
 
 /// The catalogue's effects (physics-catalogue.md), by their ids; the JSON contract and
 /// the text name them by [`EffectId::as_str`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EffectId {
     /// The coefficients bend between the temperatures more than the baseline follows.

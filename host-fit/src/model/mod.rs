@@ -30,5 +30,5 @@ pub mod profile;
 pub mod regressors;
 pub mod rules;
 pub mod solve;
-
+pub mod units;
 pub mod weights;

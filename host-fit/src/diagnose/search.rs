@@ -202,13 +202,16 @@ enum Look {
     NotLocated,
     /// The region looked at; nothing passed there.
     Nothing(Research),
-    /// The region, and the step of the first candidate that passed there, judged on
-    /// `rows`.
-    Found {
-        research: Research,
-        step: Step,
-        rows: Vec<usize>,
-    },
+    /// Something passed there.
+    Found(Box<Found>),
+}
+
+/// A re-search's find: the region, and the step of the first candidate that passed
+/// there, judged on `rows`.
+struct Found {
+    research: Research,
+    step: Step,
+    rows: Vec<usize>,
 }
 
 impl<'a> Search<'_, 'a> {
@@ -277,11 +280,12 @@ impl<'a> Search<'_, 'a> {
                     state.research.push(r);
                     state.ended = Some(Termination::NothingPassed);
                 }
-                Look::Found {
-                    mut research,
-                    step,
-                    rows,
-                } => {
+                Look::Found(found) => {
+                    let Found {
+                        mut research,
+                        step,
+                        rows,
+                    } = *found;
                     let id = step.id;
                     let Some(extra) = step.fit.spec.extras.last().cloned() else {
                         state.research.push(research);
@@ -374,11 +378,11 @@ impl<'a> Search<'_, 'a> {
                         fit,
                         rivals: Vec::new(),
                     };
-                    return Look::Found {
+                    return Look::Found(Box::new(Found {
                         research,
                         step,
                         rows,
-                    };
+                    }));
                 }
             }
         }

@@ -76,7 +76,7 @@ pub fn baseline(data: &Data) -> Option<(Fit, Vec<String>)> {
 
 /// [`baseline`], or an error naming the file that says why the data do not determine it:
 /// the positions present are counted, not inferred from the failed fit.
-pub fn required<'d>(data: &'d Data) -> Result<(Fit, Vec<String>)> {
+pub fn required(data: &Data) -> Result<(Fit, Vec<String>)> {
     baseline(data).ok_or_else(|| {
         let reason = if positions_determine(data) {
             "the baseline fit is singular although the positions present determine the per-axis offset and scale (each axis both along and across gravity): the outputs do not vary with the positions"

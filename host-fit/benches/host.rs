@@ -6,7 +6,7 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::Recording;
-use host_fit::fit::pipeline::{fit_recording, ModelChoice, ModelKind, Route};
+use host_fit::fit::pipeline::{fit_recording, Identification, ModelChoice, ModelKind};
 use host_fit::simulate::simulate;
 use std::path::Path;
 
@@ -39,7 +39,7 @@ fn host(c: &mut Criterion) {
             breakpoints: None,
         };
         g.bench_with_input(BenchmarkId::new("fit", rows), &rec, |b, rec| {
-            b.iter(|| fit_recording(rec, &pwl, Route::Joint).unwrap())
+            b.iter(|| fit_recording(rec, &pwl, Identification::Joint).unwrap())
         });
         g.bench_with_input(BenchmarkId::new("diagnose", rows), &rec, |b, rec| {
             b.iter(|| host_fit::diagnose::diagnose(rec).unwrap())

@@ -13,7 +13,8 @@ use crate::fit::identify::StopCoeffs;
 use crate::fit::noise::noise;
 use crate::fit::pipeline::{fit_chosen, identify_stops, stop_temperatures, ModelRequest};
 use crate::fit::select::Selection;
-use crate::fit::temperature::{fit_joint, fit_table, Basis, Frame, ModelFit, Setting};
+use crate::fit::temperature::{fit_joint, fit_table, Frame, ModelFit, Setting};
+use crate::model::basis::Basis;
 use crate::simulate::TrueUnit;
 use crate::verify::{verify, Verification};
 use firmware_core::compensate::{ErrorModel, Method};
@@ -253,13 +254,13 @@ pub fn analyse(rec: Recording, truth: Option<TrueUnit>) -> Result<DemoOutcome> {
     } = fits(&rec, &stops)?;
     for Fitted { model: which, fit } in list {
         let mut cal = fit.calibration(0.0, false);
-        let model = crate::blob::Model {
+        let model = crate::fit::cache::Model {
             rec: &rec,
             positions: &rec.positions,
             fit: &fit,
             noise: &noise(&rec),
         };
-        crate::blob::Cache::for_model(&model, &mut cal, None);
+        crate::model::cache::Cache::for_model(&model, &mut cal, None);
         let (blob, bytes, _) = build_blob(&serial, &rec.output_unit, &cal)?;
         let run = |m: Method| -> Result<Verification> {
             verify(&rec, &blob, m, &check)

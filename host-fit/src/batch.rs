@@ -11,11 +11,11 @@ use crate::blob::{build_blob, singular_k};
 use crate::data::positions::{Positions, Role};
 use crate::data::recording::Recording;
 use crate::diagnose::contract::Contract;
-use crate::diagnose::dynamic::{auto, Routed};
 use crate::diagnose::EffectId;
 use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::pipeline::{ModelKind, ModelRequest};
-use crate::fit::predict::coefficient_sigma;
+use crate::fit::predict::Uncertain;
+use crate::fit::route::{fit_on, Flash, Routed};
 use crate::fit::select::Selection;
 use crate::fit::temperature::span;
 use crate::output::{check_writable, write_atomic, write_json};
@@ -156,22 +156,16 @@ fn unit_model(
         r.at_t0_sigma = d.coefficient_sigma(rec.t0_c);
         (d.calibration(rec.t0_c)?, Some(d.contract()))
     } else {
-        match auto(rec, &req, notes)? {
-            Routed::Static(oc) => {
-                r.model = oc.fit.basis.describe();
-                *selection = oc.selection.clone();
-                r.at_t0_sigma = coefficient_sigma(&oc.fit, &oc.noise, rec.t0_c);
-                let mut cal = oc.fit.calibration(0.0, false);
-                crate::blob::Cache::for_fit(rec, &oc, &mut cal, None);
-                (cal, None)
+        let routed = fit_on(rec, None, &req, notes)?;
+        r.model = match &routed {
+            Routed::Identified { outcome, .. } => {
+                *selection = outcome.selection.clone();
+                routed.describe()
             }
-            Routed::Dynamic { fit, .. } => {
-                r.model = format!("{} (dynamic route)", fit.describe());
-                r.at_t0_sigma =
-                    crate::diagnose::metrics::coefficient_sigma(&fit.data, &fit.fit, rec.t0_c);
-                (fit.calibration()?, None)
-            }
-        }
+            Routed::Dynamic { .. } => format!("{} (dynamic route)", routed.describe()),
+        };
+        r.at_t0_sigma = routed.coefficient_sigma(rec.t0_c);
+        (routed.calibration(rec, Flash::default())?.cal, None)
     })
 }
 

@@ -1,239 +1,17 @@
 //! From a fitted model to a flashed blob and back: f32 tables, the f32-vs-f64 check,
 //! encoding, reading a blob file, and what `inspect` shows of it.
 use crate::data::output_unit::OutputUnit;
-use crate::data::recording::Recording;
 use crate::error::{ErrorKind, HostError, Result};
-use crate::fit::noise::Noise;
-use crate::fit::pipeline::FitOutcome;
-use crate::fit::predict::{directions, sigma_dwell_noise};
-use crate::fit::temperature::ModelFit;
+use crate::model::precision::check;
 use firmware_core::blob::{Blob, RunId, FORMAT_VERSION, MAGIC, MAX_BLOB_LEN, MAX_SERIAL_LEN};
-use firmware_core::compensate::{Compensator, ErrorModel, Method};
-use firmware_core::model::{Coeffs, COEFF_NAMES};
+use firmware_core::model::COEFF_NAMES;
 use firmware_core::temperature::{Calibration, Physics, TempModel};
 use serde::Serialize;
 use std::path::Path;
 
-/// Documented bound: the firmware's f32 path (f32 tables, f32 arithmetic) stays within
-/// this many g of the f64 evaluation of the unrounded model, for |a| <= 1 g, inside the
-/// valid temperature range. Held by [`build_blob`] on every blob built; the departure in
-/// the 10 C beyond the range (extrapolation, where a high-order polynomial loses f32
-/// digits) is measured and reported.
-pub const F32_BOUND_G: f64 = 2e-6;
-
-/// 26 unit directions: the axes, the face diagonals and the cube's corners, both signs.
-fn directions26() -> Vec<[f64; 3]> {
-    let mut dirs = Vec::new();
-    for x in -1i32..=1 {
-        for y in -1i32..=1 {
-            for z in -1i32..=1 {
-                let v = [f64::from(x), f64::from(y), f64::from(z)];
-                let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-                if n > 0.0 {
-                    dirs.push(v.map(|c| c / n));
-                }
-            }
-        }
-    }
-    dirs
-}
-
-/// The largest cache step `fit`, `diagnose --out`, `batch` and the demo give the
-/// firmware by default, C.
-pub const MAX_CACHE_STEP_C: f64 = 0.1;
-/// Grid of [`cache_slope`], C.
-const CACHE_GRID_C: f64 = 0.05;
-
-/// How fast |a| drifts while the firmware holds its cached coefficients and the unit's
-/// temperature moves, g/C: `|d|a|/dT| = |a^T N (dK/dT a + dU0/dT)|` of the calibration's
-/// own model, by differences over every 0.05 C cell of the valid range (exact within a
-/// piecewise-linear segment), worst of 26 directions (any attitude: in flight too).
-pub fn cache_slope(cal: &Calibration<f64>) -> f64 {
-    let dirs = directions26();
-    let eval = |t: f64| Coeffs::from_array(&cal.model.eval(cal.t0_c, t));
-    let mut worst: f64 = 0.0;
-    let mut t = cal.t_min_c;
-    while t < cal.t_max_c {
-        let h = CACHE_GRID_C.min(cal.t_max_c - t).max(1e-6);
-        let (c0, c1) = (eval(t), eval(t + h));
-        let Some(n) = firmware_core::model::invert(&c0.k) else {
-            t += CACHE_GRID_C;
-            continue;
-        };
-        for a in &dirs {
-            // d|a'|/dT for the reading U(T + h) compensated with the coefficients of T
-            let du: [f64; 3] = std::array::from_fn(|i| {
-                (0..3)
-                    .map(|j| (c1.k[i][j] - c0.k[i][j]) * a[j])
-                    .sum::<f64>()
-                    + c1.u0[i]
-                    - c0.u0[i]
-            });
-            let da: [f64; 3] = std::array::from_fn(|i| (0..3).map(|j| n[i][j] * du[j]).sum());
-            let d = (a[0] * da[0] + a[1] * da[1] + a[2] * da[2]).abs() / h;
-            worst = worst.max(d);
-        }
-        t += CACHE_GRID_C;
-    }
-    worst
-}
-
-/// A fitted model of a recording, as the cache's floor needs it.
-#[derive(Debug, Clone, Copy)]
-pub struct Model<'a> {
-    /// The recording.
-    pub rec: &'a Recording,
-    /// Its positions, every pose with a vector (the estimated ones where unknown).
-    pub positions: &'a crate::data::positions::Positions,
-    /// The model.
-    pub fit: &'a ModelFit,
-    /// Its noise.
-    pub noise: &'a Noise,
-}
-
-/// The firmware's cache of N(T): its step and the most it can cost.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
-pub struct Cache {
-    /// The update step written into the blob, C.
-    pub step_c: f64,
-    /// The most the cache can add to |dg| anywhere in the valid range, at any attitude
-    /// (`cache_slope` x step), mg.
-    pub worst_mg: f64,
-    /// The noise floor the default step keeps it within (a verification dwell's own
-    /// noise, 1 sigma), mg; None when none is known.
-    pub floor_mg: Option<f64>,
-    /// Whether the step was chosen from the unit's slopes (true) or given.
-    pub chosen: bool,
-}
-
-impl Cache {
-    /// `given` (`--update-step`), or by default the largest step up to
-    /// [`MAX_CACHE_STEP_C`] whose worst cost stays within `floor_mg` (rounded down to
-    /// 1e-4 C); with no floor known, 0 (the model at every temperature).
-    pub fn choose(cal: &Calibration<f64>, floor_mg: Option<f64>, given: Option<f64>) -> Cache {
-        let slope_mg = cache_slope(cal) * 1e3;
-        let step_c = match (given, floor_mg) {
-            (Some(s), _) => s,
-            (None, Some(f)) if f > 0.0 && slope_mg > 0.0 => {
-                (((f / slope_mg).min(MAX_CACHE_STEP_C) * 1e4).floor() / 1e4).max(0.0)
-            }
-            (None, Some(f)) if f > 0.0 => MAX_CACHE_STEP_C,
-            (None, _) => 0.0,
-        };
-        Cache {
-            step_c,
-            worst_mg: slope_mg * step_c,
-            floor_mg,
-            chosen: given.is_none(),
-        }
-    }
-
-    /// The cache of a fitted model's calibration (`fit`, `batch`): `given`
-    /// (`--update-step`), or chosen within a verification dwell's own noise as the fit
-    /// predicts it ([`Cache::for_model`], with the poses it estimated); `cal` takes the
-    /// step.
-    pub fn for_fit(
-        rec: &Recording,
-        oc: &FitOutcome,
-        cal: &mut Calibration<f64>,
-        given: Option<f64>,
-    ) -> Cache {
-        // the estimated poses' vectors, carried with the fit
-        let positions = oc
-            .orientation
-            .as_ref()
-            .map_or(&rec.positions, |o| &o.positions);
-        let model = Model {
-            rec,
-            positions,
-            fit: &oc.fit,
-            noise: &oc.noise,
-        };
-        Cache::for_model(&model, cal, given)
-    }
-
-    /// [`Cache::choose`] for the model `fit` of `rec`: the floor is the noise a
-    /// verification dwell of the recording's median length adds of its own (1 sigma,
-    /// worst of its verification directions, as `fit` predicts it); `cal` takes the step.
-    pub fn for_model(m: &Model, cal: &mut Calibration<f64>, given: Option<f64>) -> Cache {
-        let (fit, noise) = (m.fit, m.noise);
-        let floor = (!fit.axis_cov.is_empty()).then(|| {
-            let (dirs, n) = directions(m.rec, m.positions);
-            dirs.iter()
-                .map(|d| sigma_dwell_noise(fit, noise, fit.t0_c, d.a, n))
-                .fold(0.0, f64::max)
-                * 1e3
-        });
-        let cache = Cache::choose(cal, floor, given);
-        cal.update_step_c = cache.step_c;
-        cache
-    }
-
-    /// One line for the command's text output.
-    pub fn text(&self) -> String {
-        let how = if self.chosen {
-            match self.floor_mg {
-                Some(f) => format!(
-                    "chosen from the unit's slopes to stay within the dwell-noise floor {f:.4} mg"
-                ),
-                None => "no noise floor known: the model at every temperature".to_string(),
-            }
-        } else {
-            "as given (--update-step)".to_string()
-        };
-        format!(
-            "firmware cache: N(T) recomputed after {} C ({how}); it costs at most {:.4} mg anywhere in the valid range, at any attitude",
-            self.step_c, self.worst_mg
-        )
-    }
-}
-
-/// Largest |a_f32 - a_f64| (g) over a grid of temperatures (0.5 C steps) and 26
-/// directions, for method 1 and method 2 (full): inside the valid range, and in the
-/// 10 C beyond it.
-pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Result<(f64, f64)> {
-    let mut c64 = cal64.clone();
-    c64.update_step_c = 0.0;
-    let mut c32 = cal32.clone();
-    c32.update_step_c = 0.0;
-    let dirs = directions26();
-    let (mut inside, mut beyond): (f64, f64) = (0.0, 0.0);
-    for method in [
-        Method::CorrectConstants,
-        Method::CorrectResult(ErrorModel::Full),
-    ] {
-        // one sample a second: the physics terms' machines follow the sweep alike in both
-        let mut m64 = Compensator::new(&c64, method, 1.0)
-            .map_err(|e| HostError::new(ErrorKind::Numerical, e.to_string()))?;
-        let mut m32 = Compensator::new(&c32, method, 1.0)
-            .map_err(|e| HostError::new(ErrorKind::Numerical, e.to_string()))?;
-        let mut t = cal64.t_min_c - 10.0;
-        while t <= cal64.t_max_c + 10.0 {
-            let t32 = t as f32;
-            let coeffs = Coeffs::from_array(&cal64.model.eval(cal64.t0_c, f64::from(t32)));
-            for a in &dirs {
-                let u = coeffs.forward(*a).map(|v| f64::from(v as f32));
-                let r64 = m64.compensate(u, f64::from(t32)).accel;
-                let r32 = m32.compensate(u.map(|v| v as f32), t32).accel;
-                let in_range = (cal64.t_min_c..=cal64.t_max_c).contains(&f64::from(t32));
-                for (x, y) in r64.iter().zip(r32.iter()) {
-                    let d = (x - f64::from(*y)).abs();
-                    if in_range {
-                        inside = inside.max(d);
-                    } else {
-                        beyond = beyond.max(d);
-                    }
-                }
-            }
-            t += 0.5;
-        }
-    }
-    Ok((inside, beyond))
-}
-
 /// Build and encode the blob for `serial` from an f64 calibration whose K and U0 are in
 /// `output_unit` (the recording's `output_unit`, recorded in the blob); checks the f32
-/// path against [`F32_BOUND_G`]. Returns the blob, its bytes and the measured departure.
+/// path against [`crate::model::precision::F32_BOUND_G`]. Returns the blob, its bytes and the measured departure.
 pub fn build_blob(
     serial: &str,
     output_unit: &OutputUnit,
@@ -260,12 +38,7 @@ pub fn build_blob_checked(
     let n = blob
         .encode(&mut buf)
         .map_err(|e| HostError::new(ErrorKind::Blob, format!("cannot build the blob: {e}")))?;
-    let (dep, beyond) = f32_departure(cal64, &blob.calibration)?;
-    if dep.is_nan() || dep > F32_BOUND_G {
-        return Err(HostError::new(ErrorKind::Numerical, format!(
-            "the f32 firmware path departs from the f64 model by {dep:.3e} g, over the bound {F32_BOUND_G:.1e} g: the unit's K is too ill-conditioned for f32"
-        )));
-    }
+    let (dep, beyond) = check(cal64)?;
     Ok((blob, buf[..n].to_vec(), (dep, beyond)))
 }
 

@@ -4,12 +4,12 @@
 //! is a sweep), and both blobs, the paper test's data-chosen one and the plan's, verified
 //! through firmware-core on one equilibrium verification block recorded apart.
 use crate::acceptance::{judge, Acceptance, Spec};
-use crate::blob::{build_blob, Cache};
+use crate::blob::build_blob;
 use crate::data::positions::Role;
 use crate::data::recording::Recording;
-use crate::diagnose::dynamic::{auto, Routed};
 use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::pipeline::ModelRequest;
+use crate::fit::route::{fit_on, Flash, Routed};
 use crate::plan::{
     candidates, choose, predict, program, run, verification, verification_temps, Candidate, Limits,
     Target,
@@ -120,19 +120,16 @@ pub fn limits(cfg: &SimConfig) -> Limits {
 /// with the model the data choose); its calibration (the cache chosen as `fit` chooses
 /// it) and a description.
 pub fn fit_as_fit_does(rec: &Recording) -> Result<(Calibration<f64>, String)> {
-    let mut notes = Vec::new();
-    match auto(rec, &ModelRequest::default(), &mut notes)? {
-        Routed::Dynamic { fit, .. } => Ok((
-            fit.calibration()?,
-            format!("dynamic route, {}", fit.describe()),
-        )),
-        Routed::Static(oc) => {
-            let mut cal = oc.fit.calibration(0.0, false);
-            Cache::for_fit(rec, &oc, &mut cal, None);
-            let model = crate::analysis::Compared::Chosen(oc.fit.basis.clone());
-            Ok((cal, format!("static route, {}", model.family())))
+    let routed = fit_on(rec, None, &ModelRequest::default(), &mut Vec::new())?;
+    let cal = routed.calibration(rec, Flash::default())?.cal;
+    let fitted = match &routed {
+        Routed::Dynamic { .. } => format!("dynamic route, {}", routed.describe()),
+        Routed::Identified { outcome, .. } => {
+            let model = crate::analysis::Compared::Chosen(outcome.fit.basis.clone());
+            format!("static route, {}", model.family())
         }
-    }
+    };
+    Ok((cal, fitted))
 }
 
 /// A test of the comparison, before it is judged.

@@ -11,13 +11,14 @@
 //! | layer | modules | what |
 //! |---|---|---|
 //! | 0 | `error`, `rng`, `output`, `progress` | foundations: errors, random numbers, atomic writes, JSON/CSV, progress of long work |
-//! | 1 | `data` | recordings, positions with their roles, coefficient tables |
-//! | 2 | `fit`, `simulate` | identification, one least-squares solver, temperature models, the pipeline; the digital twin |
-//! | 3 | `blob`, `verify`, `vectors`, `acceptance` | blobs built and read, formula (13) through firmware-core, firmware test vectors, pass/fail against a specification |
-//! | 4 | `diagnose` | locate, explain, model what the paper's model leaves out |
-//! | 5 | `analysis`, `blind`, `plan`, `store` | the demo's comparison (pure), the blind tests of the diagnosis, chamber programs designed for a target accuracy, the record store (SQLite: records, history, trends) |
-//! | 6 | `report`, `batch`, `demo`, `demo_plan` | HTML reports, production batches, the main job's files (and its plan beside the paper's test) |
-//! | 7 | `cli` | the command line |
+//! | 1 | `data` | recordings, positions with their roles, stops and windows, coefficient tables |
+//! | 2 | `model` | the engine: one least-squares solver, the temperature basis, the floor, the windows and their weights, the terms and their columns, the solve with held-out blocks, the judge, the flashed model, its cache and f32 check |
+//! | 3 | `fit`, `simulate` | identification, temperature models, the pipeline, the route (detection, the dynamic fit, the choice, the calibration), the predicted error; the digital twin |
+//! | 4 | `blob`, `verify`, `vectors`, `acceptance` | blobs built and read, formula (13) through firmware-core, firmware test vectors, pass/fail against a specification |
+//! | 5 | `diagnose` | the search for what the paper's model leaves out, the findings, where the rest is, the JSON contract |
+//! | 6 | `analysis`, `blind`, `plan`, `store` | the demo's comparison (pure), the blind tests of the diagnosis, chamber programs designed for a target accuracy, the record store (SQLite: records, history, trends) |
+//! | 7 | `report`, `batch`, `demo`, `demo_plan` | HTML reports, production batches, the main job's files (and its plan beside the paper's test) |
+//! | 8 | `cli` | the command line |
 #![forbid(unsafe_code)]
 
 pub mod error;
@@ -26,6 +27,8 @@ pub mod progress;
 pub mod rng;
 
 pub mod data;
+
+pub mod model;
 
 pub mod fit;
 pub mod simulate;

@@ -8,10 +8,10 @@
 //! three temperatures (T0 among them when the range holds it).
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
-use crate::diagnose::design::static_at;
-use crate::diagnose::dynamic::fit_dynamic;
-use crate::diagnose::metrics::dispersion;
 use crate::error::{ErrorKind, HostError, Result};
+use crate::fit::pipeline::ModelRequest;
+use crate::fit::predict::{dwell_noise_of, sigma_of};
+use crate::fit::route::{fit_on, Flash, Route};
 use crate::simulate::config::CASE_TAU_S;
 use crate::simulate::program::Step;
 use crate::simulate::{simulate, PerAxis, SimConfig};
@@ -304,64 +304,33 @@ pub fn predict(
     noise_v: f64,
     dwell_samples: f64,
 ) -> Result<Predicted> {
-    let d = fit_dynamic(rec)?;
-    let cal = d.calibration()?;
-    let f = &d.fit;
-    let Some(cov) = &f.cov else {
-        return Err(HostError::new(
-            ErrorKind::Numerical,
-            "the fit carries no covariance",
-        ));
-    };
-    let phi = dispersion(&d.data, f);
-    let p = f.x.len();
+    let routed = fit_on(
+        rec,
+        Some(Route::Dynamic),
+        &ModelRequest::default(),
+        &mut Vec::new(),
+    )?;
+    let cal = routed.calibration(rec, Flash::default())?.cal;
     let mut worst: f64 = 0.0;
     for &t in temps {
-        let (k, _) = static_at(&f.spec, &f.labels, &f.x, d.data.t0, [t; 3]);
-        let Some(n) = firmware_core::model::invert(&k) else {
-            continue;
-        };
-        let unit: Vec<([[f64; 3]; 3], [f64; 3])> = (0..p)
-            .map(|c| {
-                let e = nalgebra::DVector::from_fn(p, |i, _| if i == c { 1.0 } else { 0.0 });
-                static_at(&f.spec, &f.labels, &e, d.data.t0, [t; 3])
-            })
-            .collect();
         for name in positions {
             let Some(i) = rec.positions.index(name) else {
                 continue;
             };
             let a = rec.positions.vector(i);
-            // dg = a . da, da = -N (dK a + dU0): linear in every parameter
-            let g: Vec<f64> = unit
-                .iter()
-                .map(|(dk, du)| {
-                    let v: [f64; 3] = std::array::from_fn(|r| {
-                        (0..3).map(|c| dk[r][c] * a[c]).sum::<f64>() + du[r]
-                    });
-                    -(0..3)
-                        .map(|r| a[r] * (0..3).map(|c| n[r][c] * v[c]).sum::<f64>())
-                        .sum::<f64>()
-                })
-                .collect();
-            let var: f64 = (0..p)
-                .flat_map(|x| (0..p).map(move |y| (x, y)))
-                .map(|(x, y)| g[x] * cov[(x, y)] * g[y])
-                .sum::<f64>()
-                .max(0.0)
-                * phi;
-            // the dwell's own noise through the compensation: a . N e
-            let nta: [f64; 3] = std::array::from_fn(|c| (0..3).map(|r| a[r] * n[r][c]).sum());
-            let dwell_var =
-                noise_v * noise_v / dwell_samples.max(1.0) * nta.iter().map(|v| v * v).sum::<f64>();
+            let model = sigma_of(&routed, t, a);
+            if model.is_nan() {
+                continue;
+            }
+            let dwell = dwell_noise_of(&routed, t, a, [noise_v * noise_v; 3], dwell_samples);
             // the firmware's cache is chosen to cost at most a dwell's own noise (1 sigma):
             // a bias, added
-            worst = worst.max((3.0 * (var + dwell_var).sqrt() + dwell_var.sqrt()) * 1e3);
+            worst = worst.max((3.0 * model.hypot(dwell) + dwell) * 1e3);
         }
     }
     Ok(Predicted {
         worst_mg: worst,
-        lag_s: d.lag_tau_s,
+        lag_s: routed.lag_tau_s(),
         valid_c: [cal.t_min_c, cal.t_max_c],
     })
 }

@@ -2,7 +2,7 @@
 //! time step, as an MCU with gaps or a logger gives them), and the f32 results the host
 //! gets from the same firmware-core code (compared bit for bit with the MCU's), checked
 //! against the f64 evaluation within the documented bound.
-use crate::blob::F32_BOUND_G;
+use crate::model::precision::F32_BOUND_G;
 use crate::rng::Rng;
 use firmware_core::blob::Blob;
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
@@ -112,7 +112,7 @@ pub fn expected(blob: &Blob, bytes: &[u8], prefix: &str) -> (Vec<String>, f64) {
                 for (x, y) in o.accel.iter().zip(r.accel) {
                     // the bound is for |a| <= 1 g; relative beyond
                     let d = (f64::from(*x) - y).abs() / y.abs().max(1.0);
-                    if d > crate::blob::F32_BOUND_G {
+                    if d > crate::model::precision::F32_BOUND_G {
                         log::debug!(
                             "{prefix}{tag} input {i}: u {u:?} t {t}: f32 {:?} f64 {:?}",
                             o.accel,

@@ -1,6 +1,6 @@
 //! Verification, formula (13): |a| - 1 in tilted positions, before and after compensation.
 use crate::data::recording::Recording;
-use crate::fit::temperature::temperature_clusters;
+use crate::model::basis::temperature_clusters;
 use firmware_core::blob::Blob;
 use firmware_core::compensate::{Compensator, Method};
 use firmware_core::model::{apply, dg, invert, Coeffs};

@@ -3,7 +3,8 @@
 //! from the blob's f32 table agree within the error the f32 rounding explains, for
 //! random piecewise-linear and polynomial models, inside the table and beyond it.
 use firmware_core::model::N_COEFFS;
-use host_fit::fit::temperature::{Basis, ModelFit};
+use host_fit::fit::temperature::ModelFit;
+use host_fit::model::basis::Basis;
 use proptest::prelude::*;
 
 /// A fit with `basis` and random parameters (values near a real unit's scale).

@@ -120,7 +120,7 @@ fn compensation_reads_back_from_summary_json() {
 
 #[test]
 fn diagnosis_contract() {
-    round_trip::<host_fit::diagnose::effects::EffectId>(&[
+    round_trip::<host_fit::model::effects::EffectId>(&[
         "temp_curvature",
         "thermal_lag",
         "temp_rate",
@@ -173,7 +173,7 @@ fn demo_plan_target() {
 
 #[test]
 fn routes_and_plot_styles() {
-    text_round_trip::<host_fit::fit::pipeline::Route>(&["static", "joint", "per-stop", "dynamic"]);
+    text_round_trip::<host_fit::fit::route::Route>(&["static", "joint", "per-stop", "dynamic"]);
     text_round_trip::<host_fit::report::plot::Marker>(&[
         "circle", "square", "triangle", "diamond", "cross", "ring", "none",
     ]);
@@ -276,8 +276,7 @@ fn command_line_enums() {
     // the routes the command line names are the ones the outputs name
     for r in RouteArg::value_variants() {
         let name = r.to_possible_value().unwrap().get_name().to_string();
-        if name != "auto" {
-            assert_eq!(host_fit::fit::pipeline::Route::from(*r).name(), name);
-        }
+        let route: Option<host_fit::fit::route::Route> = (*r).into();
+        assert_eq!(route.map_or("auto", |r| r.name()), name);
     }
 }

@@ -4,8 +4,9 @@
 //! same seed with and without them: the noise is identical, the difference is the effect.
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::{Recording, Row};
+use host_fit::data::stops::stops;
 use host_fit::error::ErrorKind;
-use host_fit::fit::identify::{identify_stop, stops};
+use host_fit::fit::identify::identify_stop;
 use host_fit::fit::noise::noise;
 use host_fit::simulate::{
     parse_config, simulate, Curvature, Effects, Fixture, Interp, PerAxis, SimConfig, Stop,
@@ -441,7 +442,7 @@ fn the_paper_unit_passes_through_the_papers_tables() {
 /// duration is the legs', and the temperature turns at the hot end.
 #[test]
 fn a_sweep_turns_the_tilter_while_the_chamber_ramps() {
-    use host_fit::diagnose::dynamic::Shape;
+    use host_fit::fit::route::detect::Shape;
     use host_fit::simulate::{Leg, Sweep};
     let mut cfg = SimConfig::default();
     cfg.chamber.start_c = 0.0;

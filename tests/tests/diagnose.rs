@@ -274,7 +274,7 @@ fn the_flashed_model_reaches_the_fits_own_residual_in_firmware() {
     cal.update_step_c = 0.0;
     assert!(cal.physics.is_some());
     let data = &d.data;
-    let fit_dg = host_fit::diagnose::metrics::dg_per_window(data, &d.flashed.fit);
+    let fit_dg = host_fit::model::metrics::dg_per_window(data, &d.flashed.fit);
     let mut comp = Compensator::new(&cal, Method::CorrectConstants, 1.0).unwrap();
     let accel: Vec<[f64; 3]> = rec
         .rows

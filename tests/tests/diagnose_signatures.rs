@@ -5,6 +5,7 @@
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::Recording;
 use host_fit::diagnose::contract::Verdict;
+use host_fit::diagnose::parameters::Quantity;
 use host_fit::diagnose::{diagnose, EffectId};
 use host_fit::simulate::{simulate, stop_spans, FixtureChange, SimConfig};
 
@@ -49,7 +50,11 @@ fn a_fixture_reclamped_between_two_stops_is_named_with_its_stop() {
     assert_eq!(f.position.as_deref(), Some("TP5"), "{text}");
     assert!(f.form.contains("from stop 3 on"), "{text}");
     assert!(f.evidence.contains("from stop 3 on"), "{text}");
-    assert_eq!(f.parameters.get("from_stop").copied(), Some(3.0), "{text}");
+    assert_eq!(
+        f.parameters.get(Quantity::FromStop).map(|p| p.value),
+        Some(3.0),
+        "{text}"
+    );
     assert_eq!(c.verdict, Verdict::Explained, "{text}");
 
     // the same unit clamped right throughout: no fixture error, from any stop

@@ -2,9 +2,10 @@
 //! too few positions, and the joint fit against the per-stop route under drift.
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::Recording;
-use host_fit::fit::identify::{formula_10, identify_stop, stops};
+use host_fit::data::stops::stops;
+use host_fit::fit::identify::{formula_10, identify_stop};
 use host_fit::fit::noise::noise;
-use host_fit::fit::pipeline::{fit_recording, ModelChoice, ModelKind, Route};
+use host_fit::fit::pipeline::{fit_recording, Identification, ModelChoice, ModelKind};
 use std::path::Path;
 use tests::{synthetic_csv, PAPER_T0, TP};
 
@@ -125,7 +126,7 @@ fn joint_fit_beats_per_stop_when_the_temperature_drifts_within_a_stop() {
     };
     let temps = [-40.0, 20.0, 70.0];
     let rec = read(&synthetic_csv(&temps, &truth, &TP, 30, 1e-6, 0.15, 7));
-    let err_at = |route: Route| {
+    let err_at = |route: Identification| {
         let oc = fit_recording(
             &rec,
             &ModelChoice {
@@ -145,8 +146,8 @@ fn joint_fit_beats_per_stop_when_the_temperature_drifts_within_a_stop() {
         }
         worst
     };
-    let joint = err_at(Route::Joint);
-    let per_stop = err_at(Route::PerStop);
+    let joint = err_at(Identification::Joint);
+    let per_stop = err_at(Identification::PerStop);
     assert!(joint < 1e-6, "joint fit error {joint:e}");
     println!("max coefficient error: joint {joint:e}, per-stop {per_stop:e}");
     assert!(

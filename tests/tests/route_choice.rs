@@ -1,12 +1,12 @@
 //! `fit`'s route chosen by the data (issue 19): a stop-and-soak test whose dwells still
-//! settle behind a thermal lag is seen (`host_fit::fit::route::settling`) and taken on the
+//! settle behind a thermal lag is seen (`host_fit::fit::route::detect::settling`) and taken on the
 //! dynamic route; clean units and the catalogue's other effects are not, on an even
 //! 1-Hz clock and on an uneven logger clock (rows late, lost, 0.1 Hz at rest, a
 //! power-off). The table printed is the README's "share of the residual" figures.
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::Recording;
 use host_fit::fit::pipeline::{fit_chosen, ModelRequest};
-use host_fit::fit::route::{settling, Settling, SETTLING_SHARE};
+use host_fit::fit::route::detect::{settling, Settling, SETTLING_SHARE};
 use host_fit::simulate::{simulate, Logger, SimConfig};
 use tests::cli_json;
 use tests::time_true::{production, s, write};

@@ -22,8 +22,10 @@ pub use report::report;
 use crate::data::positions::Positions;
 use crate::data::recording::Recording;
 use crate::diagnose::findings::Finding;
-use crate::diagnose::metrics::normalized_rms;
+use crate::diagnose::parameters::Quantity;
 use crate::diagnose::{diagnose_with, EffectId, Rules};
+use crate::model::metrics::normalized_rms;
+use crate::model::params::Term;
 use crate::simulate::{simulate, SimConfig};
 use std::path::Path;
 
@@ -122,24 +124,31 @@ pub fn diagnosis_text(case: &Case) -> String {
 
 /// The true values of a finding's parameters, for the per-axis linear effects and the
 /// time constants (None for effects whose parameters are not compared).
-fn truth_of(cfg: &SimConfig, effect: EffectId) -> Option<Vec<(String, f64)>> {
-    let per_axis = |sym: &str, v: [f64; 3]| -> Vec<(String, f64)> {
-        (0..3)
-            .map(|i| (format!("{sym}_{}", ["x", "y", "z"][i]), v[i]))
-            .collect()
+fn truth_of(cfg: &SimConfig, effect: EffectId) -> Option<Vec<(Quantity, f64)>> {
+    let per_axis = |q: &dyn Fn(usize) -> Quantity, v: [f64; 3]| -> Vec<(Quantity, f64)> {
+        (0..3).map(|i| (q(i), v[i])).collect()
+    };
+    let term = |term: Term| move |axis: usize| Quantity::Term { term, axis };
+    let tau = Quantity::Tau {
+        pole: 1,
+        axis: None,
     };
     let e = &cfg.effects;
     match effect {
-        EffectId::TempRate => e.temp_rate.map(|p| per_axis("r", p.value)),
-        EffectId::Hysteresis => e.hysteresis.map(|p| per_axis("h", p.value)),
-        EffectId::NonlinearityK2 => e.nonlinearity_k2.map(|p| per_axis("k2", p.value)),
-        EffectId::ScaleAsymmetry => e.scale_asymmetry.map(|p| per_axis("delta", p.value)),
-        EffectId::ThermalLag => e
-            .thermal_lag
-            .map(|p| vec![("tau_s".to_string(), p.value[0])]),
+        EffectId::TempRate => e.temp_rate.map(|p| per_axis(&term(Term::Rate), p.value)),
+        EffectId::Hysteresis => e
+            .hysteresis
+            .map(|p| per_axis(&term(Term::Hysteresis), p.value)),
+        EffectId::NonlinearityK2 => e
+            .nonlinearity_k2
+            .map(|p| per_axis(&term(Term::K2), p.value)),
+        EffectId::ScaleAsymmetry => e
+            .scale_asymmetry
+            .map(|p| per_axis(&|axis| Quantity::Delta { axis }, p.value)),
+        EffectId::ThermalLag => e.thermal_lag.map(|p| vec![(tau, p.value[0])]),
         EffectId::WarmupDrift => e.warmup_drift.map(|w| {
-            let mut v = per_axis("d", w.d_v);
-            v.push(("tau_s".into(), w.tau_s));
+            let mut v = per_axis(&term(Term::Warmup), w.d_v);
+            v.push((tau, w.tau_s));
             v
         }),
         // a curvature's and a fixture's true parameters are not the diagnosis's (a sine
@@ -154,10 +163,8 @@ fn params_within_3_sigma(cfg: &SimConfig, findings: &[Finding]) -> Option<bool> 
     let mut params_ok = None;
     for f in findings {
         if let Some(t) = truth_of(cfg, f.effect) {
-            let ok = t.iter().all(|(k, v)| {
-                let est = f.parameters.get(k).copied();
-                let sig = f.uncertainties.get(k).copied();
-                matches!((est, sig), (Some(e), Some(s)) if (e - v).abs() <= 3.0 * s.max(1e-300))
+            let ok = t.iter().all(|(q, v)| {
+                matches!(f.parameters.get(*q), Some(p) if (p.value - v).abs() <= 3.0 * p.sigma.max(1e-300))
             });
             params_ok = Some(params_ok.unwrap_or(true) && ok);
         }

@@ -5,6 +5,7 @@ use crate::blind::forms;
 use crate::blind::forms::Class;
 use crate::diagnose::contract::Verdict;
 use crate::diagnose::findings::Finding;
+use crate::diagnose::parameters::Quantity;
 use crate::diagnose::quality::NoteKind;
 use crate::diagnose::EffectId;
 
@@ -43,7 +44,7 @@ pub struct FixtureClaim {
     pub position: Option<String>,
     /// The finding's form and evidence, as written.
     pub text: String,
-    /// A parameter whose name holds `stop` (the stop the change is from), if any.
+    /// The stop the change is from (its `from_stop` parameter), if any.
     pub from_stop: Option<f64>,
 }
 
@@ -53,11 +54,7 @@ impl FixtureClaim {
         (f.effect == EffectId::FixtureError).then(|| FixtureClaim {
             position: f.position.clone(),
             text: format!("{} {}", f.form, f.evidence),
-            from_stop: f
-                .parameters
-                .iter()
-                .find(|(k, _)| k.contains("stop"))
-                .map(|(_, v)| *v),
+            from_stop: f.parameters.get(Quantity::FromStop).map(|p| p.value),
         })
     }
 

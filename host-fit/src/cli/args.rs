@@ -1,7 +1,8 @@
 //! The command line's grammar: every command and option, with its help text. Its enums
 //! are the command line's own (clap's `ValueEnum`); each maps onto the library's.
 use crate::blind::Class;
-use crate::fit::pipeline::{ModelKind, Route};
+use crate::fit::pipeline::ModelKind;
+use crate::fit::route::Route;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use firmware_core::compensate::ErrorModel;
 use std::path::PathBuf;
@@ -88,14 +89,15 @@ pub enum RouteArg {
     Dynamic,
 }
 
-impl From<RouteArg> for Route {
+impl From<RouteArg> for Option<Route> {
+    /// The route asked for; None: chosen by the data.
     fn from(r: RouteArg) -> Self {
         match r {
-            // auto starts on the static route (see `fit`)
-            RouteArg::Auto | RouteArg::Static => Route::Static,
-            RouteArg::Joint => Route::Joint,
-            RouteArg::PerStop => Route::PerStop,
-            RouteArg::Dynamic => Route::Dynamic,
+            RouteArg::Auto => None,
+            RouteArg::Static => Some(Route::Static),
+            RouteArg::Joint => Some(Route::Joint),
+            RouteArg::PerStop => Some(Route::PerStop),
+            RouteArg::Dynamic => Some(Route::Dynamic),
         }
     }
 }

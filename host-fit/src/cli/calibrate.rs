@@ -1,24 +1,27 @@
 //! `temp-fit`, `identify` and `fit`: from data to coefficients and blobs.
-use super::args::{FitArgs, IdentifyArgs, RouteArg, TempFitArgs};
+use super::args::{FitArgs, IdentifyArgs, TempFitArgs};
 use super::common::{load_for_blob, load_to_fit, oriented, w};
-use crate::blob::{build_blob, Cache, F32_BOUND_G};
+use crate::blob::build_blob;
 use crate::data::output_unit::OutputUnit;
 use crate::data::table::{read_table, to_csv, TableRow};
-use crate::diagnose::dynamic::{auto, fit_dynamic, Candidate, DynamicFit, Routed, Shape};
-use crate::error::{ErrorKind, HostError, Result};
+use crate::error::Result;
 use crate::fit::describe::ModelDescription;
 use crate::fit::equilibrium::Excluded;
 use crate::fit::identify::StopCoeffs;
 use crate::fit::noise::{noise, Noise};
 use crate::fit::orientation::PoseEstimate;
 use crate::fit::pipeline::{
-    fit_chosen, fit_recording, identify_stops, FitOutcome, ModelChoice, ModelKind, ModelRequest,
-    Route,
+    identify_stops, FitOutcome, Identification, ModelChoice, ModelKind, ModelRequest,
 };
 use crate::fit::predict::{directions, predict, Prediction, Request};
-use crate::fit::route::Settling;
+use crate::fit::route::detect::Settling;
+use crate::fit::route::detect::Shape;
+use crate::fit::route::dynamic::{Candidate, DynamicFit};
+use crate::fit::route::{fit_on, Calibrated, Flash, Route, Routed};
 use crate::fit::select::Selection;
 use crate::fit::temperature::fit_table;
+use crate::model::cache::Cache;
+use crate::model::precision::F32_BOUND_G;
 use crate::output::{check_writable, json, write_atomic};
 use firmware_core::model::COEFF_NAMES;
 use serde::Serialize;
@@ -265,7 +268,7 @@ struct Written<'a> {
 fn fitted<'a>(
     a: &'a FitArgs,
     rec: &'a crate::data::recording::Recording,
-    oc: &'a FitOutcome,
+    (route, oc): (Route, &'a FitOutcome),
     cal: &firmware_core::temperature::Calibration<f64>,
     written: &Written<'a>,
 ) -> Fitted<'a> {
@@ -292,7 +295,7 @@ fn fitted<'a>(
     let one_temp = crate::fit::predict::is_constant(&oc.fit.basis);
     Fitted {
         unit: written.serial,
-        route: Route::from(a.route).name(),
+        route: route.name(),
         model: oc.fit.basis.describe(),
         chosen_by: oc.selection.as_ref(),
         no_temperature_model: one_temp.then(|| format!(
@@ -337,59 +340,45 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
     let req = ModelRequest::from(&a.model);
     req.check()?;
     let rec = load_for_blob(&a.input, err)?;
-    let route = Route::from(a.route);
-    if route == Route::Dynamic && req.kind.is_some() {
-        return Err(HostError::new(
-            ErrorKind::Invalid,
-            "the dynamic route chooses its model on held-out blocks of time; --model does not apply to it",
-        ));
+    let mut notes = Vec::new();
+    let routed = fit_on(&rec, a.route.into(), &req, &mut notes)?;
+    for n in notes {
+        w(err, format!("note: {n}"))?;
     }
-    if route == Route::Dynamic {
-        let d = fit_dynamic(&rec)?;
-        return fit_dynamic_cli(&a, &rec, d, None, out, err);
-    }
-    let oc = match (req.kind, a.route) {
-        (_, RouteArg::Auto) => {
-            let mut notes = Vec::new();
-            let routed = auto(&rec, &req, &mut notes)?;
-            for n in notes {
-                w(err, format!("note: {n}"))?;
-            }
-            match routed {
-                Routed::Dynamic { fit, settling } => {
-                    return fit_dynamic_cli(&a, &rec, *fit, settling, out, err)
-                }
-                Routed::Static(oc) => *oc,
-            }
-        }
-        (_, RouteArg::Static) => fit_chosen(&rec, &req)?,
-        (None, _) => {
-            return Err(HostError::new(ErrorKind::Invalid, format!(
-                "the model is chosen by the data on the static route only; with --route {} give --model",
-                route.name()
-            )))
-        }
-        (Some(kind), _) => fit_recording(
-            &rec,
-            &ModelChoice {
-                kind,
-                order: req.order,
-                breakpoints: req.breakpoints.clone(),
-            },
-            route,
-        )?,
+    let flash = Flash {
+        clamp: a.clamp,
+        update_step: a.update_step,
     };
-    let mut cal = oc.fit.calibration(0.0, a.clamp);
-    let cache = Cache::for_fit(&rec, &oc, &mut cal, a.update_step);
+    let calibrated = routed.calibration(&rec, flash)?;
+    match routed {
+        Routed::Dynamic { fit, settling } => {
+            fit_dynamic_cli(&a, &rec, (&fit, settling), calibrated, out, err)
+        }
+        Routed::Identified { how, outcome } => {
+            fit_static_cli(&a, &rec, (how, &outcome), calibrated, out, err)
+        }
+    }
+}
+
+/// `fit` on the static, joint or per-stop route: the blob, the record, the output.
+fn fit_static_cli(
+    a: &FitArgs,
+    rec: &crate::data::recording::Recording,
+    (how, oc): (Identification, &FitOutcome),
+    c: Calibrated,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<()> {
+    let Calibrated { cal, cache } = c;
     let serial_name = a.serial.as_deref().unwrap_or(rec.serial());
     let (blob, bytes, dep) = build_blob(serial_name, &rec.output_unit, &cal)?;
     let run = super::records::Run {
         args: &a.record,
         serial: serial_name,
-        rec: &rec,
+        rec,
         err,
     };
-    let bytes = super::records::fit(run, &oc, &cal, bytes)?;
+    let bytes = super::records::fit(run, oc, &cal, bytes)?;
     write_atomic(&a.out, &bytes, a.force)?;
     let written = Written {
         serial: serial_name,
@@ -397,7 +386,7 @@ pub(super) fn fit(a: FitArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resul
         f32_departure_g: dep,
         cache,
     };
-    let j = fitted(&a, &rec, &oc, &cal, &written);
+    let j = fitted(a, rec, (Route::from(how), oc), &cal, &written);
     if a.json {
         return w(out, json(&j)?);
     }
@@ -449,16 +438,12 @@ struct FittedDynamic<'a> {
 fn fit_dynamic_cli(
     a: &FitArgs,
     rec: &crate::data::recording::Recording,
-    d: DynamicFit<'_>,
-    settling: Option<Settling>,
+    (d, settling): (&DynamicFit<'_>, Option<Settling>),
+    c: Calibrated,
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<()> {
-    let mut cal = d.calibration()?;
-    cal.clamp = a.clamp;
-    if let Some(step) = a.update_step {
-        cal.update_step_c = step;
-    }
+    let cal = c.cal;
     let serial_name = a.serial.as_deref().unwrap_or(rec.serial());
     let (blob, bytes, dep) = build_blob(serial_name, &rec.output_unit, &cal)?;
     let run = super::records::Run {
@@ -467,7 +452,7 @@ fn fit_dynamic_cli(
         rec,
         err,
     };
-    let bytes = super::records::fit_dynamic(run, &d, &cal, bytes)?;
+    let bytes = super::records::fit_dynamic(run, d, &cal, bytes)?;
     write_atomic(&a.out, &bytes, a.force)?;
     let j = FittedDynamic {
         unit: serial_name,

@@ -4,10 +4,13 @@ use super::common::w;
 use super::common::Outcome;
 use crate::acceptance::Verdict;
 use crate::batch::{BatchOptions, UnitStatus};
+use crate::diagnose::findings::Finding;
+use crate::diagnose::parameters::Quantity;
+use crate::diagnose::EffectId;
 use crate::error::{ErrorKind, HostError, Result};
 use crate::output::{check_writable, write_atomic, write_json};
 use crate::simulate::SimConfig;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::io::Write;
 
 pub(super) fn batch(a: BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
@@ -231,6 +234,16 @@ fn check_plan_options(a: &PlanArgs) -> Result<()> {
     }
 }
 
+/// What `plan --from-diagnosis` reads of a `diagnose --json` output, typed.
+#[derive(Deserialize)]
+struct UnitType {
+    /// Per axis (null where not a number).
+    #[serde(default)]
+    noise_sigma_per_sample: Option<Vec<Option<f64>>>,
+    #[serde(default)]
+    findings: Vec<Finding>,
+}
+
 /// The unit type's (time constant s, noise per sample) from a `diagnose --json` output:
 /// the thermal_lag finding's slowest axis, the noisiest axis; an error names the file
 /// and what it lacks.
@@ -238,28 +251,29 @@ pub(super) fn from_diagnosis(
     path: &std::path::Path,
     text: &str,
 ) -> Result<(Option<f64>, Option<f64>)> {
-    let bad =
-        |why: &str| HostError::new(ErrorKind::Malformed, format!("{}: {why}", path.display()));
-    let j: serde_json::Value =
+    let bad = |why: &str| HostError::in_file(ErrorKind::Malformed, path, why);
+    let j: UnitType =
         serde_json::from_str(text).map_err(|e| bad(&format!("not a diagnosis JSON ({e})")))?;
-    let noise = j["noise_sigma_per_sample"].as_array().and_then(|v| {
-        let v: Vec<f64> = v.iter().filter_map(serde_json::Value::as_f64).collect();
+    let noise = j.noise_sigma_per_sample.and_then(|v| {
+        let v: Vec<f64> = v.into_iter().flatten().collect();
         (v.len() == 3 && v.iter().all(|x| x.is_finite() && *x > 0.0))
             .then(|| v.iter().copied().fold(0.0, f64::max))
     });
-    let tau = j["findings"].as_array().and_then(|f| {
-        f.iter()
-            .find(|x| x["effect"] == "thermal_lag")
-            .and_then(|x| x["parameters"].as_object())
-            .map(|p| {
-                p.iter()
-                    .filter(|(k, _)| k.starts_with("tau_") && k.ends_with("_s"))
-                    .filter_map(|(_, v)| v.as_f64())
-                    .filter(|t| t.is_finite() && *t >= 0.0)
-                    .fold(f64::NAN, f64::max)
-            })
-            .filter(|t| t.is_finite())
-    });
+    let tau = j
+        .findings
+        .iter()
+        .find(|f| f.effect == EffectId::ThermalLag)
+        .map(|f| {
+            // the lag's first pole, for all axes or per axis (the slowest)
+            f.parameters
+                .list
+                .iter()
+                .filter(|p| matches!(p.quantity, Quantity::Tau { pole: 1, .. }))
+                .map(|p| p.value)
+                .filter(|t| t.is_finite() && *t >= 0.0)
+                .fold(f64::NAN, f64::max)
+        })
+        .filter(|t| t.is_finite());
     Ok((tau, noise))
 }
 

@@ -200,11 +200,11 @@ pub(super) fn fit(
 /// with their 1-sigma, the blob. Returns the blob to write (as recorded).
 pub(super) fn fit_dynamic(
     run: Run<'_>,
-    d: &crate::diagnose::dynamic::DynamicFit<'_>,
+    d: &crate::fit::route::dynamic::DynamicFit<'_>,
     cal: &Calibration<f64>,
     blob: Vec<u8>,
 ) -> Result<Vec<u8>> {
-    let sigma = crate::diagnose::metrics::coefficient_sigma(&d.data, &d.flashed.fit, cal.t0_c);
+    let sigma = crate::model::metrics::coefficient_sigma(&d.data, &d.flashed.fit, cal.t0_c);
     let model = d.describe();
     let saved = run.save(Recorded::Fit, |r| {
         r.model = Some(model);

@@ -5,4 +5,5 @@ pub mod fields;
 pub mod output_unit;
 pub mod positions;
 pub mod recording;
+pub mod stops;
 pub mod table;

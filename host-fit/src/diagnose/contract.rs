@@ -5,10 +5,10 @@
 use crate::data::output_unit::OutputUnit;
 use crate::diagnose::findings::{Ambiguity, Finding};
 use crate::diagnose::location::Hotspot;
-use crate::diagnose::metrics::{dispersion, max_dg, normalized_rms, residual_rms};
 use crate::diagnose::quality::QualityNote;
 use crate::diagnose::search::Research;
 use crate::diagnose::Diagnosis;
+use crate::model::metrics::{dispersion, max_dg, normalized_rms, residual_rms};
 use firmware_core::model::AXES;
 use serde::Serialize;
 
@@ -365,13 +365,14 @@ impl Contract {
                 x.heldout_gain,
                 if x.reproduced { "reproduced on both halves" } else { "NOT reproduced on both halves" }
             ));
-            for (k, v) in &x.parameters {
-                let unit = x.units.get(k).map(String::as_str).unwrap_or("");
+            for (k, p) in x.parameters.by_name() {
+                let unit = x.parameters.unit_text(p);
                 // a parameter the search fixes (a threshold, an estimator's constant) has
                 // no uncertainty: said, not printed as NaN
-                let line = match x.uncertainties.get(k).filter(|u| u.is_finite()) {
-                    Some(u) => format!("    {k} = {v:.4e} +- {u:.1e} {unit}"),
-                    None => format!("    {k} = {v:.4e} {unit} (fixed, not fitted)"),
+                let line = if p.sigma.is_finite() {
+                    format!("    {k} = {:.4e} +- {:.1e} {unit}", p.value, p.sigma)
+                } else {
+                    format!("    {k} = {:.4e} {unit} (fixed, not fitted)", p.value)
                 };
                 s.push_str(line.trim_end());
                 s.push('\n');

@@ -2,19 +2,19 @@
 //! the axes where it matters, its parameters with uncertainties scaled by the dispersion,
 //! where it shows, and how much it improves held-out data; and the candidates the data
 //! cannot tell apart, with the measurement that would.
-use crate::diagnose::data::Data;
-use crate::diagnose::design::Spec;
-use crate::diagnose::effects::{EffectId, Extra};
-use crate::diagnose::fit::{Depth, Fit};
 use crate::diagnose::location::{locate, Grouping};
-use crate::diagnose::metrics::{contribution, dispersion, judge, max_dg, residual_rms, sigma};
-use crate::diagnose::params::{Param, Term};
+use crate::diagnose::parameters::{Parameter, Parameters, Quantity};
+use crate::model::data::Data;
+use crate::model::design::Spec;
+use crate::model::effects::{EffectId, Extra};
+use crate::model::metrics::{contribution, dispersion, judge, max_dg, residual_rms, sigma};
+use crate::model::params::{Param, Term};
+use crate::model::solve::{Depth, Fit};
 use firmware_core::model::AXES;
-use serde::Serialize;
-use std::collections::BTreeMap;
+use serde::{Deserialize, Serialize};
 
 /// A finding of the JSON contract.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct Finding {
     /// Catalogue id.
     pub effect: EffectId,
@@ -22,12 +22,11 @@ pub struct Finding {
     pub form: String,
     /// Axes where the effect matters (removing it worsens that axis significantly).
     pub axes: Vec<String>,
-    /// Parameters, from the final joint fit.
-    pub parameters: BTreeMap<String, f64>,
-    /// 1-sigma uncertainties, scaled by the final dispersion.
-    pub uncertainties: BTreeMap<String, f64>,
-    /// Each parameter's unit (`V` standing for the recording's output unit).
-    pub units: BTreeMap<String, String>,
+    /// Parameters from the final joint fit, with their 1-sigma scaled by the final
+    /// dispersion and their units (the contract's `parameters`, `uncertainties` and
+    /// `units`).
+    #[serde(flatten)]
+    pub parameters: Parameters,
     /// Quasi-BIC change of the final model against the final model without it.
     pub delta_bic: f64,
     /// Share of the chi-square above the floor (of the model without it) it explains.
@@ -44,7 +43,7 @@ pub struct Finding {
     /// Where it shows, in one sentence.
     pub evidence: String,
     /// The position, for fixture_error.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position: Option<String>,
 }
 
@@ -71,25 +70,39 @@ fn axis_gains(data: &Data, full: &Fit, reduced: &Fit, phi: f64) -> [f64; 3] {
 }
 
 /// The linear parameters of extra `e` and their scaled 1-sigma.
-fn linear_parameters(full: &Fit, e: usize, phi: f64) -> Vec<(String, f64, f64)> {
+fn linear_parameters(full: &Fit, e: usize, phi: f64) -> Vec<Parameter> {
     full.labels
         .iter()
         .enumerate()
         .filter(|(_, l)| l.extra() == Some(e))
-        .map(|(j, l)| {
-            let (v, s) = (full.x[j], sigma(full, j, phi));
-            if let Param::Effect {
-                term: Term::Asymmetry,
-                axis,
-                ..
-            } = *l
-            {
+        .filter_map(|(j, l)| {
+            let (value, sigma) = (full.x[j], sigma(full, j, phi));
+            Some(match *l {
                 // c_i = K_ii delta_i: reported as delta_i, relative
-                let kii = full.k_at.first().map(|k| k[axis][axis]).unwrap_or(1.0);
-                (format!("delta_{}", AXES[axis]), v / kii, s / kii.abs())
-            } else {
-                (l.to_string(), v, s)
-            }
+                Param::Effect {
+                    term: Term::Asymmetry,
+                    axis,
+                    ..
+                } => {
+                    let kii = full.k_at.first().map(|k| k[axis][axis]).unwrap_or(1.0);
+                    Parameter {
+                        quantity: Quantity::Delta { axis },
+                        value: value / kii,
+                        sigma: sigma / kii.abs(),
+                    }
+                }
+                Param::Effect { term, axis, .. } => Parameter {
+                    quantity: Quantity::Term { term, axis },
+                    value,
+                    sigma,
+                },
+                Param::FixtureAngle { n, .. } => Parameter {
+                    quantity: Quantity::Angle { n },
+                    value,
+                    sigma,
+                },
+                Param::K { .. } | Param::U0 { .. } => return None,
+            })
         })
         .collect()
 }
@@ -126,14 +139,20 @@ fn profile_sigma(data: &Data, full: &Fit, phi: f64, v: f64, make: &dyn Fn(f64) -
 }
 
 /// The structural parameters of a form, with their 1-sigma where a profile defines one.
-fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<(String, f64, f64)> {
+fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<Parameter> {
     let sigma = |v: f64, make: &dyn Fn(f64) -> Extra| {
         profile_sigma(data, full, phi, v, &|t| full.spec.replaced(e, make(t)))
     };
+    let p = |quantity: Quantity, value: f64, sigma: f64| Parameter {
+        quantity,
+        value,
+        sigma,
+    };
+    let tau = |pole: u8, axis: Option<usize>| Quantity::Tau { pole, axis };
     match full.spec.extras[e].clone() {
         Extra::Warmup { tau_s, restart } => {
-            vec![(
-                "tau_s".into(),
+            vec![p(
+                tau(1, None),
                 tau_s,
                 sigma(tau_s, &|t| Extra::Warmup { tau_s: t, restart }),
             )]
@@ -141,14 +160,14 @@ fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<(St
         Extra::Lag { taus } => {
             if taus.iter().all(|t| *t == taus[0]) {
                 let [t1, t2] = taus[0];
-                let mut v = vec![(
-                    "tau_s".into(),
+                let mut v = vec![p(
+                    tau(1, None),
                     t1,
                     sigma(t1, &|t| Extra::Lag { taus: [[t, t2]; 3] }),
                 )];
                 if t2 > 0.0 {
-                    v.push((
-                        "tau2_s".into(),
+                    v.push(p(
+                        tau(2, None),
                         t2,
                         sigma(t2, &|t| Extra::Lag { taus: [[t1, t]; 3] }),
                     ));
@@ -162,31 +181,27 @@ fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<(St
                             v[i][0] = t;
                             Extra::Lag { taus: v }
                         };
-                        (
-                            format!("tau_{}_s", AXES[i]),
-                            taus[i][0],
-                            sigma(taus[i][0], &make),
-                        )
+                        p(tau(1, Some(i)), taus[i][0], sigma(taus[i][0], &make))
                     })
                     .collect()
             }
         }
-        Extra::Rate { tau_s } => vec![("rate_tau_s".into(), tau_s, f64::NAN)],
+        Extra::Rate { tau_s } => vec![p(Quantity::RateTau, tau_s, f64::NAN)],
         Extra::Hysteresis {
             threshold_c,
             initial,
             ..
         } => vec![
-            ("threshold_c".into(), threshold_c, f64::NAN),
-            ("initial_direction".into(), initial, f64::NAN),
+            p(Quantity::Threshold, threshold_c, f64::NAN),
+            p(Quantity::InitialDirection, initial, f64::NAN),
         ],
-        Extra::Bend { knot_c } => vec![(
-            "knot_c".into(),
+        Extra::Bend { knot_c } => vec![p(
+            Quantity::Knot,
             knot_c,
             sigma(knot_c, &|k| Extra::Bend { knot_c: k }),
         )],
-        Extra::Curvature(b) => vec![("breakpoints".into(), b.len() as f64, 0.0)],
-        Extra::Fixture(_, Some(n)) => vec![("from_stop".into(), n as f64, f64::NAN)],
+        Extra::Curvature(b) => vec![p(Quantity::Breakpoints, b.len() as f64, 0.0)],
+        Extra::Fixture(_, Some(n)) => vec![p(Quantity::FromStop, n as f64, f64::NAN)],
         Extra::K2 | Extra::Asymmetry | Extra::Fixture(_, None) => Vec::new(),
     }
 }
@@ -214,27 +229,19 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
         return None;
     }
     let extra = &full.spec.extras[e];
-    let (mut parameters, mut uncertainties) = (BTreeMap::new(), BTreeMap::new());
-    for (k, v, s) in linear_parameters(full, e, phi)
-        .into_iter()
-        .chain(structural_parameters(data, full, e, phi))
-    {
-        parameters.insert(k.clone(), v);
-        uncertainties.insert(k, s);
-    }
+    let parameters = Parameters {
+        output_unit: data.rec.output_unit.to_string(),
+        list: linear_parameters(full, e, phi)
+            .into_iter()
+            .chain(structural_parameters(data, full, e, phi))
+            .collect(),
+    };
     let j = judge(data, reduced, full, e);
-    let ou = data.rec.output_unit.as_str();
-    let units = parameters
-        .keys()
-        .map(|k| (k.clone(), unit_of(k, ou)))
-        .collect();
     Some(Finding {
-        units,
         effect: extra.id(),
         form: extra.form(),
         axes,
         parameters,
-        uncertainties,
         delta_bic: -j.gain,
         share: j.share,
         heldout_gain: j.heldout_gain,
@@ -250,30 +257,10 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
     })
 }
 
-/// The unit of a finding's parameter, `ou` being the recording's output unit.
-fn unit_of(name: &str, ou: &str) -> String {
-    let prefix = name.split('_').next().unwrap_or("");
-    match prefix {
-        "r" => format!("{ou} per C/s"),
-        "h" | "d" => ou.to_string(),
-        "hk" => format!("{ou}/g"),
-        "k2" => format!("{ou}/g^2"),
-        "delta" => "relative".into(),
-        "bend" if name.starts_with("bend_u0") => format!("{ou}/C"),
-        "bend" => format!("{ou}/g/C"),
-        "angle1" | "angle2" => "rad".into(),
-        "tau" | "tau2" | "rate" => "s".into(),
-        "threshold" | "knot" => "C".into(),
-        "initial" => "+1 heated, -1 cooled".into(),
-        "breakpoints" => "count".into(),
-        _ => String::new(),
-    }
-}
-
 /// Whether extra `e` shows the same signature on both halves of the data (even and odd
 /// time chunks, each spanning the whole recording): on each half alone, the residual
 /// without the effect projects onto the effect's contribution with an amplitude within
-/// [`crate::diagnose::rules::Rules::reproduced_amplitude`] of the joint fit's, at least
+/// [`crate::model::rules::Rules::reproduced_amplitude`] of the joint fit's, at least
 /// `z_significant` sigmas from zero. The rest of the model is held at the joint fit (a
 /// half alone need not determine it).
 pub fn reproduced(data: &Data, full: &Fit, reduced: &Fit) -> bool {

@@ -1,7 +1,7 @@
 //! Where a residual (or an effect's contribution) stands out from the floor: grouped by
 //! position, temperature, time, temperature rate and heating/cooling direction, per axis.
-use crate::diagnose::data::Data;
-use crate::fit::temperature::temperature_clusters;
+use crate::model::basis::temperature_clusters;
+use crate::model::data::Data;
 use firmware_core::model::AXES;
 use serde::Serialize;
 
@@ -132,7 +132,7 @@ fn groups(data: &Data) -> Vec<Group> {
 }
 
 /// Every group where `z` (per observation and axis, floor units) has an RMS above
-/// `min_rms` and at least [`crate::diagnose::rules::Rules::located_share`] of the sum of
+/// `min_rms` and at least [`crate::model::rules::Rules::located_share`] of the sum of
 /// squares, worst first; `raw` gives the means in output units. (A group of two windows
 /// can be extreme and still not be where the mismatch is.)
 pub fn locate(data: &Data, z: &[[f64; 3]], raw: &[[f64; 3]], min_rms: f64) -> Vec<Hotspot> {

@@ -2,53 +2,41 @@
 //! physics left out (physics-catalogue.md) where the data support it, model it, show the
 //! fit improve on held-out data, and say plainly what stays unexplained.
 //!
-//! [`diagnose`] reads top-down: the error floor is measured inside the dwells at every
-//! time scale ([`floor`]); the windows are built once ([`data`]), every one weighted by
-//! the floor; the [`baseline`] and the catalogue's effects ([`effects`], their structural
-//! unknowns profiled by [`profile`]) are fitted in one weighted least squares over all
-//! three axes ([`fit`], its columns from [`design`]); the [`search`] adds an effect only
-//! when it passes every acceptance rule ([`rules`], judged by [`metrics`]) in the
-//! dispersion of the larger model, survives the backward check of the joint model, and
-//! explains the data where it acts. Findings ([`findings`]) take their parameters from
-//! the final joint fit; [`location`] says where a residual sits, [`quality`] what the
-//! data themselves show, [`firmware`] the model in the blob's form, [`contract`] the JSON
-//! contract; [`dynamic`] is `fit`'s dynamic route for sweeps (the temperature models
-//! jointly with the lag and rate the held-out blocks support, on these same data). With a logger at debug level (`HOSTFIT_DEBUG=1` for the command), every
-//! candidate's judgement is logged.
-pub mod baseline;
+//! [`diagnose`] reads top-down, on the [`crate::model`] engine: the error floor is
+//! measured inside the dwells at every time scale, the windows are built once and
+//! weighted by it ([`crate::model::weights`]); the baseline and the catalogue's effects
+//! (their structural unknowns profiled) are fitted in one weighted least squares over all
+//! three axes ([`crate::model::solve`]); the [`search`] adds an effect only when it
+//! passes every acceptance rule ([`crate::model::rules`], judged by
+//! [`crate::model::metrics`]) in the dispersion of the larger model, survives the backward
+//! check of the joint model, and explains the data where it acts. Findings ([`findings`])
+//! take their parameters from the final joint fit, typed with their units
+//! ([`parameters`]); [`location`] says where a residual sits, [`quality`] what the data
+//! themselves show, [`contract`] the JSON contract; the model the blob carries is
+//! [`crate::model::flashed`]'s. With a logger at debug level (`HOSTFIT_DEBUG=1` for the
+//! command), every candidate's judgement is logged.
 pub mod contract;
-pub mod data;
-pub mod design;
-pub mod dynamic;
-pub mod effects;
 pub mod findings;
-pub mod firmware;
-pub mod fit;
-pub mod floor;
 pub mod location;
-pub mod metrics;
-pub mod observations;
-pub mod params;
-pub mod profile;
+pub mod parameters;
 pub mod quality;
-pub mod regressors;
-pub mod rules;
 pub mod search;
 
-pub use effects::EffectId;
-pub use rules::Rules;
+pub use crate::model::effects::EffectId;
+pub use crate::model::rules::Rules;
 
 use crate::data::recording::Recording;
-use crate::error::{ErrorKind, HostError, Result};
-use crate::fit::temperature::{temperature_clusters, Basis};
-use data::Data;
-use design::Spec;
-use effects::Extra;
+use crate::error::Result;
+use crate::model::baseline;
+use crate::model::basis::temperature_clusters;
+use crate::model::data::Data;
+use crate::model::flashed::Flashed;
+use crate::model::floor::Floor;
+use crate::model::metrics;
+use crate::model::solve::Fit;
+use crate::model::weights::{weighed, Purpose, Weighed};
 use findings::{Ambiguity, Finding};
-use firmware::Flashed;
 use firmware_core::temperature::Calibration;
-use fit::{Depth, Fit};
-use floor::Floor;
 use location::{locate, Hotspot};
 use quality::QualityNote;
 
@@ -95,7 +83,7 @@ impl Diagnosis<'_> {
 
     /// The flashed model as a firmware calibration (see [`Flashed::calibration`]).
     pub fn calibration(&self, t0: f64) -> Result<Calibration<f64>> {
-        self.flashed.calibration(t0)
+        self.flashed.calibration(t0, None).map(|(cal, _)| cal)
     }
 
     /// The 1-sigma of the flashed model's 12 coefficients at temperature `t` (see
@@ -112,32 +100,14 @@ pub fn diagnose(rec: &Recording) -> Result<Diagnosis<'_>> {
 
 /// Run the diagnosis with `rules` (see the module doc for the steps).
 pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
-    let floor = floor::floor(rec, &rules);
-    let mut data = Data::new(rec, &floor, rules);
-    if data.obs.len() < rules.min_windows {
-        return Err(HostError::in_file(
-            ErrorKind::Insufficient,
-            &rec.path,
-            format!(
-                "{} static windows of known positions: too few to diagnose (need {}, e.g. 6 positions)",
-                data.obs.len(),
-                rules.min_windows
-            ),
-        ));
-    }
-    let measured = weigh(&mut data, &floor);
+    let Weighed {
+        data,
+        floor,
+        measured,
+    } = weighed(rec, rules, Purpose::Diagnosis)?;
     let temps: Vec<f64> = data.obs.iter().map(|o| o.temp_c).collect();
     let n_temps = temperature_clusters(&temps).len();
-    let (baseline, mut not_identifiable) = baseline::baseline(&data).ok_or_else(|| {
-        // the reason stated is the one that holds: the positions are counted, not
-        // inferred from the failed fit
-        let reason = if positions_determine(&data) {
-            "the baseline fit is singular although the positions present determine the per-axis offset and scale (each axis both along and across gravity): the outputs do not vary with the positions"
-        } else {
-            "the positions present do not determine even the per-axis offset and scale (need each axis both along and across gravity)"
-        };
-        HostError::in_file(ErrorKind::Insufficient, &rec.path, reason)
-    })?;
+    let (baseline, mut not_identifiable) = baseline::required(&data)?;
     let scope = scope(&data, measured, n_temps, &mut not_identifiable);
     let z = metrics::z(&data, &baseline);
     let hotspots = locate(&data, &z, &baseline.resid, rules.located_sigmas);
@@ -186,72 +156,6 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         not_identifiable,
         quality,
         data,
-    })
-}
-
-/// Weights from the floor, or (floor not measurable) from the scatter per axis that the
-/// most general static model leaves (the baseline with every static catalogue term the
-/// positions determine: what none of the candidates could explain is the floor).
-/// Whether the floor was measured.
-pub(crate) fn weigh(data: &mut Data, floor: &Floor) -> bool {
-    // a floor of zero (samples that repeat exactly, no grid found) weighs nothing
-    let measured = floor
-        .axes
-        .iter()
-        .all(|a| a.var_of_mean(1.0).is_some_and(|v| v > 0.0 && v.is_finite()));
-    if measured {
-        // a quantised axis below its step repeats one rounding error wherever the
-        // position reads the same level: its windows of one position are one piece of
-        // information, not many (else that error, fixed per position, looks like a
-        // fixture error)
-        let mut per_position = std::collections::HashMap::new();
-        for o in &data.obs {
-            *per_position.entry(o.position).or_insert(0usize) += 1;
-        }
-        data.w = data
-            .obs
-            .iter()
-            .flat_map(|o| {
-                let shared = per_position[&o.position] as f64;
-                (0..3).map(move |i| {
-                    let a = &floor.axes[i];
-                    let v = a.var_of_mean(o.n as f64).unwrap_or(1.0);
-                    1.0 / if a.quantum.is_some() { v * shared } else { v }
-                })
-            })
-            .collect();
-        return true;
-    }
-    data.w = vec![1.0; data.n_rows()];
-    if let Some((b, _)) = baseline::baseline(data) {
-        let general = [vec![Extra::K2, Extra::Asymmetry], vec![Extra::K2], vec![]]
-            .into_iter()
-            .find_map(|extras| {
-                let spec = Spec {
-                    extras,
-                    basis: Basis::Poly {
-                        order: baseline::max_order(data),
-                    },
-                    ..b.spec.clone()
-                };
-                data.fit(&spec, None, Depth::Profile)
-            })
-            .unwrap_or(b);
-        let per_axis: [f64; 3] = std::array::from_fn(|i| {
-            let ss: f64 = general.resid.iter().map(|r| r[i] * r[i]).sum();
-            let dof = data.obs.len().saturating_sub(general.k.div_ceil(3));
-            (ss / dof.max(1) as f64).max(1e-300)
-        });
-        data.w = (0..data.n_rows()).map(|r| 1.0 / per_axis[r % 3]).collect();
-    }
-    false
-}
-
-/// Whether the positions present hold each axis both along gravity (|f_i| > 1/2) and
-/// across it (|f_i| < 1/2): what the per-axis offset and scale need, whatever the noise.
-fn positions_determine(data: &Data) -> bool {
-    (0..3).all(|i| {
-        data.obs.iter().any(|o| o.a[i].abs() > 0.5) && data.obs.iter().any(|o| o.a[i].abs() < 0.5)
     })
 }
 

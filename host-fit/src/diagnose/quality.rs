@@ -2,10 +2,10 @@
 //! time-correlated noise, a temperature sensor that disagrees with the chamber, and what
 //! the recording's form (one sample per dwell, one temperature) leaves unanswerable.
 use crate::data::recording::Recording;
-use crate::diagnose::floor::Floor;
-use crate::diagnose::observations::DObs;
-use crate::diagnose::regressors::Events;
-use crate::diagnose::rules::Rules;
+use crate::model::floor::Floor;
+use crate::model::observations::DObs;
+use crate::model::regressors::Events;
+use crate::model::rules::Rules;
 use firmware_core::model::AXES;
 use serde::Serialize;
 

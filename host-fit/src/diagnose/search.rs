@@ -1,35 +1,42 @@
-//! The search for the physics the baseline leaves out, written as a solver's loop of
-//! named steps: [`Forward::propose`] every open catalogue effect in its best profiled form
-//! on top of the current model, [`Forward::rank`] them by the quasi-BIC each fit gains,
-//! [`Forward::judge`] the best ranked in full by the acceptance rules ([`Judgement`]),
-//! [`Forward::accept`] the first that passes (the rivals within the ambiguity margin are
-//! named as ambiguous), [`Forward::stop`] when none passes or none is left; then the
-//! [`backward`] check of the joint model, and [`keep_adequate`]: each effect must explain
-//! the data where it acts. Then the [`Forward::research`]: where the residual of the
-//! joint model still stands out (a position, an axis, a time span, ...), every candidate
-//! that explains a material share of what is left there is judged by the same rules, the
-//! share counted in that region instead of over the whole recording (a small effect
-//! beside a large one is diluted by the large one's imperfect fit elsewhere), and it
-//! must reproduce on both halves of the recording; an effect found joins the model, the
-//! backward and adequacy checks run again until neither drops one, and the search looks
-//! again. A hysteresis, a warm-up or a temperature curvature must also beat a linear
-//! drift in time in its place ([`beats_drift`]), when added and in the backward check.
+//! The search for the physics the baseline leaves out, written as a solver (as argmin
+//! writes one): [`Search::init`] makes the [`State`] from the baseline; [`Search::next`]
+//! runs one iteration and [`Search::terminate`] says, with a [`Termination`] reason,
+//! when none is left to run.
 //!
-//! Every rule is a field of [`crate::diagnose::rules::Rules`] (all scaled by the
+//! An iteration of the forward phase: every [`Proposer`] proposes its open candidates
+//! in their best profiled form on top of the current model (the [`Catalogue`]'s effects
+//! today; a library of discovered terms is one more proposer), [`Search::rank`] ranks
+//! them by the quasi-BIC each fit gains, [`Search::judge`] fits the best ranked in full
+//! and judges them by the acceptance rules ([`Judgement`]), [`Search::accept`] takes the
+//! first that passes (the rivals within the ambiguity margin are named as ambiguous);
+//! when none passes or none is left, the [`backward`] check of the joint model and
+//! [`keep_adequate`] (each effect must explain the data where it acts) run until neither
+//! drops one, and the search turns to the re-search. An iteration of the re-search
+//! ([`Search::look`]): where the residual of the joint model still stands out (a
+//! position, an axis, a time span, ...), every candidate that explains a material share
+//! of what is left there is judged by the same rules, the share counted in that region
+//! instead of over the whole recording (a small effect beside a large one is diluted by
+//! the large one's imperfect fit elsewhere), and it must reproduce on both halves of the
+//! recording; an effect found joins the model, the checks run again, and the forward
+//! phase resumes. A hysteresis, a warm-up or a temperature curvature must also beat a
+//! linear drift in time in its place ([`beats_drift`]), when added and in the backward
+//! check.
+//!
+//! Every rule is a field of [`crate::model::rules::Rules`] (all scaled by the
 //! dispersion phi of the larger model, so a model still far from the data cannot buy
 //! findings with small improvements): the quasi-BIC drops by more than `q_margin`; the
 //! effect explains at least `material_share` of the chi-square above the floor; one of
 //! its parameters is at least `z_significant` scaled sigmas from zero; the held-out time
 //! chunks improve by more than `heldout_gain` per parameter (in floor units); its
 //! profiled structure (time constant, bend) is determined by the data.
-use crate::diagnose::baseline::reorder;
-use crate::diagnose::data::Data;
-use crate::diagnose::effects::{EffectId, Extra};
 use crate::diagnose::findings::reproduced;
-use crate::diagnose::fit::{Depth, Fit};
 use crate::diagnose::location::{locate, rows_of, Hotspot};
-use crate::diagnose::metrics::{adequate, dispersion, judge, normalized_rms, qbic, z, Judgement};
-use crate::diagnose::profile;
+use crate::model::baseline::reorder;
+use crate::model::data::Data;
+use crate::model::effects::{EffectId, Extra};
+use crate::model::metrics::{adequate, dispersion, judge, normalized_rms, qbic, z, Judgement};
+use crate::model::profile;
+use crate::model::solve::{Depth, Fit};
 use serde::Serialize;
 
 /// What the data can identify.
@@ -53,6 +60,8 @@ pub struct Outcome {
     pub ambiguous: Vec<Vec<EffectId>>,
     /// Every re-search, in order: where it looked and what it found.
     pub research: Vec<Research>,
+    /// Why it ended.
+    pub ended: Termination,
 }
 
 /// One re-search after the effects accepted so far: the located region it looked at,
@@ -63,73 +72,112 @@ pub struct Research {
     /// first; the one the effect found explains, when one was found).
     pub region: Vec<Hotspot>,
     /// The effects proposed there: each explains at least
-    /// [`crate::diagnose::rules::Rules::material_share`] of the excess in a located group.
+    /// [`crate::model::rules::Rules::material_share`] of the excess in a located group.
     pub tried: Vec<EffectId>,
     /// The effect that passed every acceptance rule and stayed in the joint model; None:
     /// nothing passed.
     pub found: Option<EffectId>,
 }
 
+/// Why the search ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Termination {
+    /// Every candidate is in the model at its most, or named in an ambiguity: nothing
+    /// is left to propose.
+    CandidatesUsedUp,
+    /// The re-searches allowed ([`crate::model::rules::Rules::research_rounds`]) are
+    /// spent.
+    ResearchRoundsSpent,
+    /// The joint model's residual is at the floor: nothing is left to explain.
+    AtFloor,
+    /// The residual is above the floor but located in no group: no region to look at.
+    NotLocated,
+    /// Where the residual is located, no candidate passed the rules.
+    NothingPassed,
+}
+
 /// Search from `baseline` (see the module doc).
 pub fn run(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
-    let mut s = Forward {
+    let search = Search {
         data,
         scope,
-        current: baseline.clone(),
-        used: Vec::new(),
-        ambiguous: Vec::new(),
+        proposers: &[&Catalogue],
     };
-    let mut research = Vec::new();
-    // effects a re-search found that the checks then dropped: not proposed there again
-    let mut dropped: Vec<EffectId> = Vec::new();
-    // the effects a re-search found, with the located rows they were judged on: the
-    // backward check judges them there again
-    let mut regions: Vec<(Extra, Vec<usize>)> = Vec::new();
-    loop {
-        s.forward();
-        s.current = checked(data, s.current.clone(), &regions);
-        if research.len() >= data.rules.research_rounds || s.stop() {
-            break;
+    let mut state = search.init(baseline);
+    let ended = loop {
+        if let Some(reason) = search.terminate(&state) {
+            break reason;
         }
-        let Some((mut r, step)) = s.research(&dropped) else {
-            break;
-        };
-        let Some((step, rows)) = step else {
-            research.push(r);
-            break;
-        };
-        let id = step.id;
-        let Some(extra) = step.fit.spec.extras.last().cloned() else {
-            research.push(r);
-            break;
-        };
-        regions.push((extra.clone(), rows));
-        s.accept(step);
-        s.current = checked(data, s.current.clone(), &regions);
-        if !s.current.spec.extras.contains(&extra) {
-            log::debug!("  re-search: {id:?} dropped by the checks");
-            dropped.push(id);
-            r.found = None;
-        }
-        research.push(r);
-    }
+        state = search.next(state);
+    };
+    log::debug!("  search ended: {ended:?}");
     Outcome {
-        joint: s.current,
-        ambiguous: s.ambiguous,
-        research,
+        joint: state.current,
+        ambiguous: state.ambiguous,
+        research: state.research,
+        ended,
     }
 }
 
-/// The forward search's state between rounds.
-struct Forward<'s, 'a> {
+/// A source of candidate extensions of the current model.
+pub trait Proposer {
+    /// Every open candidate's best form on top of the state's current model, fitted for
+    /// profiling (no held-out chunks): a fit whose last extra is the candidate.
+    fn propose(&self, search: &Search, state: &State) -> Vec<Fit>;
+}
+
+/// The catalogue's effects (physics-catalogue.md), each in its forms profiled.
+pub struct Catalogue;
+
+/// The search: what it works on and where its candidates come from.
+pub struct Search<'s, 'a> {
     data: &'s Data<'a>,
     scope: &'s Scope,
+    proposers: &'s [&'s dyn Proposer],
+}
+
+/// Which half of an iteration comes next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    /// Rounds of propose, rank, judge, accept over the whole recording.
+    Forward,
+    /// A look where the joint model's residual is located.
+    Research,
+}
+
+/// An effect a re-search found, with the located rows it was judged on: the backward
+/// check judges it there again.
+#[derive(Debug, Clone)]
+struct Region {
+    extra: Extra,
+    rows: Vec<usize>,
+}
+
+/// The search's state between iterations.
+pub struct State {
     /// The model so far.
     current: Fit,
     /// Effects no longer proposed: at their most, or named in an ambiguity.
     used: Vec<EffectId>,
     /// The ambiguities met.
     ambiguous: Vec<Vec<EffectId>>,
+    /// The re-searches so far.
+    research: Vec<Research>,
+    /// Effects a re-search found that the checks then dropped: not proposed there again.
+    dropped: Vec<EffectId>,
+    /// The effects the re-searches found, where.
+    regions: Vec<Region>,
+    /// What the next iteration does.
+    phase: Phase,
+    /// Set when an iteration ends the search.
+    ended: Option<Termination>,
+}
+
+impl State {
+    /// The model so far.
+    pub fn current(&self) -> &Fit {
+        &self.current
+    }
 }
 
 /// A proposal with the quasi-BIC it gains in its own dispersion.
@@ -139,9 +187,6 @@ struct Ranked {
     fit: Fit,
 }
 
-/// A re-search's step and the located rows it was judged on.
-type Relocated = (Step, Vec<usize>);
-
 /// One round's decision: the effect accepted (fitted in full) and its rivals.
 struct Step {
     id: EffectId,
@@ -149,58 +194,173 @@ struct Step {
     rivals: Vec<EffectId>,
 }
 
-impl Forward<'_, '_> {
-    /// Rounds of propose, rank, judge, accept until none passes or none is left.
-    fn forward(&mut self) {
-        loop {
-            let proposals = self.propose();
-            let ranked = self.rank(proposals);
-            let Some(step) = self.judge(ranked) else {
-                break;
-            };
-            self.accept(step);
-            if self.stop() {
-                break;
-            }
+/// What a look where the residual is located saw.
+enum Look {
+    /// The residual is at the floor.
+    AtFloor,
+    /// It is located nowhere.
+    NotLocated,
+    /// The region looked at; nothing passed there.
+    Nothing(Research),
+    /// Something passed there.
+    Found(Box<Found>),
+}
+
+/// A re-search's find: the region, and the step of the first candidate that passed
+/// there, judged on `rows`.
+struct Found {
+    research: Research,
+    step: Step,
+    rows: Vec<usize>,
+}
+
+impl<'a> Search<'_, 'a> {
+    /// The data searched.
+    pub fn data(&self) -> &Data<'a> {
+        self.data
+    }
+
+    /// What the data can identify.
+    pub fn scope(&self) -> &Scope {
+        self.scope
+    }
+
+    /// The state at the baseline, in the forward phase.
+    pub fn init(&self, baseline: &Fit) -> State {
+        State {
+            current: baseline.clone(),
+            used: Vec::new(),
+            ambiguous: Vec::new(),
+            research: Vec::new(),
+            dropped: Vec::new(),
+            regions: Vec::new(),
+            phase: Phase::Forward,
+            ended: None,
         }
     }
 
+    /// Why the search is over, when it is: an iteration ended it, or the forward phase
+    /// has ended (the checks run) with every candidate used up or every re-search spent.
+    pub fn terminate(&self, state: &State) -> Option<Termination> {
+        if state.ended.is_some() {
+            return state.ended;
+        }
+        if state.phase == Phase::Research {
+            if state.research.len() >= self.data.rules.research_rounds {
+                return Some(Termination::ResearchRoundsSpent);
+            }
+            if self.used_up(state) {
+                return Some(Termination::CandidatesUsedUp);
+            }
+        }
+        None
+    }
+
+    /// One iteration (see the module doc): a forward round (propose, fit, judge, accept;
+    /// when none passes or none is left, the backward and adequacy checks), or a look
+    /// where the residual is located (its effect accepted and checked).
+    pub fn next(&self, mut state: State) -> State {
+        match state.phase {
+            Phase::Forward => {
+                let ranked = self.rank(&state, self.propose(&state));
+                match self.judge(&state, ranked) {
+                    Some(step) => {
+                        self.accept(&mut state, step);
+                        if self.used_up(&state) {
+                            self.end_forward(&mut state);
+                        }
+                    }
+                    None => self.end_forward(&mut state),
+                }
+            }
+            Phase::Research => match self.look(&state) {
+                Look::AtFloor => state.ended = Some(Termination::AtFloor),
+                Look::NotLocated => state.ended = Some(Termination::NotLocated),
+                Look::Nothing(r) => {
+                    state.research.push(r);
+                    state.ended = Some(Termination::NothingPassed);
+                }
+                Look::Found(found) => {
+                    let Found {
+                        mut research,
+                        step,
+                        rows,
+                    } = *found;
+                    let id = step.id;
+                    let Some(extra) = step.fit.spec.extras.last().cloned() else {
+                        state.research.push(research);
+                        state.ended = Some(Termination::NothingPassed);
+                        return state;
+                    };
+                    state.regions.push(Region {
+                        extra: extra.clone(),
+                        rows,
+                    });
+                    self.accept(&mut state, step);
+                    state.current = checked(self.data, state.current, &state.regions);
+                    if !state.current.spec.extras.contains(&extra) {
+                        log::debug!("  re-search: {id:?} dropped by the checks");
+                        state.dropped.push(id);
+                        research.found = None;
+                    }
+                    state.research.push(research);
+                    state.phase = Phase::Forward;
+                }
+            },
+        }
+        state
+    }
+
+    /// The forward phase ends: the backward and adequacy checks, then the re-search.
+    fn end_forward(&self, state: &mut State) {
+        state.current = checked(self.data, state.current.clone(), &state.regions);
+        state.phase = Phase::Research;
+    }
+
+    /// Every proposer's proposals.
+    fn propose(&self, state: &State) -> Vec<Fit> {
+        self.proposers
+            .iter()
+            .flat_map(|p| p.propose(self, state))
+            .collect()
+    }
+
     /// Look again where the current model's residual is located: for each of the worst
-    /// [`crate::diagnose::rules::Rules::research_groups`] located groups, the ranked
-    /// proposals (effects not in `dropped`) that explain a material share of the excess
+    /// [`crate::model::rules::Rules::research_groups`] located groups, the ranked
+    /// proposals (effects not dropped) that explain a material share of the excess
     /// there are judged in full by the acceptance rules, the share counted in that
-    /// group. None when the residual is at the floor or nowhere located; else what was
-    /// looked at, and the step of the first that passed.
-    fn research(&self, dropped: &[EffectId]) -> Option<(Research, Option<Relocated>)> {
+    /// group.
+    fn look(&self, state: &State) -> Look {
         let data = self.data;
         let rules = &data.rules;
-        if normalized_rms(data, &self.current) <= rules.at_floor_rms {
-            return None;
+        let current = &state.current;
+        if normalized_rms(data, current) <= rules.at_floor_rms {
+            return Look::AtFloor;
         }
-        let zs = z(data, &self.current);
-        let spots: Vec<Hotspot> = locate(data, &zs, &self.current.resid, rules.located_sigmas)
+        let zs = z(data, current);
+        let spots: Vec<Hotspot> = locate(data, &zs, &current.resid, rules.located_sigmas)
             .into_iter()
             .take(rules.research_groups)
             .collect();
         if spots.is_empty() {
-            return None;
+            return Look::NotLocated;
         }
         let ranked: Vec<Ranked> = self
-            .rank(self.propose())
+            .rank(state, self.propose(state))
             .into_iter()
-            .filter(|r| !dropped.contains(&r.id))
+            .filter(|r| !state.dropped.contains(&r.id))
             .collect();
         let mut tried: Vec<EffectId> = Vec::new();
         for h in &spots {
             let rows = rows_of(data, h);
             for r in &ranked {
-                if regional_share(data, &self.current, &r.fit, &rows) < rules.material_share {
+                if regional_share(data, current, &r.fit, &rows) < rules.material_share {
                     continue;
                 }
                 if !tried.contains(&r.id) {
                     tried.push(r.id);
                 }
-                if let Some(fit) = self.judged_where(&r.fit, Some(&rows)) {
+                if let Some(fit) = self.judged_where(current, &r.fit, Some(&rows)) {
                     log::debug!(
                         "  re-search at {} {} {}: {:?}",
                         h.group,
@@ -218,38 +378,137 @@ impl Forward<'_, '_> {
                         fit,
                         rivals: Vec::new(),
                     };
-                    return Some((research, Some((step, rows))));
+                    return Look::Found(Box::new(Found {
+                        research,
+                        step,
+                        rows,
+                    }));
                 }
             }
         }
-        let research = Research {
+        Look::Nothing(Research {
             region: spots,
             tried,
             found: None,
-        };
-        Some((research, None))
+        })
     }
 
-    /// Whether effect `id` may still be proposed.
-    fn open(&self, id: EffectId) -> bool {
-        let count = self
+    /// Whether effect `id` may still be proposed in `state`.
+    pub fn open(&self, state: &State, id: EffectId) -> bool {
+        let count = state
             .current
             .spec
             .extras
             .iter()
             .filter(|e| e.id() == id)
             .count();
-        !self.used.contains(&id) && count < id.max_count()
+        !state.used.contains(&id) && count < id.max_count()
     }
 
+    /// The proposals that gain more than the margin, each in its own dispersion, best
+    /// first.
+    fn rank(&self, state: &State, proposals: Vec<Fit>) -> Vec<Ranked> {
+        let data = self.data;
+        let mut ranked: Vec<Ranked> = proposals
+            .into_iter()
+            .filter_map(|fit| {
+                let phi = dispersion(data, &fit);
+                let id = fit.spec.extras.last()?.id();
+                let gain = qbic(data, &state.current, phi) - qbic(data, &fit, phi);
+                Some(Ranked { gain, id, fit })
+            })
+            .filter(|r| r.gain > data.rules.q_margin)
+            .collect();
+        ranked.sort_by(|a, b| b.gain.total_cmp(&a.gain));
+        ranked
+    }
+
+    /// The best ranked proposal that passes every acceptance rule, fitted in full, and
+    /// the others of the ranking that gain within the ambiguity margin of it.
+    fn judge(&self, state: &State, ranked: Vec<Ranked>) -> Option<Step> {
+        let rules = &self.data.rules;
+        let mut accepted: Option<(f64, Step)> = None;
+        for r in ranked.into_iter().take(rules.judged_per_round) {
+            match &mut accepted {
+                Some((best_gain, best)) => {
+                    if r.id != best.id
+                        && *best_gain - r.gain < rules.ambiguity_margin
+                        && !best.rivals.contains(&r.id)
+                    {
+                        best.rivals.push(r.id);
+                    }
+                }
+                None => {
+                    if let Some(fit) = self.judged_where(&state.current, &r.fit, None) {
+                        let step = Step {
+                            id: r.id,
+                            fit,
+                            rivals: Vec::new(),
+                        };
+                        accepted = Some((r.gain, step));
+                    }
+                }
+            }
+        }
+        accepted.map(|(_, s)| s)
+    }
+
+    /// The proposal `f` fitted in full, when it passes every acceptance rule against
+    /// `current`; its share of the excess counted on `rows` (a located region) when
+    /// given: an effect found there must then also show on both halves of the
+    /// recording, else the leftovers of a larger effect's imperfect form pass for a small
+    /// one.
+    fn judged_where(&self, current: &Fit, f: &Fit, rows: Option<&[usize]>) -> Option<Fit> {
+        let data = self.data;
+        let full = data.fit(&f.spec, Some(current), Depth::Full)?;
+        let e = full.spec.extras.len().checked_sub(1)?;
+        let mut j = judge(data, current, &full, e);
+        if let Some(rows) = rows {
+            j.share = regional_share(data, current, &full, rows);
+        }
+        let ok = j.accepted(data)
+            && beats_drift(data, current, &full, e)
+            && rows.is_none_or(|_| reproduced(data, &full, current));
+        log::debug!(
+            "  {}{:?}: {j:?} accepted {ok}",
+            if rows.is_some() { "re-search " } else { "" },
+            full.spec.extras.last()
+        );
+        ok.then_some(full)
+    }
+
+    /// The step's effect joins the model (its polynomial order chosen again); its rivals
+    /// are named as ambiguous and no longer proposed, nor is an effect at its most.
+    fn accept(&self, state: &mut State, step: Step) {
+        let Step { id, fit, rivals } = step;
+        if !rivals.is_empty() {
+            let mut group = vec![id];
+            group.extend(rivals.iter().copied());
+            state.used.extend(rivals);
+            state.ambiguous.push(group);
+        }
+        if fit.spec.extras.iter().filter(|e| e.id() == id).count() >= id.max_count() {
+            state.used.push(id);
+        }
+        state.current = reorder(self.data, &fit, self.scope.max_order);
+    }
+
+    /// Every catalogue effect has been used up: nothing is left to propose.
+    fn used_up(&self, state: &State) -> bool {
+        state.used.len() >= EffectId::ALL.len()
+    }
+}
+
+impl Proposer for Catalogue {
     /// Every open effect's best form on top of the current model, for profiling (no
     /// held-out chunks).
-    fn propose(&self) -> Vec<Fit> {
-        let (data, scope, current) = (self.data, self.scope, &self.current);
+    fn propose(&self, search: &Search, state: &State) -> Vec<Fit> {
+        let (data, scope, current) = (search.data, search.scope, &state.current);
+        let open = |id: EffectId| search.open(state, id);
         let spec = &current.spec;
         let mut out = Vec::new();
         let single = |e: Extra| data.fit(&spec.with(e), Some(current), Depth::Profile);
-        if scope.temperature && self.open(EffectId::TempCurvature) {
+        if scope.temperature && open(EffectId::TempCurvature) {
             let broad = !spec.extras.iter().any(|e| matches!(e, Extra::Curvature(_)));
             out.extend(choose_form(
                 data,
@@ -257,24 +516,24 @@ impl Forward<'_, '_> {
                 profile::curvature(data, spec, current, broad),
             ));
         }
-        if scope.dynamics && self.open(EffectId::ThermalLag) {
+        if scope.dynamics && open(EffectId::ThermalLag) {
             out.extend(choose_form(
                 data,
                 current,
                 profile::lag(data, spec, current),
             ));
         }
-        if scope.dynamics && self.open(EffectId::TempRate) {
+        if scope.dynamics && open(EffectId::TempRate) {
             out.extend(profile::rate(data, spec, current));
         }
-        if scope.dynamics && scope.reversals && self.open(EffectId::Hysteresis) {
+        if scope.dynamics && scope.reversals && open(EffectId::Hysteresis) {
             out.extend(choose_form(
                 data,
                 current,
                 profile::hysteresis(data, spec, current),
             ));
         }
-        if scope.dynamics && self.open(EffectId::WarmupDrift) {
+        if scope.dynamics && open(EffectId::WarmupDrift) {
             out.extend(choose_form(
                 data,
                 current,
@@ -282,11 +541,11 @@ impl Forward<'_, '_> {
             ));
         }
         for e in [Extra::K2, Extra::Asymmetry] {
-            if self.open(e.id()) {
+            if open(e.id()) {
                 out.extend(single(e));
             }
         }
-        if self.open(EffectId::FixtureError) {
+        if open(EffectId::FixtureError) {
             let mut positions: Vec<usize> = data.obs.iter().map(|o| o.position).collect();
             positions.sort_unstable();
             positions.dedup();
@@ -321,104 +580,6 @@ impl Forward<'_, '_> {
         }
         out
     }
-
-    /// The proposals that gain more than the margin, each in its own dispersion, best
-    /// first.
-    fn rank(&self, proposals: Vec<Fit>) -> Vec<Ranked> {
-        let data = self.data;
-        let mut ranked: Vec<Ranked> = proposals
-            .into_iter()
-            .filter_map(|fit| {
-                let phi = dispersion(data, &fit);
-                let id = fit.spec.extras.last()?.id();
-                let gain = qbic(data, &self.current, phi) - qbic(data, &fit, phi);
-                Some(Ranked { gain, id, fit })
-            })
-            .filter(|r| r.gain > data.rules.q_margin)
-            .collect();
-        ranked.sort_by(|a, b| b.gain.total_cmp(&a.gain));
-        ranked
-    }
-
-    /// The best ranked proposal that passes every acceptance rule, fitted in full, and
-    /// the others of the ranking that gain within the ambiguity margin of it.
-    fn judge(&self, ranked: Vec<Ranked>) -> Option<Step> {
-        let rules = &self.data.rules;
-        let mut accepted: Option<(f64, Step)> = None;
-        for r in ranked.into_iter().take(rules.judged_per_round) {
-            match &mut accepted {
-                Some((best_gain, best)) => {
-                    if r.id != best.id
-                        && *best_gain - r.gain < rules.ambiguity_margin
-                        && !best.rivals.contains(&r.id)
-                    {
-                        best.rivals.push(r.id);
-                    }
-                }
-                None => {
-                    if let Some(fit) = self.judged(&r.fit) {
-                        let step = Step {
-                            id: r.id,
-                            fit,
-                            rivals: Vec::new(),
-                        };
-                        accepted = Some((r.gain, step));
-                    }
-                }
-            }
-        }
-        accepted.map(|(_, s)| s)
-    }
-
-    /// The proposal `f` fitted in full, when it passes every acceptance rule against the
-    /// current model.
-    fn judged(&self, f: &Fit) -> Option<Fit> {
-        self.judged_where(f, None)
-    }
-
-    /// [`Forward::judged`], its share of the excess counted on `rows` (a located region)
-    /// when given: an effect found there must then also show on both halves of the
-    /// recording, else the leftovers of a larger effect's imperfect form pass for a small
-    /// one.
-    fn judged_where(&self, f: &Fit, rows: Option<&[usize]>) -> Option<Fit> {
-        let data = self.data;
-        let full = data.fit(&f.spec, Some(&self.current), Depth::Full)?;
-        let e = full.spec.extras.len().checked_sub(1)?;
-        let mut j = judge(data, &self.current, &full, e);
-        if let Some(rows) = rows {
-            j.share = regional_share(data, &self.current, &full, rows);
-        }
-        let ok = j.accepted(data)
-            && beats_drift(data, &self.current, &full, e)
-            && rows.is_none_or(|_| reproduced(data, &full, &self.current));
-        log::debug!(
-            "  {}{:?}: {j:?} accepted {ok}",
-            if rows.is_some() { "re-search " } else { "" },
-            full.spec.extras.last()
-        );
-        ok.then_some(full)
-    }
-
-    /// The step's effect joins the model (its polynomial order chosen again); its rivals
-    /// are named as ambiguous and no longer proposed, nor is an effect at its most.
-    fn accept(&mut self, step: Step) {
-        let Step { id, fit, rivals } = step;
-        if !rivals.is_empty() {
-            let mut group = vec![id];
-            group.extend(rivals.iter().copied());
-            self.used.extend(rivals);
-            self.ambiguous.push(group);
-        }
-        if fit.spec.extras.iter().filter(|e| e.id() == id).count() >= id.max_count() {
-            self.used.push(id);
-        }
-        self.current = reorder(self.data, &fit, self.scope.max_order);
-    }
-
-    /// Every effect has been used up.
-    fn stop(&self) -> bool {
-        self.used.len() >= EffectId::ALL.len()
-    }
 }
 
 /// The share of the excess over the floor on `rows` (residual rows, floor-weighted) that
@@ -438,7 +599,7 @@ fn regional_share(data: &Data, smaller: &Fit, larger: &Fit, rows: &[usize]) -> f
 /// pass for a trend in time (a hysteresis, a warm-up, a temperature curvature), explains
 /// the data better than a linear drift in time of the same coefficients would in its
 /// place: its quasi-BIC is lower than the drift's by more than
-/// [`crate::diagnose::rules::Rules::q_margin`], in its own dispersion. A slow disturbance
+/// [`crate::model::rules::Rules::q_margin`], in its own dispersion. A slow disturbance
 /// with no temperature reversal and no power-on behind it (bias or scale ageing, part of
 /// a slow cycle) is fitted by a direction switch, a long decay or a bend about as well as
 /// by the trend itself on a single pass through the temperatures; the effect must show
@@ -514,7 +675,7 @@ pub fn without(data: &Data, f: &Fit, e: usize) -> Option<Fit> {
 /// hysteresis, a warm-up or a curvature also against a linear drift in its place, see
 /// [`beats_drift`]). An effect a re-search found (in `regions`, with its located rows)
 /// has its share counted there, as when it was accepted.
-pub fn backward(data: &Data, mut current: Fit, regions: &[(Extra, Vec<usize>)]) -> Fit {
+fn backward(data: &Data, mut current: Fit, regions: &[Region]) -> Fit {
     loop {
         let mut weakest: Option<(Judgement, Fit)> = None;
         for e in 0..current.spec.extras.len() {
@@ -522,8 +683,8 @@ pub fn backward(data: &Data, mut current: Fit, regions: &[(Extra, Vec<usize>)]) 
                 continue;
             };
             let mut j = judge(data, &reduced, &current, e);
-            if let Some((_, rows)) = regions.iter().find(|(x, _)| *x == current.spec.extras[e]) {
-                j.share = regional_share(data, &reduced, &current, rows);
+            if let Some(r) = regions.iter().find(|r| r.extra == current.spec.extras[e]) {
+                j.share = regional_share(data, &reduced, &current, &r.rows);
             }
             let kept = j.accepted(data) && beats_drift(data, &reduced, &current, e);
             if !kept && weakest.as_ref().is_none_or(|(w, _)| j.gain < w.gain) {
@@ -539,7 +700,7 @@ pub fn backward(data: &Data, mut current: Fit, regions: &[(Extra, Vec<usize>)]) 
 
 /// The backward check and the adequacy check, again until neither drops an effect: an
 /// effect dropped as inadequate changes what the others are judged against.
-fn checked(data: &Data, mut current: Fit, regions: &[(Extra, Vec<usize>)]) -> Fit {
+fn checked(data: &Data, mut current: Fit, regions: &[Region]) -> Fit {
     loop {
         let n = current.spec.extras.len();
         current = keep_adequate(data, backward(data, current, regions));

@@ -2,7 +2,7 @@
 //! that has no static dwell at one, named with the stop, so that a lost dwell is said
 //! (every command that fits warns) instead of silently thinning the data there.
 use crate::data::recording::Recording;
-use crate::fit::identify::stops;
+use crate::data::stops::stops;
 use std::collections::BTreeSet;
 
 /// A position missing at stops.

@@ -1,7 +1,8 @@
 //! A fitted temperature model described in the paper's terms: the coefficients at T0,
 //! then per interval (pwl) the slopes, or per coefficient the polynomial terms; K terms
 //! absolute or as the paper's relative beta/gamma, offsets always absolute (alpha).
-use crate::fit::temperature::{Basis, ModelFit};
+use crate::fit::temperature::ModelFit;
+use crate::model::basis::Basis;
 use firmware_core::model::COEFF_NAMES;
 use serde::Serialize;
 use std::collections::BTreeMap;

@@ -9,6 +9,7 @@
 //! model, and a rest through a ramp would outweigh the stops with its samples; they are
 //! left out of the static fit, and `--route joint` takes them in on request.
 use crate::data::recording::{Recording, MAX_DWELL_DRIFT_C};
+use crate::data::stops::WINDOW_SPAN_C;
 use crate::fit::identify::{observations, Obs};
 use serde::Serialize;
 
@@ -16,12 +17,6 @@ use serde::Serialize;
 /// moves slower than this, C/min. The production twin's stops settle at 0.02-0.1 C/min
 /// and ramp at 1 C/min; a unit warming by 1 C an hour moves at 0.017 C/min.
 pub const MAX_RATE_C_PER_MIN: f64 = 0.05;
-
-/// A window of a dwell spans at most this much temperature: small enough that every
-/// coefficient's temperature dependence is linear across it, so the window's mean belongs
-/// to its mean temperature (on a 1 C/min ramp, 15 s of data). The static fits and the
-/// diagnosis cut the same windows.
-pub const WINDOW_SPAN_C: f64 = 0.25;
 
 /// What the rule left out.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]

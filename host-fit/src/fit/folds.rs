@@ -11,8 +11,9 @@
 //! out (it always trains), and the selection says which. Every candidate is then scored
 //! on the same held-out dwells.
 use crate::fit::identify::Obs;
-use crate::fit::lsq::Normal;
-use crate::fit::temperature::{check_coverage, design_row, kept_columns, Basis, ModelFit, Setting};
+use crate::fit::temperature::{check_coverage, design_row, kept_columns, ModelFit, Setting};
+use crate::model::basis::Basis;
+use crate::model::lsq::Normal;
 
 /// Which fold holds out each dwell; None: never held out.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,11 +1,13 @@
 //! The fit layer: from a recording's dwells to the 12 coefficients and their temperature
-//! models, with one least-squares solver.
+//! models (on the `model` engine's solver and bases), the route a recording is fitted on
+//! ([`route`]: detection, the dynamic fit, the choice, and the one function that turns a
+//! route's fit into the firmware's calibration), and the predicted compensation error.
+pub mod cache;
 pub mod coverage;
 pub mod describe;
 pub mod equilibrium;
 pub mod folds;
 pub mod identify;
-pub mod lsq;
 pub mod noise;
 pub mod orientation;
 pub mod pipeline;

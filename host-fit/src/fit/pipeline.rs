@@ -6,16 +6,16 @@
 //! first (`fit::orientation`).
 use crate::data::positions::Role;
 use crate::data::recording::Recording;
+use crate::data::stops::{stops, WINDOW_SPAN_C};
 use crate::data::table::TableRow;
 use crate::error::{ErrorKind, HostError, Result};
-use crate::fit::equilibrium::{static_observations, Excluded, WINDOW_SPAN_C};
-use crate::fit::identify::{identify_stop, observations, stops, Obs, StopCoeffs};
+use crate::fit::equilibrium::{static_observations, Excluded};
+use crate::fit::identify::{identify_stop, observations, Obs, StopCoeffs};
 use crate::fit::noise::{noise, Noise};
 use crate::fit::orientation::{estimate_with, has_unknown, provisional_basis, Orientation};
 use crate::fit::select::{choose_among, Selection};
-use crate::fit::temperature::{
-    fit_joint, fit_table, temperature_clusters, Basis, Frame, ModelFit, Setting,
-};
+use crate::fit::temperature::{fit_joint, fit_table, Frame, ModelFit, Setting};
+use crate::model::basis::{temperature_clusters, Basis};
 use std::borrow::Cow;
 
 /// Temperature model kind.
@@ -27,20 +27,11 @@ pub enum ModelKind {
     Poly,
 }
 
-/// Identification route.
-#[derive(
-    Clone,
-    Copy,
-    Debug,
-    PartialEq,
-    Eq,
-    strum::Display,
-    strum::EnumString,
-    strum::IntoStaticStr,
-    strum::EnumIter,
-)]
-#[strum(serialize_all = "kebab-case")]
-pub enum Route {
+/// How a model given is identified from a recording's dwells (the routes of
+/// [`crate::fit::route::Route`] that take a model given; the dynamic route chooses its
+/// own).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Identification {
     /// The dwells taken in thermal equilibrium (temperature span <= 0.5 C), each window
     /// at its own temperature, all at once.
     Static,
@@ -49,16 +40,6 @@ pub enum Route {
     Joint,
     /// The paper's route: formula (10) per stop, then a fit across stops.
     PerStop,
-    /// Every window through temperature changes, fitted jointly with the unit's thermal
-    /// lag and rate where the held-out blocks support them (the diagnosis's `dynamic` module).
-    Dynamic,
-}
-
-impl Route {
-    /// The name used in outputs.
-    pub fn name(self) -> &'static str {
-        self.into()
-    }
 }
 
 /// The temperature model asked for.
@@ -265,7 +246,7 @@ pub fn fit_chosen(rec: &Recording, req: &ModelRequest) -> Result<FitOutcome> {
                 order: req.order,
                 breakpoints: req.breakpoints.clone(),
             };
-            return fit_recording(rec, &choice, Route::Static);
+            return fit_recording(rec, &choice, Identification::Static);
         }
         (Some(ModelKind::Poly), None, None) => &|b| matches!(b, Basis::Poly { .. }),
         (Some(ModelKind::Pwl), None, None) => &|b| matches!(b, Basis::Pwl { .. }),
@@ -337,29 +318,29 @@ fn rounded_clusters(temps: &[f64]) -> Vec<f64> {
 }
 
 /// Fit a recording's calibration positions with the model given in `choice`, by
-/// `route`; poses of unknown orientation are estimated first (with that model).
-pub fn fit_recording(rec: &Recording, choice: &ModelChoice, route: Route) -> Result<FitOutcome> {
-    match route {
-        Route::PerStop => fit_per_stop(rec, choice),
-        Route::Static | Route::Joint => fit_windows(rec, choice, route),
-        Route::Dynamic => Err(HostError::new(
-            ErrorKind::Invalid,
-            "the dynamic route chooses its own model on held-out blocks of time; --model does not apply to it",
-        )),
+/// `how`; poses of unknown orientation are estimated first (with that model).
+pub fn fit_recording(
+    rec: &Recording,
+    choice: &ModelChoice,
+    how: Identification,
+) -> Result<FitOutcome> {
+    match how {
+        Identification::PerStop => fit_per_stop(rec, choice),
+        Identification::Static | Identification::Joint => fit_windows(rec, choice, how),
     }
 }
 
-fn fit_windows(rec: &Recording, choice: &ModelChoice, route: Route) -> Result<FitOutcome> {
+fn fit_windows(rec: &Recording, choice: &ModelChoice, how: Identification) -> Result<FitOutcome> {
     let (obs0, _) = static_calibration(rec);
     let basis0 = choice.basis(&obs_temperatures(&obs0));
     let oriented = with_orientations(rec, Some(&basis0))?;
     let r = &*oriented.rec;
-    let (obs, excluded) = match route {
-        Route::Joint => {
+    let (obs, excluded) = match how {
+        Identification::Joint => {
             let cal = |p: usize| r.positions.has_role(p, Role::Calibration);
             (observations(r, &cal, WINDOW_SPAN_C), Excluded::default())
         }
-        Route::Static | Route::PerStop | Route::Dynamic => static_calibration(r),
+        Identification::Static | Identification::PerStop => static_calibration(r),
     };
     require_known(r, &obs)?;
     if obs.is_empty() {

@@ -14,7 +14,8 @@
 //! model's shape there: only data at those temperatures can show that. Every figure is
 //! stated inside the valid range only (T0 among them when it lies there).
 use crate::fit::noise::Noise;
-use crate::fit::temperature::{Basis, ModelFit};
+use crate::fit::temperature::ModelFit;
+use crate::model::basis::Basis;
 use firmware_core::model::{invert, Coeffs};
 use serde::Serialize;
 
@@ -51,61 +52,133 @@ pub struct Prediction {
     pub covariance_scale: [f64; 3],
 }
 
-/// `(a^T N(T))_i` and the per-axis design rows `g` at `t`; None when K is singular.
-fn sensitivity(fit: &ModelFit, t: f64, a: [f64; 3]) -> Option<([f64; 3], Vec<f64>)> {
-    let c = Coeffs::from_array(&fit.eval(t));
+/// A fitted model as a prediction needs it: its 12 coefficients at a temperature, and
+/// the variance of a linear function of them from the fit's covariance. The static
+/// route's per-axis fits ([`StaticModel`]) and the dynamic route's joint one
+/// (`fit::route::Routed`) are both read through it, so the covariance is propagated to
+/// |dg| in one place.
+pub trait Uncertain {
+    /// The 12 coefficients (canonical order) at `t`.
+    fn coefficients(&self, t: f64) -> [f64; 12];
+
+    /// The variance of `sum_c s_c coeff_c(t)` from the fit's covariance (widened by its
+    /// misfit); NaN when the fit carries none.
+    fn variance(&self, t: f64, s: &[f64; 12]) -> f64;
+
+    /// The 1-sigma of each of the 12 coefficients at `t`.
+    fn coefficient_sigma(&self, t: f64) -> [f64; 12] {
+        std::array::from_fn(|c| {
+            let mut e = [0.0; 12];
+            e[c] = 1.0;
+            self.variance(t, &e).max(0.0).sqrt()
+        })
+    }
+}
+
+/// A model of the static, joint or per-stop route with the noise it was weighted by.
+#[derive(Debug, Clone, Copy)]
+pub struct StaticModel<'a> {
+    /// The model.
+    pub fit: &'a ModelFit,
+    /// Its noise.
+    pub noise: &'a Noise,
+}
+
+impl Uncertain for StaticModel<'_> {
+    fn coefficients(&self, t: f64) -> [f64; 12] {
+        self.fit.eval(t)
+    }
+
+    /// Each axis is its own least squares: `sum_i g_i^T C_i g_i`, `g_i` the design row
+    /// of the axis's K row and offset weighted by `s`, `C_i` the axis's covariance
+    /// widened by its reduced chi-square.
+    fn variance(&self, t: f64, s: &[f64; 12]) -> f64 {
+        use firmware_core::model::{K_INDEX, U0_INDEX};
+        let fit = self.fit;
+        let phi = fit.basis.eval(fit.t0_c, t);
+        let mut var = 0.0;
+        for i in 0..3 {
+            let Some(c) = fit.axis_cov.get(i) else {
+                return f64::NAN;
+            };
+            let slots = [K_INDEX[i][0], K_INDEX[i][1], K_INDEX[i][2], U0_INDEX[i]];
+            let g: Vec<f64> = slots
+                .iter()
+                .flat_map(|slot| phi.iter().map(move |f| s[*slot] * f))
+                .collect();
+            let mut q = 0.0;
+            for (r, gr) in g.iter().enumerate() {
+                for (u, gu) in g.iter().enumerate() {
+                    q += gr * c[(r, u)] * gu;
+                }
+            }
+            var += self.fit.axis_scale(i, self.noise.dof > 0) * q;
+        }
+        var
+    }
+}
+
+/// `(a^T N(T))_i` of `m` at `t`: how an error in axis i's output moves |a|; None when
+/// K is singular.
+fn sensitivity(m: &dyn Uncertain, t: f64, a: [f64; 3]) -> Option<[f64; 3]> {
+    let c = Coeffs::from_array(&m.coefficients(t));
     let n = invert(&c.k)?;
-    let w: [f64; 3] = std::array::from_fn(|i| (0..3).map(|j| a[j] * n[j][i]).sum());
-    let phi = fit.basis.eval(fit.t0_c, t);
-    let g: Vec<f64> = [a[0], a[1], a[2], 1.0]
-        .iter()
-        .flat_map(|gj| phi.iter().map(move |f| gj * f))
-        .collect();
-    Some((w, g))
+    Some(std::array::from_fn(|i| {
+        (0..3).map(|j| a[j] * n[j][i]).sum()
+    }))
+}
+
+/// 1-sigma of |dg| (g) at direction `a` and temperature `t` from the coefficients'
+/// uncertainty, of any fitted model: |dg| moves by `-(a^T N)_i (dK_i a + dU0_i)`,
+/// linear in the 12 coefficients; NaN when the fit carries no covariance or K is
+/// singular.
+pub fn sigma_of(m: &dyn Uncertain, t: f64, a: [f64; 3]) -> f64 {
+    use firmware_core::model::{K_INDEX, U0_INDEX};
+    let Some(w) = sensitivity(m, t, a) else {
+        return f64::NAN;
+    };
+    let mut s = [0.0; 12];
+    for i in 0..3 {
+        for j in 0..3 {
+            s[K_INDEX[i][j]] = w[i] * a[j];
+        }
+        s[U0_INDEX[i]] = w[i];
+    }
+    m.variance(t, &s).max(0.0).sqrt()
+}
+
+/// The noise of one dwell's mean of `n` samples in |dg| (g) at direction `a`, the
+/// outputs scattering with variance `var[i]` per sample: `sum_i (a^T N)_i^2 var_i / n`.
+pub fn dwell_noise_of(m: &dyn Uncertain, t: f64, a: [f64; 3], var: [f64; 3], n: f64) -> f64 {
+    let Some(w) = sensitivity(m, t, a) else {
+        return f64::NAN;
+    };
+    (0..3)
+        .map(|i| w[i] * w[i] * var[i] / n.max(1.0))
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// 1-sigma of |dg| (g) at direction `a` and temperature `t` from the coefficients'
 /// uncertainty; NaN when the fit carries no covariance.
 pub fn sigma_model(fit: &ModelFit, noise: &Noise, t: f64, a: [f64; 3]) -> f64 {
-    let Some((w, g)) = sensitivity(fit, t, a) else {
-        return f64::NAN;
-    };
-    let mut var = 0.0;
-    for (i, wi) in w.iter().enumerate() {
-        let Some(c) = fit.axis_cov.get(i) else {
-            return f64::NAN;
-        };
-        let mut q = 0.0;
-        for (r, gr) in g.iter().enumerate() {
-            for (s, gs) in g.iter().enumerate() {
-                q += gr * c[(r, s)] * gs;
-            }
-        }
-        var += wi * wi * q * fit.axis_scale(i, noise.dof > 0);
-    }
-    var.max(0.0).sqrt()
+    sigma_of(&StaticModel { fit, noise }, t, a)
 }
 
 /// The noise of one dwell's mean of `n` samples in |dg| (g) at direction `a`.
 pub fn sigma_dwell_noise(fit: &ModelFit, noise: &Noise, t: f64, a: [f64; 3], n: usize) -> f64 {
-    let Some((w, _)) = sensitivity(fit, t, a) else {
-        return f64::NAN;
-    };
-    let var: f64 = (0..3)
-        .map(|i| {
-            // without an in-dwell noise level the residual scatter of the fit's
-            // observations (one per dwell) is the only noise there is; with it, the
-            // dwell's own scatter, whatever the model's residuals (one dwell missing once
-            // made a misfitting model's reduced chi-square of 36 000 a "dwell noise")
-            let s2 = if noise.dof > 0 {
-                noise.sigma[i].powi(2)
-            } else {
-                fit.axis_scale(i, false)
-            };
-            w[i] * w[i] * s2 / n.max(1) as f64
-        })
-        .sum();
-    var.sqrt()
+    // without an in-dwell noise level the residual scatter of the fit's observations
+    // (one per dwell) is the only noise there is; with it, the dwell's own scatter,
+    // whatever the model's residuals (one dwell missing once made a misfitting model's
+    // reduced chi-square of 36 000 a "dwell noise")
+    let var = std::array::from_fn(|i| {
+        if noise.dof > 0 {
+            noise.sigma[i].powi(2)
+        } else {
+            fit.axis_scale(i, false)
+        }
+    });
+    dwell_noise_of(&StaticModel { fit, noise }, t, a, var, n as f64)
 }
 
 /// The 1-sigma of a verification dwell's |dg| (g): the model's and the dwell's own.
@@ -172,7 +245,7 @@ pub fn predict(fit: &ModelFit, noise: &Noise, req: &Request) -> Prediction {
     let cache = temps
         .iter()
         .flat_map(|t| dirs.iter().map(move |d| (*t, d.a)))
-        .map(|(t, a)| dg_slope(fit, t, a).abs() * update_step_c)
+        .map(|(t, a)| dg_slope(fit, noise, t, a).abs() * update_step_c)
         .fold(0.0, f64::max);
     let dwell = dirs
         .iter()
@@ -194,9 +267,9 @@ pub fn predict(fit: &ModelFit, noise: &Noise, req: &Request) -> Prediction {
 /// How fast |a| read with the coefficients of `t` drifts from the truth as the
 /// coefficients' temperature is held while the unit's moves, g/C: `-(a^T N)(dK/dT a +
 /// dU0/dT)`, by central difference.
-fn dg_slope(fit: &ModelFit, t: f64, a: [f64; 3]) -> f64 {
+fn dg_slope(fit: &ModelFit, noise: &Noise, t: f64, a: [f64; 3]) -> f64 {
     let h = 0.05;
-    let Some((w, _)) = sensitivity(fit, t, a) else {
+    let Some(w) = sensitivity(&StaticModel { fit, noise }, t, a) else {
         return 0.0;
     };
     let (up, dn) = (fit.eval(t + h), fit.eval(t - h));

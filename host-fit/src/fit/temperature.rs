@@ -3,12 +3,11 @@
 use crate::data::table::TableRow;
 use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::identify::Obs;
-use crate::fit::lsq::{weighted_lsq, Lsq};
 use crate::fit::noise::Noise;
+use crate::model::basis::{temperature_clusters, Basis, POLY_SCALE_C};
+use crate::model::lsq::{weighted_lsq, Lsq};
 use firmware_core::model::{K_INDEX, U0_INDEX};
-use firmware_core::temperature::{
-    pwl_segment, Calibration, TempModel, MAX_BREAKPOINTS, MAX_POLY_ORDER,
-};
+use firmware_core::temperature::{Calibration, TempModel};
 use nalgebra::{DMatrix, DVector};
 use std::path::Path;
 
@@ -17,114 +16,11 @@ use std::path::Path;
 /// past the calibration dwells, and a model is no worse there than at its data's edge.
 pub const RANGE_MARGIN_C: f64 = 1.0;
 
-/// Polynomial fits work in `dT / POLY_SCALE_C` for conditioning.
-pub const POLY_SCALE_C: f64 = 50.0;
-
 /// The firmware recomputes its cached matrices after the temperature moves by this much
 /// (the blob's default, `fit --update-step`): the lag it adds to |dg| stays an order of
 /// magnitude below the acceptance limit near T0 (0.03 mg against 0.3 mg on the paper's
 /// unit), and the MCU inverts K(T) ten times per degree instead of every sample.
 pub const UPDATE_STEP_C: f64 = 0.1;
-
-/// The shape of a temperature model.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Basis {
-    /// Polynomial of `dT = T - T0`.
-    Poly {
-        /// Order 0..=5 (0: one temperature, no temperature dependence; the firmware
-        /// table then carries a zero slope).
-        order: usize,
-    },
-    /// Piecewise-linear through strictly increasing breakpoints (C).
-    Pwl {
-        /// Breakpoints.
-        breakpoints: Vec<f64>,
-    },
-}
-
-impl Basis {
-    /// Number of parameters per coefficient.
-    pub fn len(&self) -> usize {
-        match self {
-            Basis::Poly { order } => order + 1,
-            Basis::Pwl { breakpoints } => breakpoints.len(),
-        }
-    }
-
-    /// True for a basis with no functions (never valid).
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Check the order / breakpoints fit a firmware table.
-    pub fn check(&self) -> Result<()> {
-        match self {
-            Basis::Poly { order } if *order <= MAX_POLY_ORDER => Ok(()),
-            Basis::Poly { order } => Err(HostError::new(
-                ErrorKind::Invalid,
-                format!("polynomial order {order} is outside 0..={MAX_POLY_ORDER}"),
-            )),
-            Basis::Pwl { breakpoints } => {
-                if !(2..=MAX_BREAKPOINTS).contains(&breakpoints.len()) {
-                    return Err(HostError::new(
-                        ErrorKind::Invalid,
-                        format!(
-                        "a piecewise-linear model needs 2..={MAX_BREAKPOINTS} breakpoints, got {}",
-                        breakpoints.len()
-                    ),
-                    ));
-                }
-                if breakpoints.windows(2).any(|w| w[0] >= w[1])
-                    || breakpoints.iter().any(|b| !b.is_finite())
-                {
-                    return Err(HostError::new(
-                        ErrorKind::Invalid,
-                        format!(
-                            "breakpoints must be finite and strictly increasing: {breakpoints:?}"
-                        ),
-                    ));
-                }
-                Ok(())
-            }
-        }
-    }
-
-    /// The basis functions at temperature `t` (poly: powers of the scaled dT; pwl: hat
-    /// functions, the end segments extrapolated as the firmware does).
-    pub fn eval(&self, t0: f64, t: f64) -> Vec<f64> {
-        match self {
-            Basis::Poly { order } => {
-                let x = (t - t0) / POLY_SCALE_C;
-                (0..=*order).map(|k| x.powi(k as i32)).collect()
-            }
-            Basis::Pwl { breakpoints } => {
-                // firmware-core's segment rule, so a fit and its table agree everywhere
-                let mut out = vec![0.0; breakpoints.len()];
-                if breakpoints.len() >= 2 {
-                    let (s, f) = pwl_segment(breakpoints.len(), |j| breakpoints[j], t);
-                    out[s] = 1.0 - f;
-                    out[s + 1] = f;
-                }
-                out
-            }
-        }
-    }
-
-    /// Short text, e.g. `poly3` or `pwl[-40,20,70]`.
-    pub fn describe(&self) -> String {
-        match self {
-            Basis::Poly { order } => format!("poly{order}"),
-            Basis::Pwl { breakpoints } => format!(
-                "pwl[{}]",
-                breakpoints
-                    .iter()
-                    .map(|b| format!("{b}"))
-                    .collect::<Vec<_>>()
-                    .join(",")
-            ),
-        }
-    }
-}
 
 /// A fitted temperature model of the 12 coefficients, in f64.
 #[derive(Debug, Clone, PartialEq)]
@@ -231,23 +127,6 @@ fn unscale(basis: &Basis, k: usize, v: f64) -> f64 {
         Basis::Poly { .. } => v / POLY_SCALE_C.powi(k as i32),
         Basis::Pwl { .. } => v,
     }
-}
-
-/// Distinct temperatures in `temps`: sorted, a new cluster starts more than 2 C above
-/// the first value of the current one (so a ramp counts as many temperatures).
-pub fn temperature_clusters(temps: &[f64]) -> Vec<f64> {
-    let mut t: Vec<f64> = temps.to_vec();
-    t.sort_by(f64::total_cmp);
-    let mut out: Vec<Vec<f64>> = Vec::new();
-    for v in t {
-        match out.last_mut() {
-            Some(c) if v - c[0] <= 2.0 => c.push(v),
-            _ => out.push(vec![v]),
-        }
-    }
-    out.iter()
-        .map(|c| c.iter().sum::<f64>() / c.len() as f64)
-        .collect()
 }
 
 /// Whether data at `temps` can determine `basis` at all: a polynomial needs as many

@@ -3,9 +3,9 @@
 //! after the findings, each pair on one scale so that what the findings explain shows,
 //! with the band the noise alone would fill.
 use crate::data::recording::Recording;
-use crate::diagnose::fit::Fit;
 use crate::diagnose::Diagnosis;
 use crate::error::Result;
+use crate::model::solve::Fit;
 use crate::report::axis::prefixed;
 use crate::report::page::{esc, html, Section};
 use crate::report::plot::{padded_y, Band, Plot, Series, FLOOR};

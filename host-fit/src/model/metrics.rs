@@ -3,12 +3,12 @@
 //! floor units), the worst |dg| the fitted model leaves in the static windows, a
 //! parameter's standard error, an effect's contribution, and the judgement of a larger
 //! model against a smaller one by the acceptance rules of [`Rules`].
-use crate::diagnose::data::Data;
-use crate::diagnose::design::static_at;
-use crate::diagnose::fit::Fit;
-use crate::diagnose::profile;
+use crate::model::data::Data;
+use crate::model::design::static_at;
+use crate::model::profile;
 #[cfg(doc)]
-use crate::diagnose::rules::Rules;
+use crate::model::rules::Rules;
+use crate::model::solve::Fit;
 
 /// The dispersion of a fit: chi-square per degree of freedom in floor units, at least 1
 /// (a floor measured too high is not a reason to trust a model more).
@@ -97,6 +97,43 @@ pub fn sigma(f: &Fit, j: usize, phi: f64) -> f64 {
     formal.max(hac)
 }
 
+/// The 12 coefficients (canonical order) of `f` at temperature `t`.
+pub fn coefficients(data: &Data, f: &Fit, t: f64) -> [f64; 12] {
+    let (k, u0) = static_at(&f.spec, &f.labels, &f.x, data.t0, [t; 3]);
+    firmware_core::model::Coeffs { k, u0 }.to_array()
+}
+
+/// The 12 coefficients of `f` at `t` are linear in its parameters: their gradient over
+/// every parameter, their values at unit vectors.
+fn gradients(data: &Data, f: &Fit, t: f64) -> Vec<[f64; 12]> {
+    let p = f.x.len();
+    (0..p)
+        .map(|c| {
+            let e = nalgebra::DVector::from_fn(p, |i, _| if i == c { 1.0 } else { 0.0 });
+            let (k, u0) = static_at(&f.spec, &f.labels, &e, data.t0, [t; 3]);
+            firmware_core::model::Coeffs { k, u0 }.to_array()
+        })
+        .collect()
+}
+
+/// The variance of `sum_c s_c coeff_c(t)` of `f`: its gradient over the parameters `h`,
+/// `h^T C h` scaled by the dispersion; NaN when `f` carries no covariance.
+pub fn variance(data: &Data, f: &Fit, t: f64, s: &[f64; 12]) -> f64 {
+    let Some(cov) = &f.cov else {
+        return f64::NAN;
+    };
+    let h: Vec<f64> = gradients(data, f, t)
+        .iter()
+        .map(|g| g.iter().zip(s).map(|(g, s)| g * s).sum())
+        .collect();
+    let p = h.len();
+    (0..p)
+        .flat_map(|x| (0..p).map(move |y| (x, y)))
+        .map(|(x, y)| h[x] * cov[(x, y)] * h[y])
+        .sum::<f64>()
+        * dispersion(data, f)
+}
+
 /// The 1-sigma of the 12 coefficients (canonical order) of `f` at temperature `t`: each
 /// is linear in the parameters, `g^T x`; its variance the covariance's `g^T C g` scaled
 /// by the dispersion, or where larger the Newey-West bound `sum |g_j| sigma_j` (exact
@@ -108,14 +145,7 @@ pub fn coefficient_sigma(data: &Data, f: &Fit, t: f64) -> [f64; 12] {
     };
     let phi = dispersion(data, f);
     let p = f.x.len();
-    // the coefficients are linear in x: their gradient is their value at unit vectors
-    let unit: Vec<[f64; 12]> = (0..p)
-        .map(|c| {
-            let e = nalgebra::DVector::from_fn(p, |i, _| if i == c { 1.0 } else { 0.0 });
-            let (k, u0) = static_at(&f.spec, &f.labels, &e, data.t0, [t; 3]);
-            firmware_core::model::Coeffs { k, u0 }.to_array()
-        })
-        .collect();
+    let unit = gradients(data, f, t);
     std::array::from_fn(|slot| {
         let g: Vec<f64> = unit.iter().map(|u| u[slot]).collect();
         let formal: f64 = (0..p)

@@ -1,13 +1,13 @@
 //! The columns of a diagnosis fit: what is fitted ([`Spec`]: the baseline's temperature
 //! basis, cross terms, the effects added), per axis the baseline's temperature models of
 //! the K row and offset, and every effect's columns (through firmware-core's own filters, see
-//! [`crate::diagnose::regressors`]), three residual rows per window. What the columns
+//! [`crate::model::regressors`]), three residual rows per window. What the columns
 //! mean at a temperature (K and U0, bends included) is read back by [`static_at`].
-use crate::diagnose::data::Data;
-use crate::diagnose::effects::{Extra, Restart};
-use crate::diagnose::params::{Param, Term};
-use crate::diagnose::regressors;
-use crate::fit::temperature::Basis;
+use crate::model::basis::Basis;
+use crate::model::data::Data;
+use crate::model::effects::{Extra, Restart};
+use crate::model::params::{Param, Term};
+use crate::model::regressors;
 use nalgebra::DVector;
 
 /// What is fitted.

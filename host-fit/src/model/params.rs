@@ -1,6 +1,7 @@
 //! Typed parameter ids of the diagnosis's designs: which coefficient's temperature term,
 //! which effect term on which axis, which fixture angle. Their text form is the JSON
 //! contract's.
+use crate::model::units::{Factor, Unit};
 use firmware_core::model::AXES;
 use std::fmt;
 
@@ -33,6 +34,39 @@ pub enum Term {
 }
 
 impl Term {
+    /// Every term.
+    pub const ALL: [Term; 10] = [
+        Term::Rate,
+        Term::Hysteresis,
+        Term::HysteresisScale,
+        Term::K2,
+        Term::Asymmetry,
+        Term::Warmup,
+        Term::BendOffset,
+        Term::BendScale,
+        Term::Drift,
+        Term::DriftScale,
+    ];
+
+    /// The unit of its coefficient: the output unit per the units of what it multiplies.
+    pub fn unit(self) -> Unit {
+        match self {
+            Term::Rate => Unit::output_per(&[Factor::CPerS]),
+            Term::Hysteresis | Term::Warmup | Term::Drift => Unit::output(),
+            Term::HysteresisScale | Term::Asymmetry | Term::DriftScale => {
+                Unit::output_per(&[Factor::G])
+            }
+            Term::K2 => Unit::Output(vec![(Factor::G, 2)]),
+            Term::BendOffset => Unit::output_per(&[Factor::C]),
+            Term::BendScale => Unit::output_per(&[Factor::G, Factor::C]),
+        }
+    }
+
+    /// The term of symbol `s` ([`Term::symbol`]).
+    pub fn from_symbol(s: &str) -> Option<Term> {
+        Term::ALL.into_iter().find(|t| t.symbol() == s)
+    }
+
     /// The symbol in parameter names (`r_x`, `h_y`, ...).
     pub fn symbol(self) -> &'static str {
         match self {

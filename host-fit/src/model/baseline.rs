@@ -2,14 +2,15 @@
 //! cross-sensitivities where the positions identify them, the polynomial order chosen by
 //! the quasi-likelihood information criterion (in the richest order's dispersion); and
 //! the order chosen again once effects are in the model.
-use crate::diagnose::data::Data;
-use crate::diagnose::design::Spec;
-use crate::diagnose::fit::{Depth, Fit};
-use crate::diagnose::metrics::{dispersion, qbic};
-use crate::fit::temperature::{temperature_clusters, Basis};
+use crate::error::{ErrorKind, HostError, Result};
+use crate::model::basis::{temperature_clusters, Basis};
+use crate::model::data::Data;
+use crate::model::design::Spec;
+use crate::model::metrics::{dispersion, qbic};
+use crate::model::solve::{Depth, Fit};
 
 /// The highest polynomial order the data's temperatures support (at most
-/// [`crate::diagnose::rules::Rules::max_order`]).
+/// [`crate::model::rules::Rules::max_order`]).
 pub fn max_order(data: &Data) -> usize {
     let temps: Vec<f64> = data.obs.iter().map(|o| o.temp_c).collect();
     data.rules
@@ -71,4 +72,25 @@ pub fn baseline(data: &Data) -> Option<(Fit, Vec<String>)> {
         return Some((fit, not_identifiable));
     }
     None
+}
+
+/// [`baseline`], or an error naming the file that says why the data do not determine it:
+/// the positions present are counted, not inferred from the failed fit.
+pub fn required(data: &Data) -> Result<(Fit, Vec<String>)> {
+    baseline(data).ok_or_else(|| {
+        let reason = if positions_determine(data) {
+            "the baseline fit is singular although the positions present determine the per-axis offset and scale (each axis both along and across gravity): the outputs do not vary with the positions"
+        } else {
+            "the positions present do not determine even the per-axis offset and scale (need each axis both along and across gravity)"
+        };
+        HostError::in_file(ErrorKind::Insufficient, &data.rec.path, reason)
+    })
+}
+
+/// Whether the positions present hold each axis both along gravity (|f_i| > 1/2) and
+/// across it (|f_i| < 1/2): what the per-axis offset and scale need, whatever the noise.
+fn positions_determine(data: &Data) -> bool {
+    (0..3).all(|i| {
+        data.obs.iter().any(|o| o.a[i].abs() > 0.5) && data.obs.iter().any(|o| o.a[i].abs() < 0.5)
+    })
 }

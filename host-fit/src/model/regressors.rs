@@ -4,7 +4,7 @@
 //! diagnosis fits exactly what the firmware will apply on any row spacing; plus the
 //! recording's restart events.
 use crate::data::recording::Recording;
-use crate::diagnose::rules::Rules;
+use crate::model::rules::Rules;
 use firmware_core::inflight::{
     power_on_direction, Clock, Direction, Lag, Rate, Step, Tick, Warmup,
 };

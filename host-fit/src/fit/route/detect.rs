@@ -1,15 +1,57 @@
-//! Which identification route a recording calls for (issue 19): the static route for a
-//! unit in equilibrium, the dynamic one for a sweep, and for a stop-and-soak test whose
-//! dwells still carry the sensing element's settling (a thermal lag its soaks did not wait
-//! out: the static fit cannot see it and leaves it in its residuals). Looking for the
-//! settling costs one pass over the rows; the dynamic route, which then decides on
-//! held-out blocks of time, runs only where it is seen.
+//! Which identification route a recording calls for: the static route for a unit in
+//! equilibrium, the dynamic one for a sweep (most dwells move in temperature: its
+//! [`Shape`]), and for a stop-and-soak test whose dwells still carry the sensing element's
+//! settling (a thermal lag its soaks did not wait out: the static fit cannot see it and
+//! leaves it in its residuals). Looking for the settling costs one pass over the rows; the
+//! dynamic route, which then decides on held-out blocks of time, runs only where it is
+//! seen.
 use crate::data::positions::Role;
 use crate::data::recording::{Dwell, Recording, MAX_DWELL_DRIFT_C};
-use crate::fit::temperature::{temperature_clusters, ModelFit};
+use crate::fit::temperature::ModelFit;
+use crate::model::basis::temperature_clusters;
+use crate::model::lsq::residual;
 use firmware_core::model::Coeffs;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
+
+/// A recording is a sweep when at least this share of its dwells drift more than
+/// [`MAX_DWELL_DRIFT_C`] (the static route keeps none of them). Counted in dwells, not
+/// samples: a stop-and-soak test's few long rests through its ramps hold most of its
+/// samples, its tilter's dwells are static.
+pub const SWEEP_MOVING_SHARE: f64 = 0.5;
+
+/// How much of a recording's dwells move in temperature.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct Shape {
+    /// Dwells within [`MAX_DWELL_DRIFT_C`] (the static route's data).
+    pub static_dwells: usize,
+    /// Dwells drifting more.
+    pub moving_dwells: usize,
+    /// Share of the dwells that move.
+    pub moving_share: f64,
+}
+
+impl Shape {
+    /// The dwells of `rec`.
+    pub fn of(rec: &Recording) -> Shape {
+        let m = rec
+            .dwells
+            .iter()
+            .filter(|d| d.temp_span_c > MAX_DWELL_DRIFT_C)
+            .count();
+        let n = rec.dwells.len();
+        Shape {
+            static_dwells: n - m,
+            moving_dwells: m,
+            moving_share: m as f64 / n.max(1) as f64,
+        }
+    }
+
+    /// Most dwells move in temperature: a sweep, for the dynamic route.
+    pub fn is_sweep(&self) -> bool {
+        self.moving_share >= SWEEP_MOVING_SHARE
+    }
+}
 
 /// The settling the static fit left in its dwells.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -176,13 +218,11 @@ fn within_stops(y: &[[f64; 3]], a: &[[f64; 3]], stops: &[Vec<usize>]) -> Vec<[f6
         let m = DMatrix::from_fn(idx.len(), 4, |i, j| {
             a.get(idx[i]).and_then(|v| v.get(j)).copied().unwrap_or(1.0)
         });
-        let svd = m.clone().svd(true, true);
         for axis in 0..3 {
             let b = DVector::from_iterator(idx.len(), idx.iter().map(|k| y[*k][axis]));
-            let Ok(coef) = svd.solve(&b, 1e-12) else {
+            let Some(res) = residual(&m, &b) else {
                 continue;
             };
-            let res = &b - &m * coef;
             for (i, k) in idx.iter().enumerate() {
                 out[*k][axis] = res[i];
             }

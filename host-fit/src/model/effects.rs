@@ -1,7 +1,7 @@
 //! The catalogue's effects as candidate extensions of the baseline model, each with the
 //! structural unknowns of its form (time constants, thresholds, initial states, restart
 //! events, where a bend sits), which the search profiles instead of assuming.
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// When a warm-up clock restarts (besides the start of the recording).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -76,12 +76,13 @@ pub enum Extra {
     Ord,
     Hash,
     Serialize,
+    Deserialize,
     strum::Display,
     strum::EnumString,
     strum::IntoStaticStr,
     strum::EnumIter,
 )]
-#[serde(into = "&'static str")]
+#[serde(rename_all = "snake_case")]
 #[strum(serialize_all = "snake_case")]
 pub enum EffectId {
     /// The coefficients bend between the temperatures more than the baseline follows.

@@ -6,14 +6,14 @@
 //! from its own clock); its coefficients as
 //! the polynomial itself or a piecewise-linear table over the data's temperatures, and
 //! its in-flight physics terms.
-use crate::blob::Cache;
-use crate::diagnose::data::Data;
-use crate::diagnose::effects::Extra;
-use crate::diagnose::fit::{Depth, Fit};
-use crate::diagnose::params::{Param, Term};
-use crate::diagnose::profile::{time_constant, Grid};
 use crate::error::{ErrorKind, HostError, Result};
-use crate::fit::temperature::{Basis, POLY_SCALE_C};
+use crate::model::basis::{Basis, POLY_SCALE_C};
+use crate::model::cache::Cache;
+use crate::model::data::Data;
+use crate::model::effects::Extra;
+use crate::model::params::{Param, Term};
+use crate::model::profile::{time_constant, Grid};
+use crate::model::solve::{Depth, Fit};
 use firmware_core::model::{K_INDEX, U0_INDEX};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
 
@@ -45,8 +45,10 @@ impl Flashed {
     /// The extended model as a firmware calibration: the coefficients as the polynomial
     /// itself, or as a piecewise-linear table (which also carries a temp_curvature
     /// finding), and the in-flight physics terms (fixture_error only corrects the
-    /// calibration, which the final fit already does).
-    pub fn calibration(&self, t0: f64) -> Result<Calibration<f64>> {
+    /// calibration, which the final fit already does); the firmware's cache step `given`,
+    /// or chosen within the floor of a window mean (in g: over the mean scale factor at
+    /// T0), as `fit` keeps it within a dwell's own noise.
+    pub fn calibration(&self, t0: f64, given: Option<f64>) -> Result<(Calibration<f64>, Cache)> {
         let (lo, hi) = (
             self.table.first().map(|r| r.0).unwrap_or(t0 - 1.0),
             self.table.last().map(|r| r.0).unwrap_or(t0 + 1.0),
@@ -63,31 +65,12 @@ impl Flashed {
             }),
             physics: self.physics()?,
         };
-        // the firmware's cache within the floor of a window mean (in g: over the mean
-        // scale factor at T0), as `fit` keeps it within a dwell's own noise
         let c0 = cal.at_t0();
         let k = (c0[0].abs() + c0[1].abs() + c0[2].abs()) / 3.0;
         let floor_mg = (k > 0.0).then(|| self.noise_rms / k * 1e3);
-        cal.update_step_c = Cache::choose(&cal, floor_mg, None).step_c;
-        Ok(cal)
-    }
-
-    /// The model's values of a per-axis term of extra `e` (0 where not fitted).
-    fn term(&self, e: usize, term: Term) -> [f64; 3] {
-        let f = &self.fit;
-        std::array::from_fn(|axis| {
-            f.labels
-                .iter()
-                .position(|l| {
-                    *l == Param::Effect {
-                        term,
-                        axis,
-                        extra: e,
-                    }
-                })
-                .map(|j| f.x[j])
-                .unwrap_or(0.0)
-        })
+        let cache = Cache::choose(&cal, floor_mg, given);
+        cal.update_step_c = cache.step_c;
+        Ok((cal, cache))
     }
 
     /// The in-flight terms in the firmware's form, every time constant in seconds (the
@@ -115,7 +98,7 @@ impl Flashed {
                     ph.lag_tau_s = taus[0][0];
                 }
                 Extra::Rate { tau_s } => {
-                    ph.rate = self.term(e, Term::Rate);
+                    ph.rate = self.fit.term(e, Term::Rate);
                     ph.rate_tau_s = *tau_s;
                 }
                 Extra::Hysteresis {
@@ -126,12 +109,12 @@ impl Flashed {
                     if *scale {
                         return refuse("hysteresis of the scale factors");
                     }
-                    ph.hysteresis = self.term(e, Term::Hysteresis);
+                    ph.hysteresis = self.fit.term(e, Term::Hysteresis);
                     ph.hysteresis_threshold_c = *threshold_c;
                     ph.hysteresis_initial = *initial;
                 }
-                Extra::K2 => ph.k2 = self.term(e, Term::K2),
-                Extra::Asymmetry => ph.asymmetry = self.term(e, Term::Asymmetry),
+                Extra::K2 => ph.k2 = self.fit.term(e, Term::K2),
+                Extra::Asymmetry => ph.asymmetry = self.fit.term(e, Term::Asymmetry),
                 Extra::Warmup { tau_s, .. } => {
                     // in flight the clock restarts at power-on only, as it does here at
                     // the recording's start and its stated power-offs; handling does not
@@ -139,7 +122,7 @@ impl Flashed {
                     if ph.warmup != [0.0; 3] {
                         return refuse("second warm-up time constant");
                     }
-                    ph.warmup = self.term(e, Term::Warmup);
+                    ph.warmup = self.fit.term(e, Term::Warmup);
                     ph.warmup_tau_s = *tau_s;
                 }
                 Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(..) => {}

@@ -4,10 +4,10 @@
 //! is judged by. The [`crate::diagnose::Diagnosis`] owns it, so every figure of the
 //! contract is computed on the very data the search saw.
 use crate::data::recording::Recording;
-use crate::diagnose::floor::Floor;
-use crate::diagnose::observations::{observations, window_means, DObs};
-use crate::diagnose::regressors::{self, Events};
-use crate::diagnose::rules::Rules;
+use crate::model::floor::Floor;
+use crate::model::observations::{observations, window_means, DObs};
+use crate::model::regressors::{self, Events};
+use crate::model::rules::Rules;
 
 /// The data of a diagnosis.
 #[derive(Debug, Clone)]
@@ -27,7 +27,7 @@ pub struct Data<'a> {
     /// Gaps and handling.
     pub events: Events,
     /// When each stop of the tilter test begins (its first static dwell), s, in time
-    /// order: the stops of [`crate::fit::identify::stops`], dwells within 3 C of the
+    /// order: the stops of [`crate::data::stops::stops`], dwells within 3 C of the
     /// first of their stop, ramps between them.
     pub stop_starts: Vec<f64>,
     /// Each observation's temperature rate (the firmware's estimate, over
@@ -93,6 +93,12 @@ impl<'a> Data<'a> {
         self.obs.iter().map(|o| o.chunk + 1).max().unwrap_or(1)
     }
 
+    /// The recording's span in time, first row to last, s.
+    pub fn span_s(&self) -> f64 {
+        let rows = &self.rec.rows;
+        rows.last().map(|r| r.t_s).unwrap_or(0.0) - rows.first().map(|r| r.t_s).unwrap_or(0.0)
+    }
+
     /// The lowest and highest window temperature, C.
     pub fn temperature_range(&self) -> (f64, f64) {
         self.obs
@@ -105,7 +111,7 @@ impl<'a> Data<'a> {
 
 /// The start time of every stop of `rec` (see [`Data::stop_starts`]).
 fn stop_starts(rec: &Recording) -> Vec<f64> {
-    crate::fit::identify::stops(rec, &|_| true, 3.0)
+    crate::data::stops::stops(rec, &|_| true, 3.0)
         .iter()
         .filter_map(|s| s.dwells.first())
         .filter_map(|&d| rec.dwells.get(d))

@@ -1,11 +1,11 @@
 //! The structural unknowns of each effect's form, profiled: every candidate form is fitted
 //! and the best kept (time constants on a log grid refined by golden-section search,
 //! thresholds and initial states on grids, a bend's place over the data's temperatures).
-use crate::diagnose::data::Data;
-use crate::diagnose::design::Spec;
-use crate::diagnose::effects::{Extra, Restart};
-use crate::diagnose::fit::{Depth, Fit};
-use crate::diagnose::params::{Param, Term};
+use crate::model::data::Data;
+use crate::model::design::Spec;
+use crate::model::effects::{Extra, Restart};
+use crate::model::params::{Param, Term};
+use crate::model::solve::{Depth, Fit};
 
 /// The best (lowest chi-square) of several fits.
 fn best(fits: impl IntoIterator<Item = Option<Fit>>) -> Option<Fit> {
@@ -26,7 +26,7 @@ pub struct Grid {
     pub lo_s: f64,
     /// Points.
     pub steps: i32,
-    /// Ratio between neighbours ([`crate::diagnose::rules::Rules::grid_ratio`]).
+    /// Ratio between neighbours ([`crate::model::rules::Rules::grid_ratio`]).
     pub ratio: f64,
     /// No time constant beyond this, s.
     pub max_s: f64,
@@ -187,14 +187,12 @@ pub fn hysteresis(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
 /// recording and its stated power-ons, or the gaps or handling it shows), so a second
 /// warm-up needs other events than the first's (once per event); it settles within what
 /// the recording shows, so its time constant is at most
-/// [`crate::diagnose::rules::Rules::warmup_max_fraction`] of the recording and its
+/// [`crate::model::rules::Rules::warmup_max_fraction`] of the recording and its
 /// profile has its minimum inside that range, not at the edge (a form that wants a
 /// longer one is a drift); and it has one sign per axis, so two warm-ups of opposite
 /// signs on one axis (a pair imitating a slow excursion) are not a warm-up.
 pub fn warmup(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
-    let rows = &data.rec.rows;
-    let span =
-        rows.last().map(|r| r.t_s).unwrap_or(0.0) - rows.first().map(|r| r.t_s).unwrap_or(0.0);
+    let span = data.span_s();
     let taken: Vec<Restart> = spec
         .extras
         .iter()
@@ -276,7 +274,7 @@ pub fn curvature(data: &Data, spec: &Spec, base: &Fit, broad: bool) -> Vec<Fit> 
 }
 
 /// Whether extra `e` of `f` has a determined structure (see
-/// [`crate::diagnose::metrics::Judgement::determined`]): the chi-square profile over its
+/// [`crate::model::metrics::Judgement::determined`]): the chi-square profile over its
 /// time constant (in log) or bend place curves up by the dispersion `phi` within the
 /// limit.
 pub fn determined(data: &Data, f: &Fit, e: usize, phi: f64) -> bool {

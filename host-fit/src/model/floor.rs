@@ -5,7 +5,7 @@
 //! Quantised outputs (a digital sensor's counts, a coarse logger) whose noise is below one
 //! step do not average down: their floor is the step's own, `q^2 / 12` for any mean.
 use crate::data::recording::Recording;
-use crate::diagnose::rules::Rules;
+use crate::model::rules::Rules;
 
 /// Median of a chi-square with one degree of freedom: robust variance from squares.
 const CHI2_1_MEDIAN: f64 = 0.454_936_423_119_572_8;

@@ -1,8 +1,8 @@
 //! The diagnosis's observations: windows of every dwell of a known position (spikes
 //! left out), and the contiguous time chunks that make its held-out folds.
 use crate::data::recording::Recording;
-use crate::diagnose::rules::Rules;
-use crate::fit::identify::windows;
+use crate::data::stops::windows;
+use crate::model::rules::Rules;
 
 /// One observation: the mean of a window of a dwell.
 #[derive(Debug, Clone)]

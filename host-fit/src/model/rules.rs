@@ -2,7 +2,7 @@
 //! each value (as argmin documents a solver's tuning fields). [`Rules::default`] is what
 //! `host-fit diagnose` uses; the blind suite varies them (`blind::run_with`) to show what
 //! each rule buys.
-use crate::fit::equilibrium::WINDOW_SPAN_C;
+use crate::data::stops::WINDOW_SPAN_C;
 use firmware_core::temperature::{MAX_BREAKPOINTS, MAX_POLY_ORDER};
 
 /// The diagnosis's rules. Units are in the field names (C, s, C/s); "floor units" are
@@ -78,6 +78,13 @@ pub struct Rules {
     /// A warm-up is never longer than this fraction of the recording: a settling must be
     /// seen settling (three time constants: 95 % of it); beyond, it is a drift.
     pub warmup_max_fraction: f64,
+    /// `fit`'s dynamic route keeps no thermal lag longer than this fraction of the
+    /// recording: a lag is told apart from the temperature model only where the element
+    /// is seen catching up with its sensor (three time constants: 95 %); a longer one
+    /// holds the element near where the recording started and lets the temperature
+    /// model bend to the time instead (a 2-h sweep took a 6-h lag and coefficients of
+    /// 30x their size, which the f32 path could not carry).
+    pub lag_max_fraction: f64,
     /// Broad temperature curvature: one offset breakpoint per this many C (the stops of a
     /// production test are 25-30 C apart; ramps fill in between).
     pub curvature_step_c: f64,
@@ -192,6 +199,7 @@ impl Default for Rules {
             max_fixture_stops: 12,
             grid_ratio: 1.7,
             warmup_max_fraction: 1.0 / 3.0,
+            lag_max_fraction: 1.0 / 3.0,
             curvature_step_c: 4.0,
             max_breakpoints: MAX_BREAKPOINTS,
             table_step_c: 2.0,

@@ -170,6 +170,29 @@ pub fn weighted_lsq(a: &DMatrix<f64>, b: &DVector<f64>, w: &[f64]) -> Option<Lsq
     })
 }
 
+/// The residual of `b` after its least-squares fit on the columns of `a` (unit weights):
+/// the part of `b` no combination of the columns explains. A column the columns before it
+/// already determine (to [`RANK_TOL`], a zero column among them) is left out, so a design
+/// of deficient rank projects onto the space its columns span, as a minimum-norm solution
+/// would. `None` when `a` has no rows or no column with data.
+pub fn residual(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
+    let mut keep: Vec<usize> = Vec::new();
+    for j in 0..a.ncols() {
+        let mut cols = keep.clone();
+        cols.push(j);
+        let sub = a.select_columns(&cols);
+        let w = vec![1.0; a.nrows()];
+        if Normal::of_rows(&sub, b, &w, |_| true).is_determined() {
+            keep = cols;
+        }
+    }
+    if keep.is_empty() {
+        return None;
+    }
+    let sub = a.select_columns(&keep);
+    weighted_lsq(&sub, b, &vec![1.0; a.nrows()]).map(|s| s.residuals)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -186,6 +209,33 @@ mod tests {
         // nearly parallel columns, condition ~1e7: not determined
         let e = DMatrix::from_row_slice(3, 2, &[1.0, 1.0, 1.0, 1.0 + 1e-7, 1.0, 1.0]);
         assert!(weighted_lsq(&e, &b, &[1.0; 3]).is_none());
+    }
+
+    /// The residual of a projection is the data minus its least-squares fit, also where
+    /// a column repeats another or is zero (the space spanned, as an SVD's minimum-norm
+    /// solution gives): to 1e-12 of the exact values.
+    #[test]
+    fn the_residual_of_a_projection_holds_for_deficient_rank() {
+        let b = DVector::from_vec(vec![1.0, 3.0, 4.0, 8.0]);
+        // the line through (0, 1), (1, 3), (2, 4), (3, 8): y = 0.7 + 2.2 x
+        let want = [0.3, 0.1, -1.1, 0.7];
+        let fitted = [0.7, 2.9, 5.1, 7.3];
+        let full = DMatrix::from_row_slice(4, 2, &[1.0, 0.0, 1.0, 1.0, 1.0, 2.0, 1.0, 3.0]);
+        let deficient = DMatrix::from_row_slice(
+            4,
+            4,
+            &[
+                1.0, 0.0, 0.0, 2.0, 1.0, 1.0, 0.0, 2.0, 1.0, 2.0, 0.0, 2.0, 1.0, 3.0, 0.0, 2.0,
+            ],
+        );
+        for a in [full, deficient] {
+            let r = residual(&a, &b).unwrap();
+            for i in 0..4 {
+                assert!((r[i] - (b[i] - fitted[i])).abs() < 1e-12, "{r}");
+                assert!((r[i] - want[i]).abs() < 1e-12, "{r}");
+            }
+        }
+        assert!(residual(&DMatrix::zeros(4, 1), &b).is_none());
     }
 
     #[test]

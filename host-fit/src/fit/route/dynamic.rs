@@ -8,61 +8,24 @@
 //! is kept only when the held-out blocks and every acceptance rule of the diagnosis
 //! support it, so a unit without dynamics keeps none, and the temperature model's order
 //! is chosen on the same held-out blocks.
-use crate::data::recording::{Recording, MAX_DWELL_DRIFT_C};
-use crate::diagnose::baseline;
-use crate::diagnose::data::Data;
-use crate::diagnose::design::Spec;
-use crate::diagnose::effects::Extra;
-use crate::diagnose::firmware::Flashed;
-use crate::diagnose::fit::{Depth, Fit};
-use crate::diagnose::floor;
-use crate::diagnose::metrics::{self, judge};
-use crate::diagnose::profile::{self, time_constant, Grid};
-use crate::diagnose::Rules;
+use crate::data::recording::Recording;
 use crate::error::{ErrorKind, HostError, Result};
-use crate::fit::route::{settling, Settling};
-use crate::fit::temperature::Basis;
+use crate::fit::route::detect::Shape;
+use crate::model::baseline;
+use crate::model::basis::Basis;
+use crate::model::data::Data;
+use crate::model::design::Spec;
+use crate::model::effects::Extra;
+use crate::model::flashed::Flashed;
+use crate::model::metrics::{self, judge};
+use crate::model::params::Term;
+use crate::model::precision::check;
+use crate::model::profile::{self, time_constant, Grid};
+use crate::model::rules::Rules;
+use crate::model::solve::{Depth, Fit};
+use crate::model::weights::{weighed, Purpose, Weighed};
 use firmware_core::temperature::Calibration;
 use serde::Serialize;
-
-/// A recording is a sweep when at least this share of its dwells drift more than
-/// [`MAX_DWELL_DRIFT_C`] (the static route keeps none of them). Counted in dwells, not
-/// samples: a stop-and-soak test's few long rests through its ramps hold most of its
-/// samples, its tilter's dwells are static.
-pub const SWEEP_MOVING_SHARE: f64 = crate::data::recording::SWEEP_MOVING_SHARE;
-
-/// How much of a recording's dwells move in temperature.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
-pub struct Shape {
-    /// Dwells within [`MAX_DWELL_DRIFT_C`] (the static route's data).
-    pub static_dwells: usize,
-    /// Dwells drifting more.
-    pub moving_dwells: usize,
-    /// Share of the dwells that move.
-    pub moving_share: f64,
-}
-
-impl Shape {
-    /// The dwells of `rec`.
-    pub fn of(rec: &Recording) -> Shape {
-        let m = rec
-            .dwells
-            .iter()
-            .filter(|d| d.temp_span_c > MAX_DWELL_DRIFT_C)
-            .count();
-        let n = rec.dwells.len();
-        Shape {
-            static_dwells: n - m,
-            moving_dwells: m,
-            moving_share: m as f64 / n.max(1) as f64,
-        }
-    }
-
-    /// Most dwells move in temperature: a sweep, for the dynamic route.
-    pub fn is_sweep(&self) -> bool {
-        self.moving_share >= SWEEP_MOVING_SHARE
-    }
-}
 
 /// One candidate model and what the held-out blocks said of it.
 #[derive(Debug, Clone, Serialize)]
@@ -96,12 +59,18 @@ pub struct DynamicFit<'a> {
     pub blocks: usize,
     /// The floor of a window mean (output units, RMS).
     pub noise_rms: f64,
+    /// Why the model chosen on the held-out blocks is not the one flashed (its f32
+    /// path departs beyond the bound), when it is not.
+    pub notes: Vec<String>,
 }
 
 impl DynamicFit<'_> {
-    /// The blob's calibration (temperature model and in-flight physics).
+    /// The blob's calibration (temperature model and in-flight physics), its cache step
+    /// chosen within the floor.
     pub fn calibration(&self) -> Result<Calibration<f64>> {
-        self.flashed.calibration(self.data.t0)
+        self.flashed
+            .calibration(self.data.t0, None)
+            .map(|(cal, _)| cal)
     }
 
     /// The chosen model's description.
@@ -168,12 +137,18 @@ fn refine_lag(data: &Data, f: &Fit) -> Fit {
     let make = |t: f64| data.fit(&f.spec.replaced(i, lag(t)), None, Depth::Profile);
     let grid = Grid {
         golden_steps: FLASHED_GOLDEN_STEPS,
+        max_s: max_lag_s(data),
         ..Grid::around(data, taus[0][0], 2, 5)
     };
     time_constant(&make, grid)
         .and_then(|(t, _)| data.fit(&f.spec.replaced(i, lag(t)), None, Depth::Full))
         .filter(|g| g.chi2 <= f.chi2)
         .unwrap_or_else(|| f.clone())
+}
+
+/// The longest lag this route keeps on `data` ([`Rules::lag_max_fraction`] of it).
+fn max_lag_s(data: &Data) -> f64 {
+    data.span_s() * data.rules.lag_max_fraction
 }
 
 /// `larger` (the last extra added to `smaller`) passes every acceptance rule of the
@@ -183,8 +158,9 @@ fn kept(data: &Data, smaller: &Fit, larger: &Fit) -> bool {
     judge(data, smaller, larger, e).accepted(data)
 }
 
-/// The polynomial order chosen on the held-out blocks with `f`'s extras.
-fn order_by_heldout(data: &Data, f: &Fit, cands: &mut Vec<Candidate>) -> Fit {
+/// The polynomial order chosen on the held-out blocks with `f`'s extras; every order
+/// fitted goes to `tried` too.
+fn order_by_heldout(data: &Data, f: &Fit, cands: &mut Vec<Candidate>, tried: &mut Vec<Fit>) -> Fit {
     let fits: Vec<Fit> = (0..=baseline::max_order(data))
         .filter_map(|order| {
             let mut spec = f.spec.clone();
@@ -203,6 +179,7 @@ fn order_by_heldout(data: &Data, f: &Fit, cands: &mut Vec<Candidate>) -> Fit {
     for g in &fits {
         cands.push(candidate(g, g.spec == best.spec));
     }
+    tried.extend(fits);
     best
 }
 
@@ -227,34 +204,15 @@ fn compared(cands: Vec<Candidate>, f: &Fit) -> Vec<Candidate> {
 
 /// Fit `rec` on the dynamic route (see the module doc).
 pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
-    let rules = Rules::default();
-    let fl = floor::floor(rec, &rules);
-    let mut data = Data::new(rec, &fl, rules);
-    if data.obs.len() < rules.min_windows {
-        return Err(HostError::in_file(
-            ErrorKind::Insufficient,
-            &rec.path,
-            format!(
-                "{} windows of known positions: too few for the dynamic route (need {})",
-                data.obs.len(),
-                rules.min_windows
-            ),
-        ));
-    }
-    if !crate::diagnose::weigh(&mut data, &fl) {
+    let Weighed { data, measured, .. } = weighed(rec, Rules::default(), Purpose::DynamicRoute)?;
+    if !measured {
         return Err(HostError::in_file(
             ErrorKind::Insufficient,
             &rec.path,
             "the noise floor cannot be measured inside the dwells (too few samples per dwell): the dynamic route weighs every window by it",
         ));
     }
-    let (base, _) = baseline::baseline(&data).ok_or_else(|| {
-        HostError::in_file(
-            ErrorKind::Insufficient,
-            &rec.path,
-            "the positions present do not determine even the per-axis offset and scale (need each axis both along and across gravity)",
-        )
-    })?;
+    let (base, _) = baseline::required(&data)?;
     // the lag profiled with the richest temperature model the data support, so that
     // the model's own bending cannot stand in for it, then judged against that model
     let top = Spec {
@@ -265,8 +223,10 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
     };
     let mut f = data.fit(&top, None, Depth::Full).unwrap_or(base);
     let mut cands = vec![];
+    let mut tried = vec![f.clone()];
     let grid = Grid {
         golden_steps: FLASHED_GOLDEN_STEPS,
+        max_s: max_lag_s(&data),
         ..Grid::new(&data, 20.0, 14)
     };
     if let Some(lagged) = with_lag(&data, &f.spec, &f, grid) {
@@ -275,6 +235,7 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
         cands.push(candidate(&lagged, keep));
         if keep {
             f = lagged;
+            tried.push(f.clone());
         }
     }
     if let Some(rated) =
@@ -286,34 +247,21 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
             f = rated;
         }
     }
-    let f = refine_lag(&data, &order_by_heldout(&data, &f, &mut cands));
+    let f = refine_lag(&data, &order_by_heldout(&data, &f, &mut cands, &mut tried));
     let cands = compared(cands, &f);
     let noise_rms = metrics::floor_rms(&data);
-    let term = |f: &Fit, e: usize| -> [f64; 3] {
-        std::array::from_fn(|axis| {
-            f.labels
-                .iter()
-                .position(|l| {
-                    *l == crate::diagnose::params::Param::Effect {
-                        term: crate::diagnose::params::Term::Rate,
-                        axis,
-                        extra: e,
-                    }
-                })
-                .map(|j| f.x[j])
-                .unwrap_or(0.0)
-        })
-    };
+    let (f, flashed, notes) = flashable(&data, f, tried, noise_rms)?;
     let (mut lag_tau_s, mut rate) = (None, None);
     for (e, x) in f.spec.extras.iter().enumerate() {
         if let Extra::Lag { taus } = x {
             lag_tau_s = Some(taus[0][0]);
         } else if let Extra::Rate { tau_s } = x {
-            rate = Some((term(&f, e), *tau_s));
+            rate = Some((f.term(e, Term::Rate), *tau_s));
         }
     }
     Ok(DynamicFit {
-        flashed: Flashed::of(&data, &f, noise_rms),
+        flashed,
+        notes,
         blocks: data.n_chunks(),
         shape: Shape::of(rec),
         data,
@@ -325,58 +273,41 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
     })
 }
 
-/// The route `fit` and `batch` take by default (`--route auto`), chosen by the data.
-pub enum Routed<'a> {
-    /// The static route's fit (the dwells in equilibrium).
-    Static(Box<crate::fit::pipeline::FitOutcome>),
-    /// The dynamic route's; `settling` says why a stop-and-soak test took it (None: a sweep).
-    Dynamic {
-        /// The fit.
-        fit: Box<DynamicFit<'a>>,
-        /// The settling the static fit left, when that is why.
-        settling: Option<Settling>,
-    },
-}
-
-/// The data's route for `rec` with the model request `req` (a given family keeps the
-/// static route): a sweep takes the dynamic route; a stop-and-soak test whose dwells
-/// still settle ([`settling`]) is fitted on it too and kept there when its held-out blocks
-/// keep a lag or rate term; anything else the static route. Why the static fit stood
-/// where a settling was seen goes to `notes`.
-pub fn auto<'a>(
-    rec: &'a Recording,
-    req: &crate::fit::pipeline::ModelRequest,
-    notes: &mut Vec<String>,
-) -> Result<Routed<'a>> {
-    if req.kind.is_none() && Shape::of(rec).is_sweep() {
-        return Ok(Routed::Dynamic {
-            fit: Box::new(fit_dynamic(rec)?),
-            settling: None,
-        });
-    }
-    let oc = crate::fit::pipeline::fit_chosen(rec, req)?;
-    if req.kind.is_none() {
-        if let Some(st) = settling(rec, &oc.fit).filter(Settling::seen) {
-            let why = format!(
-                "the dwells look unsettled (a lag near {:.0} s explains {:.0}% of the static fit's residual)",
-                st.tau_s,
-                100.0 * st.explained
+/// The model chosen, `f`, in the firmware's forms, when the firmware's f32 path carries
+/// it within the bound; else the first of `tried` that it carries (the richest first,
+/// then by held-out chi-square), with a note naming why `f` could not be flashed. An
+/// error naming the cause when none can be.
+fn flashable(
+    data: &Data,
+    f: Fit,
+    mut tried: Vec<Fit>,
+    noise_rms: f64,
+) -> Result<(Fit, Flashed, Vec<String>)> {
+    let check = |g: &Fit| -> Result<Flashed> {
+        let flashed = Flashed::of(data, g, noise_rms);
+        let (cal, _) = flashed.calibration(data.t0, None)?;
+        check(&cal).map(|_| flashed)
+    };
+    let first = match check(&f) {
+        Ok(flashed) => return Ok((f, flashed, Vec::new())),
+        Err(e) => e,
+    };
+    tried.sort_by(|a, b| {
+        b.spec
+            .extras
+            .len()
+            .cmp(&a.spec.extras.len())
+            .then(a.heldout.total_cmp(&b.heldout))
+    });
+    for g in tried {
+        if let Ok(flashed) = check(&g) {
+            let note = format!(
+                "the model chosen on the held-out blocks, {}, cannot be flashed ({first}): {} instead",
+                describe(&f),
+                describe(&g)
             );
-            match fit_dynamic(rec) {
-                Ok(d) if d.lag_tau_s.is_some() || d.rate.is_some() => {
-                    return Ok(Routed::Dynamic {
-                        fit: Box::new(d),
-                        settling: Some(st),
-                    })
-                }
-                Ok(_) => notes.push(format!(
-                    "{why}, but the held-out blocks keep no lag or rate term: static route"
-                )),
-                Err(e) => notes.push(format!(
-                    "{why}; the dynamic route could not be taken ({e}): static route"
-                )),
-            }
+            return Ok((g, flashed, vec![note]));
         }
     }
-    Ok(Routed::Static(Box::new(oc)))
+    Err(first)
 }

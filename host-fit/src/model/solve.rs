@@ -2,11 +2,11 @@
 //! three axes (weights from the floor), with every held-out time chunk predicted by the
 //! fit without it, and Newey-West (HAC) standard errors that hold residuals correlated
 //! in time.
-use crate::diagnose::data::Data;
-use crate::diagnose::design::{static_at, Row, Spec};
-use crate::diagnose::effects::Extra;
-use crate::diagnose::params::Param;
-use crate::fit::lsq::Normal;
+use crate::model::data::Data;
+use crate::model::design::{static_at, Row, Spec};
+use crate::model::effects::Extra;
+use crate::model::lsq::Normal;
+use crate::model::params::{Param, Term};
 use nalgebra::{DMatrix, DVector};
 
 /// How much of a fit to compute.
@@ -56,6 +56,24 @@ impl Fit {
     /// All parameters, linear and structural.
     pub fn params(&self) -> usize {
         self.k + self.spec.structural()
+    }
+
+    /// The values of a per-axis term of extra `e`, x y z (0 on an axis where it is not
+    /// fitted).
+    pub fn term(&self, e: usize, term: Term) -> [f64; 3] {
+        std::array::from_fn(|axis| {
+            self.labels
+                .iter()
+                .position(|l| {
+                    *l == Param::Effect {
+                        term,
+                        axis,
+                        extra: e,
+                    }
+                })
+                .map(|j| self.x[j])
+                .unwrap_or(0.0)
+        })
     }
 }
 
@@ -175,7 +193,7 @@ impl Data<'_> {
     }
 
     /// Per chunk: whether both fits predict it from the other chunks (not an
-    /// extrapolation for either, see [`crate::diagnose::rules::Rules::extrapolation`]).
+    /// extrapolation for either, see [`crate::model::rules::Rules::extrapolation`]).
     pub fn predictable(&self, a: &Fit, b: &Fit) -> Vec<bool> {
         let mut sums = vec![[0.0f64; 5]; self.n_chunks()];
         for (r, o) in self.obs.iter().enumerate() {

@@ -191,7 +191,7 @@ pub fn fit_on<'a>(
     let how = match route {
         None => return choose(rec, req, notes),
         Some(Route::Dynamic) if req.kind.is_some() => {
-            return Err(HostError::new(ErrorKind::Invalid, 
+            return Err(HostError::new(ErrorKind::Invalid,
                 "the dynamic route chooses its model on held-out blocks of time; --model does not apply to it",
             ))
         }

@@ -18,7 +18,7 @@ use serde::Serialize;
 /// [`MAX_DWELL_DRIFT_C`] (the static route keeps none of them). Counted in dwells, not
 /// samples: a stop-and-soak test's few long rests through its ramps hold most of its
 /// samples, its tilter's dwells are static.
-pub const SWEEP_MOVING_SHARE: f64 = 0.5;
+pub const SWEEP_MOVING_SHARE: f64 = crate::data::recording::SWEEP_MOVING_SHARE;
 
 /// How much of a recording's dwells move in temperature.
 #[derive(Debug, Clone, Copy, Serialize, PartialEq)]
@@ -43,7 +43,7 @@ impl Shape {
         Shape {
             static_dwells: n - m,
             moving_dwells: m,
-            moving_share: m as f64 / n.max(1) as f64,
+            moving_share: rec.moving_share(),
         }
     }
 

@@ -21,6 +21,8 @@ mod pg;
 const UNITS: usize = 50;
 /// Stations writing at once.
 const STATIONS: usize = 8;
+/// The killed station's lot: this many copies of the 50 units.
+const KILLED_COPIES: usize = 8;
 
 /// The recordings of 50 twin units (seeds 1..=50), fast ones (one row per dwell, as a
 /// voltmeter that averages each position), made once per test binary.
@@ -43,9 +45,15 @@ fn recordings() -> &'static Vec<String> {
 
 /// A lot of the 50 units, serials `PREFIX-i`, in `dir`.
 fn lot(dir: &Path, prefix: &str) {
+    lot_of(dir, prefix, 1);
+}
+
+/// A lot of `copies` x 50 units (each recording under `copies` serials), in `dir`.
+fn lot_of(dir: &Path, prefix: &str, copies: usize) {
     std::fs::create_dir_all(dir).unwrap();
-    for (i, csv) in recordings().iter().enumerate() {
-        let serial = format!("{prefix}-{i:02}");
+    let all = recordings().iter().cycle().take(copies * UNITS);
+    for (i, csv) in all.enumerate() {
+        let serial = format!("{prefix}-{i:03}");
         let text = csv.replacen("# unit=SERIAL", &format!("# unit={serial}"), 1);
         assert_ne!(&text, csv);
         std::fs::write(dir.join(format!("{serial}.csv")), text).unwrap();
@@ -191,7 +199,10 @@ fn eight_stations_writing_one_postgresql_store_lose_and_duplicate_nothing() {
 /// same command, no `--force`.
 fn killed_and_run_again(root: &Path, db: &str) {
     let dir = root.join("lot-k");
-    lot(&dir, "K");
+    // a unit of one row per dwell fits in a few ms: a lot long enough (seconds) that the
+    // writer's first chunk (after FLUSH_AFTER) lands well before the lot's end
+    let units = KILLED_COPIES * UNITS;
+    lot_of(&dir, "K", KILLED_COPIES);
     let out = root.join("out");
     let mut p = batch(&dir, &out, db, "ST-K").spawn().unwrap();
     let t = Instant::now();
@@ -215,8 +226,8 @@ fn killed_and_run_again(root: &Path, db: &str) {
     p.wait().unwrap();
     let before = store(db).all().unwrap();
     let n = before.len();
-    assert!(n > 0 && n < UNITS, "{n} records at the kill");
     assert_whole(&before);
+    assert!(n > 0 && n < units, "{n} records at the kill");
     // the files of the units recorded, as the killed run left them
     let kept: Vec<(PathBuf, Vec<u8>)> = before
         .iter()
@@ -238,13 +249,13 @@ fn killed_and_run_again(root: &Path, db: &str) {
         "{text}"
     );
     assert!(
-        text.contains(&format!("{UNITS} pass, 0 fail, 0 error")),
+        text.contains(&format!("{units} pass, 0 fail, 0 error")),
         "{text}"
     );
     let after = store(db).all().unwrap();
     assert_eq!(
         after.len(),
-        UNITS,
+        units,
         "every unit once: {n} kept, the rest done"
     );
     assert_whole(&after);
@@ -262,7 +273,7 @@ fn killed_and_run_again(root: &Path, db: &str) {
         assert!(out.join(format!("{}.test-record.json", r.serial)).exists());
     }
     let rows = summary(&out);
-    assert_eq!(rows.len(), UNITS);
+    assert_eq!(rows.len(), units);
     assert!(rows.iter().all(|r| r.1 == "pass"), "{rows:?}");
 }
 

@@ -11,7 +11,7 @@
 //! | layer | modules | what |
 //! |---|---|---|
 //! | 0 | `error`, `rng`, `output`, `progress` | foundations: errors, random numbers, atomic writes, JSON/CSV, progress of long work |
-//! | 1 | `data` | recordings, positions with their roles, coefficient tables |
+//! | 1 | `data`, `terms` | recordings, positions with their roles, coefficient tables; the vocabulary of discovered terms (parse, print, evaluate, a blob's term table) |
 //! | 2 | `fit`, `simulate` | identification, one least-squares solver, temperature models, the pipeline; the digital twin |
 //! | 3 | `blob`, `verify`, `vectors`, `acceptance` | blobs built and read, formula (13) through firmware-core, firmware test vectors, pass/fail against a specification |
 //! | 4 | `diagnose` | locate, explain, model what the paper's model leaves out |
@@ -26,6 +26,7 @@ pub mod progress;
 pub mod rng;
 
 pub mod data;
+pub mod terms;
 
 pub mod fit;
 pub mod simulate;

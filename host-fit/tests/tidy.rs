@@ -11,12 +11,13 @@ use std::path::{Path, PathBuf};
 const MAX_FN_LINES: usize = 120;
 
 /// The layers of lib.rs's table: a module may use modules of its own rank or below.
-const LAYERS: [(&str, u8); 24] = [
+const LAYERS: [(&str, u8); 25] = [
     ("error", 0),
     ("rng", 0),
     ("output", 0),
     ("progress", 0),
     ("data", 1),
+    ("terms", 1),
     ("fit", 2),
     ("simulate", 2),
     ("blob", 3),

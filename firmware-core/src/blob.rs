@@ -40,7 +40,9 @@
 //! ([`Error::CrcMismatch`]): any flipped bit, the version's included, reads as
 //! corruption; (3) magic and version ([`Error::BadMagic`],
 //! [`Error::UnsupportedVersion`]); (4) the header against the layout
-//! ([`Error::TableSize`], [`Error::Malformed`], [`Error::TooManyTerms`]); (5) the
+//! ([`Error::TableSize`], [`Error::Malformed`], [`Error::TooManyTerms`]; built without
+//! the `terms` feature, a blob with a term table is refused here,
+//! [`Error::TermsNotBuiltIn`]); (5) the
 //! content: finite values, range, increasing breakpoints, physics ranges, each term
 //! ([`Error::TermAxis`], [`Error::TermFactors`], [`Error::TermTimeConstant`],
 //! [`Error::NonFinite`]) and no term twice on an axis ([`Error::DuplicateTerm`]), K(T0)
@@ -66,7 +68,9 @@ use crate::temperature::{
     eval_table, validate_source, Calibration, CoeffRow, ModelKind, Physics, Source, Table,
     TempModel, MAX_BREAKPOINTS, MAX_POLY_ORDER, PHYSICS_WORDS,
 };
-use crate::terms::{validate_entries, Axis, RawTerm, Tau, Term, TermEntry, TermList, MAX_TERMS};
+#[cfg(feature = "terms")]
+use crate::terms::RawTerm;
+use crate::terms::{validate_entries, Axis, Tau, Term, TermEntry, TermList, MAX_TERMS};
 
 pub use crate::format::{FORMAT_VERSION, OLDEST_FORMAT_VERSION};
 
@@ -318,13 +322,17 @@ pub struct BlobView<'a> {
     kind: ModelKind,
     rows: u8,
     clamp: bool,
-    /// Entries of the term table (0: none).
+    /// Entries of the term table (0: none; only with the `terms` feature, as every field
+    /// and method of the table: a firmware without it refuses a table, and links none of
+    /// its code).
+    #[cfg(feature = "terms")]
     n_terms: u8,
     scalars: u16,
     breakpoints: u16,
     table: u16,
     /// The term table's head word (the CRC's offset when there is none): where the f32
     /// words that [`Source::all_finite`] checks end.
+    #[cfg(feature = "terms")]
     terms: u16,
 }
 
@@ -355,6 +363,12 @@ impl<'a> BlobView<'a> {
         let version = u16_at(bytes, 4).unwrap_or(0);
         if !(OLDEST_FORMAT_VERSION..=FORMAT_VERSION).contains(&version) {
             return Err(Error::UnsupportedVersion(version));
+        }
+        // a firmware without `terms` neither validates nor applies a table it cannot
+        // compensate: a blob with one (format 5) is refused when it is opened, and no code
+        // of the table is linked (its flash budget)
+        if cfg!(not(feature = "terms")) && version == FORMAT_VERSION {
+            return Err(Error::TermsNotBuiltIn);
         }
         // A current-version blob with a valid CRC must declare its own length.
         if declared_len(bytes) != Some(n) {
@@ -397,8 +411,9 @@ impl<'a> BlobView<'a> {
             PHYSICS_WORDS => true,
             _ => return Err(Error::Malformed),
         };
-        // format 5 is written only with a term table, format 4 never has one
-        let has_terms = version == FORMAT_VERSION;
+        // format 5 is written only with a term table, format 4 never has one (and a
+        // firmware without `terms` refused format 5 when it read the version)
+        let has_terms = cfg!(feature = "terms") && version == FORMAT_VERSION;
         let terms_flag = if has_terms { FLAG_TERMS } else { 0 };
         if flags & !FLAG_CLAMP != terms_flag
             || OutputUnit::from_code(unit).is_none()
@@ -407,8 +422,8 @@ impl<'a> BlobView<'a> {
             return Err(Error::Malformed);
         }
         let (rows_n, serial_n) = (usize::from(rows), usize::from(serial));
-        let base = Layout::new(kind, rows_n, serial_n, has_physics, 0);
         let n_terms = if has_terms {
+            let base = Layout::new(kind, rows_n, serial_n, has_physics, 0);
             terms_head(bytes, base.terms)?
         } else {
             0
@@ -441,10 +456,12 @@ impl<'a> BlobView<'a> {
             kind,
             rows,
             clamp: flags & FLAG_CLAMP != 0,
+            #[cfg(feature = "terms")]
             n_terms,
             scalars: off(l.scalars)?,
             breakpoints: off(l.breakpoints)?,
             table: off(l.table)?,
+            #[cfg(feature = "terms")]
             terms: off(l.terms)?,
         })
     }
@@ -455,6 +472,7 @@ impl<'a> BlobView<'a> {
     }
 
     /// The offset of term entry `j`.
+    #[cfg(feature = "terms")]
     fn term_at(&self, j: usize) -> usize {
         usize::from(self.terms)
             .saturating_add(TERMS_HEAD_BYTES)
@@ -641,9 +659,13 @@ impl Source for BlobView<'_> {
     /// bytes (an exponent of all ones is an infinity or a NaN); the term table's words
     /// are checked entry by entry ([`RawTerm::entry`]).
     fn all_finite(&self) -> bool {
+        #[cfg(feature = "terms")]
+        let end = usize::from(self.terms);
+        #[cfg(not(feature = "terms"))]
+        let end = self.bytes.len().saturating_sub(CRC_LEN);
         let words = self
             .bytes
-            .get(usize::from(self.scalars)..usize::from(self.terms))
+            .get(usize::from(self.scalars)..end)
             .unwrap_or(&[]);
         words.chunks_exact(4).all(|w| {
             let bits = u32::from_le_bytes([
@@ -655,11 +677,15 @@ impl Source for BlobView<'_> {
             bits & 0x7F80_0000 != 0x7F80_0000
         })
     }
+    /// (Without the `terms` feature the default, 0: such a firmware refuses a table when
+    /// it opens the blob.)
+    #[cfg(feature = "terms")]
     #[inline]
     fn term_count(&self) -> usize {
         usize::from(self.n_terms)
     }
     /// Entry `j` read where it lies ([`RawTerm::none`] past the table).
+    #[cfg(feature = "terms")]
     #[inline]
     fn term_raw(&self, j: usize) -> RawTerm<f32> {
         let at = self.term_at(j);
@@ -678,6 +704,7 @@ impl Source for BlobView<'_> {
         }
     }
     /// The axis and codes of entry `j`: one word, what every sample reads.
+    #[cfg(feature = "terms")]
     #[inline]
     fn term_shape(&self, j: usize) -> (u8, [u8; 3]) {
         match self

@@ -37,7 +37,7 @@ use crate::real::Real;
 use crate::temperature::{eval_table, Calibration, Source, WithTerms};
 use crate::terms::TermEntry;
 #[cfg(feature = "terms")]
-use crate::terms::{force_values, product, state_values, UnitState, MAX_TERMS};
+use crate::terms::{force_values, product, set_decay, state_values, UnitState, MAX_TERMS};
 
 /// What discovered terms add to the f32 path's departure from the f64 one, g, for
 /// terms whose contributions stay within 1e-3 of the output scale (each at most 1e-3 V
@@ -159,10 +159,14 @@ pub struct Compensator<S: Source> {
     #[cfg(feature = "physics")]
     ph: Machines<S::Real>,
     /// Each discovered term's coefficient times its state part, as of the machines' last
-    /// step (K(T0), which method 2's update needs, is re-evaluated there instead of kept:
-    /// this state's room).
+    /// step.
     #[cfg(feature = "terms")]
     weights: [S::Real; MAX_TERMS],
+    /// K(T0), for method 2's dK at each update. With `terms` it is re-evaluated there
+    /// instead (the same evaluation, the same bits): the weights take its room, so the
+    /// state stays within 256 bytes on a 64-bit host too.
+    #[cfg(not(feature = "terms"))]
+    k0: Mat3<S::Real>,
 }
 
 /// The compensator over a blob in flash, in f32: what the firmware holds.
@@ -252,6 +256,8 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
             path: Path::Constants,
             method,
             n0,
+            #[cfg(not(feature = "terms"))]
+            k0: c0.k,
             u00: c0.u0,
             t_cached: t0,
             n: n0,
@@ -355,6 +361,20 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
         self.sticky
     }
 
+    /// K(T0): kept without `terms`, re-evaluated with it (as at construction: the same
+    /// evaluation, so the same bits).
+    #[inline]
+    fn k0(&self) -> Mat3<R> {
+        #[cfg(not(feature = "terms"))]
+        let k0 = self.k0;
+        #[cfg(feature = "terms")]
+        let k0 = {
+            let t0 = self.src.t0_c();
+            Coeffs::from_array(&eval_table(self.src.table(), t0, t0)).k
+        };
+        k0
+    }
+
     /// Recompute the cached matrices and range flags for a finite temperature `t`.
     fn update(&mut self, t: R) {
         let te = self.effective_temperature(t);
@@ -370,10 +390,7 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
                 None => self.sticky = Status::SINGULAR,
             },
             Method::CorrectResult(em) => {
-                // K(T0) as at construction: the same evaluation, so the same bits
-                let t0 = self.src.t0_c();
-                let k0 = Coeffs::from_array(&eval_table(self.src.table(), t0, t0)).k;
-                let dk = mat_sub(&c.k, &k0);
+                let dk = mat_sub(&c.k, &self.k0());
                 let du0 = sub3(c.u0, self.u00);
                 // delta = N0 (dK a + dU0) = (N0 dK) a + N0 dU0; the simplified model
                 // uses diag(N0) in place of N0.
@@ -458,7 +475,7 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
     /// term from the source (flash); at most once per [`crate::inflight::MIN_STEP_S`]. A
     /// source with discovered terms and no physics section steps neutral machines (their
     /// clock, rate and time since power-on), then the terms' weights are renewed.
-    #[cfg(feature = "physics")]
+    #[cfg(feature = "terms")]
     #[inline(never)]
     fn step_machines(&mut self, tick: Tick<R>, x: R) {
         let p = self
@@ -467,14 +484,21 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
             .unwrap_or_else(crate::temperature::Physics::neutral);
         let t0 = self.src.t0_c();
         let rate = self.ph.apply(tick, &p, x, t0);
-        #[cfg(feature = "terms")]
         self.weigh_terms(&UnitState {
             dt_c: self.ph.sensor_temperature() - t0,
             dtdt_c_per_min: rate * R::from_f32(60.0),
             since_power_on_s: self.ph.since_power_on(),
         });
-        #[cfg(not(feature = "terms"))]
-        let _ = rate;
+    }
+
+    /// Start or step the physics terms' machines (without the `terms` feature: a source
+    /// on the physics path has physics terms).
+    #[cfg(all(feature = "physics", not(feature = "terms")))]
+    #[inline(never)]
+    fn step_machines(&mut self, tick: Tick<R>, x: R) {
+        if let Some(p) = self.src.physics() {
+            let _ = self.ph.apply(tick, &p, x, self.src.t0_c());
+        }
     }
 
     /// Each discovered term's coefficient times its state part in state `s`
@@ -482,9 +506,12 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
     #[cfg(feature = "terms")]
     fn weigh_terms(&mut self, s: &UnitState<R>) {
         let n = self.src.term_count();
+        // the state table once, its decay slot per term: `state_values(s, tau)` each time
+        let mut v = state_values(s, 0.0);
         for (j, w) in self.weights.iter_mut().enumerate().take(n) {
             let t = self.src.term_raw(j);
-            *w = t.coefficient * product(&state_values(s, t.tau_s), t.codes);
+            set_decay(&mut v, s, t.tau_s);
+            *w = t.coefficient * product(&v, t.codes);
         }
     }
 
@@ -498,12 +525,18 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
             return;
         }
         let f = force_values(a);
+        // a fourth slot takes an axis code that is none (never after validation): the
+        // masked index needs no bounds check
+        let [e0, e1, e2] = *e;
+        let mut acc = [e0, e1, e2, R::ZERO];
         for (j, w) in self.weights.iter().enumerate().take(n) {
             let (axis, codes) = self.src.term_shape(j);
-            if let Some(slot) = e.get_mut(usize::from(axis)) {
+            if let Some(slot) = acc.get_mut(usize::from(axis & 3)) {
                 *slot = *slot + *w * product(&f, codes);
             }
         }
+        let [a0, a1, a2, _] = acc;
+        *e = [a0, a1, a2];
     }
 
     /// The physics terms around the core path: the temperature (when within 40 C of the
@@ -537,23 +570,19 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
         {
             return out;
         }
-        let [a0, a1, a2] = out.accel;
         // Path::Physics: physics terms, discovered terms, or both
-        #[allow(unused_mut)]
+        #[cfg(feature = "terms")]
         let mut e = match self.src.physics() {
-            Some(p) => {
-                let [k0, k1, k2] = p.k2;
-                let [c0, c1, c2] = p.asymmetry;
-                [
-                    k0 * a0 * a0 + c0 * a0.abs(),
-                    k1 * a1 * a1 + c1 * a1.abs(),
-                    k2 * a2 * a2 + c2 * a2.abs(),
-                ]
-            }
+            Some(p) => second_order(&p, out.accel),
             None => [R::ZERO; 3],
         };
         #[cfg(feature = "terms")]
         self.add_terms(&mut e, out.accel);
+        // without `terms`, Path::Physics is set only for a source with physics terms
+        #[cfg(not(feature = "terms"))]
+        let Some(e) = self.src.physics().map(|p| second_order(&p, out.accel)) else {
+            return out;
+        };
         let n = if m2 { &self.n0 } else { &self.n };
         out.accel = sub3(out.accel, mat_vec(n, e));
         let [b0, b1, b2] = out.accel;
@@ -589,6 +618,20 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
         }
         Output { accel, status }
     }
+}
+
+/// The K2 and scale-asymmetry terms at the estimated specific force `a`, per axis.
+#[cfg(feature = "physics")]
+#[inline]
+fn second_order<R: Real>(p: &crate::temperature::Physics<R>, a: Vec3<R>) -> Vec3<R> {
+    let [a0, a1, a2] = a;
+    let [k0, k1, k2] = p.k2;
+    let [c0, c1, c2] = p.asymmetry;
+    [
+        k0 * a0 * a0 + c0 * a0.abs(),
+        k1 * a1 * a1 + c1 * a1.abs(),
+        k2 * a2 * a2 + c2 * a2.abs(),
+    ]
 }
 
 /// Why the output is not finite: a non-finite input, or an overflow. Either way the

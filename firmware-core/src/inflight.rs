@@ -389,7 +389,8 @@ pub struct Machines<R> {
     warm: Warmup<R>,
     offset: [R; 3],
     /// The time since the latest power-on, as of the last step (a discovered term's
-    /// `decay(power_on,TAU)`).
+    /// `decay(power_on,TAU)`; only with the `terms` feature: flash and state).
+    #[cfg(feature = "terms")]
     since_on: Elapsed<R>,
     /// A power-on of the sensor is pending ([`Machines::power_on`]) this many seconds
     /// before the next sample; negative: none (no flag beside it: the compensator's
@@ -408,6 +409,7 @@ impl<R: Real> Default for Machines<R> {
             dir: Direction::default(),
             warm: Warmup::default(),
             offset: [R::ZERO; 3],
+            #[cfg(feature = "terms")]
             since_on: Elapsed::default(),
             on_s: -R::ONE,
         }
@@ -433,6 +435,7 @@ impl<R: Real> Machines<R> {
                 self.rate.start();
                 self.dir.start(power_on_direction(p, x, t0), x);
                 self.on_s = -R::ONE;
+                #[cfg(feature = "terms")]
                 self.since_on.set(since_on);
                 let w = self.warm.start(Step::new(since_on, p.warmup_tau_s));
                 (R::ZERO, self.dir.value(), w)
@@ -446,9 +449,11 @@ impl<R: Real> Machines<R> {
                 let w = if self.on_s >= R::ZERO {
                     let on = self.on_s;
                     self.on_s = -R::ONE;
+                    #[cfg(feature = "terms")]
                     self.since_on.set(on);
                     self.warm.start(Step::new(on, p.warmup_tau_s))
                 } else {
+                    #[cfg(feature = "terms")]
                     self.since_on.add(h);
                     self.warm.step(Step::new(h, p.warmup_tau_s))
                 };
@@ -507,7 +512,8 @@ impl<R: Real> Machines<R> {
         self.x
     }
 
-    /// The time since the latest power-on at the last step, s.
+    /// The time since the latest power-on at the last step, s (with the `terms` feature).
+    #[cfg(feature = "terms")]
     #[inline]
     pub fn since_power_on(&self) -> R {
         self.since_on.value()
@@ -674,6 +680,7 @@ mod tests {
     /// The time since power-on in f32: a day of 0.1 s steps summed with the compensation
     /// term stays within 2 eps of the exact sum of the (f32) steps, where a plain f32
     /// sum is off by seconds; and the machines keep it, a power-on restarting it.
+    #[cfg(feature = "terms")]
     #[test]
     fn elapsed_time_keeps_its_digits() {
         let (mut e, mut plain, mut exact) = (Elapsed::<f32>::default(), 0.0f32, 0.0f64);

@@ -131,8 +131,11 @@ pub enum Factor {
     DecayPowerOn = 9,
 }
 
-/// The number of slots of the factor value tables: code 0 (no factor) to the last code.
-const SLOTS: usize = 10;
+/// The number of slots of the factor value tables: a code masked to 4 bits indexes them
+/// without a bounds check (slots 10..16, no factor's, hold NaN, so a bug would show).
+pub const SLOTS: usize = 16;
+/// The mask of a code into the value tables.
+const SLOT_MASK: u8 = 15;
 
 impl Factor {
     /// Every factor, in canonical order.
@@ -306,34 +309,9 @@ impl Term {
     /// [`Term::new`] refuses, and a code that is no factor or out of canonical order
     /// ([`Error::TermFactors`]).
     pub fn from_codes(codes: [u8; MAX_FACTORS], tau_s: f32) -> Result<Term, Error> {
-        let mut factors = [None; MAX_FACTORS];
-        let mut ended = false;
-        let mut last = 0u8;
-        for (slot, &c) in factors.iter_mut().zip(codes.iter()) {
-            if c == 0 {
-                ended = true;
-                continue;
-            }
-            // after a gap, out of order, or an unknown code
-            if ended || c < last {
-                return Err(Error::TermFactors);
-            }
-            *slot = Some(Factor::from_code(c).ok_or(Error::TermFactors)?);
-            last = c;
-        }
-        let count = |x: Factor| factors.iter().filter(|f| **f == Some(x)).count();
-        let bad_abs = [Factor::AbsAx, Factor::AbsAy, Factor::AbsAz]
-            .iter()
-            .any(|a| count(*a) > 1);
-        if factors.first() == Some(&None) || bad_abs || count(Factor::DecayPowerOn) > 1 {
-            return Err(Error::TermFactors);
-        }
-        let has_decay = count(Factor::DecayPowerOn) == 1;
-        let tau = match (has_decay, Tau::from_seconds(tau_s)) {
-            (true, Some(t)) => Some(t),
-            (false, None) if tau_s == 0.0 => None,
-            _ => return Err(Error::TermTimeConstant),
-        };
+        check_codes(codes, tau_s)?;
+        let factors = codes.map(Factor::from_code);
+        let tau = Tau::from_seconds(tau_s);
         Ok(Term { factors, tau })
     }
 
@@ -380,6 +358,35 @@ impl Term {
     pub fn state<R: Real>(&self, s: &UnitState<R>) -> R {
         product(&state_values(s, self.tau_s()), self.codes())
     }
+}
+
+/// The rules of a canonical term on a blob entry's codes and TAU, checked where the entry
+/// lies (no term built: the firmware's validation): at least one factor, the codes known
+/// (1..=9) and ascending, zeros only after the last factor ([`Error::TermFactors`]);
+/// `abs(a_i)` (the even codes 2, 4, 6) and the decay (9) at most once, so never equal to
+/// their neighbour (also `TermFactors`); a decay's TAU positive and finite, 0 without a
+/// decay ([`Error::TermTimeConstant`]).
+#[inline]
+pub fn check_codes(codes: [u8; MAX_FACTORS], tau_s: f32) -> Result<(), Error> {
+    let [a, b, c] = codes;
+    let last = Factor::DecayPowerOn.code();
+    let ordered = a != 0 && (b == 0 || b >= a) && (c == 0 || (b != 0 && c >= b)) && c <= last;
+    let known = a <= last && b <= last;
+    let once = |x: u8| x == last || (x & 1 == 0 && x <= Factor::AbsAz.code());
+    let twice = |x: u8, y: u8| x != 0 && x == y && once(x);
+    if !ordered || !known || twice(a, b) || twice(b, c) {
+        return Err(Error::TermFactors);
+    }
+    let decay = a == last || b == last || c == last;
+    let tau_ok = if decay {
+        tau_s > 0.0 && tau_s.is_finite()
+    } else {
+        tau_s == 0.0
+    };
+    if !tau_ok {
+        return Err(Error::TermTimeConstant);
+    }
+    Ok(())
 }
 
 /// Sort three optional factors ascending, `None` last (a three-element network: fixed
@@ -452,21 +459,33 @@ pub fn decay_weight<R: Real>(since_power_on_s: R, tau_s: R) -> R {
 #[inline]
 pub fn force_values<R: Real>(a: Vec3<R>) -> [R; SLOTS] {
     let [x, y, z] = a;
-    let one = R::ONE;
-    [one, x, x.abs(), y, y.abs(), z, z.abs(), one, one, one]
+    let (one, nan) = (R::ONE, R::NAN);
+    [
+        one,
+        x,
+        x.abs(),
+        y,
+        y.abs(),
+        z,
+        z.abs(),
+        one,
+        one,
+        one,
+        nan,
+        nan,
+        nan,
+        nan,
+        nan,
+        nan,
+    ]
 }
 
 /// The state factors' values in state `s`, the decay's with time constant `tau_s` (s; 0:
 /// no decay), by code (code 0 and the force factors' codes hold an exact 1).
 #[inline]
 pub fn state_values<R: Real>(s: &UnitState<R>, tau_s: f32) -> [R; SLOTS] {
-    let one = R::ONE;
-    let w = if tau_s > 0.0 {
-        decay_weight(s.since_power_on_s, R::from_f32(tau_s))
-    } else {
-        one
-    };
-    [
+    let (one, nan) = (R::ONE, R::NAN);
+    let mut v = [
         one,
         one,
         one,
@@ -476,15 +495,42 @@ pub fn state_values<R: Real>(s: &UnitState<R>, tau_s: f32) -> [R; SLOTS] {
         one,
         s.dt_c,
         s.dtdt_c_per_min,
-        w,
-    ]
+        one,
+        nan,
+        nan,
+        nan,
+        nan,
+        nan,
+        nan,
+    ];
+    set_decay(&mut v, s, tau_s);
+    v
 }
 
-/// The product of the values at three codes, in order (a code out of the table reads as
-/// NaN: never for a validated term).
+/// Set the decay's slot of a state table to the weight for time constant `tau_s` (s; 0:
+/// no decay, an exact 1): the one slot that differs from term to term.
+#[inline]
+pub fn set_decay<R: Real>(v: &mut [R; SLOTS], s: &UnitState<R>, tau_s: f32) {
+    let w = if tau_s > 0.0 {
+        decay_weight(s.since_power_on_s, R::from_f32(tau_s))
+    } else {
+        R::ONE
+    };
+    if let Some(slot) = v.get_mut(usize::from(Factor::DecayPowerOn.code())) {
+        *slot = w;
+    }
+}
+
+/// The product of the values at three codes, in order (a code that is no factor's reads
+/// as NaN: never for a validated term).
 #[inline]
 pub fn product<R: Real>(values: &[R; SLOTS], codes: [u8; MAX_FACTORS]) -> R {
-    let v = |c: u8| values.get(usize::from(c)).copied().unwrap_or(R::NAN);
+    let v = |c: u8| {
+        values
+            .get(usize::from(c & SLOT_MASK))
+            .copied()
+            .unwrap_or(R::NAN)
+    };
     let [c0, c1, c2] = codes;
     v(c0) * v(c1) * v(c2)
 }

@@ -51,6 +51,18 @@ pub fn test(s: &mut Steps) {
             "--release",
         ]),
     );
+    s.run(
+        "tests (firmware-core with physics, without the terms feature)",
+        cargo(&[
+            "test",
+            "-p",
+            "firmware-core",
+            "--no-default-features",
+            "--features",
+            "physics",
+            "--release",
+        ]),
+    );
     // the reports' browser test needs Chromium: it fails (not skips) without it
     s.prepare("install chromium", crate::setup::chromium);
     // every test binary runs, so one failure does not hide the others

@@ -7,10 +7,11 @@
 void semihost_puts(const char *s);
 
 /* Written by `cargo xtask embedded` (c-data.c): the PWL blob from `host-fit fit`, the
- * physics blob from `host-fit diagnose --out`, the input table (ux uy uz temp dt, f32 LE:
- * each sample on its own time step, s). */
-extern const uint8_t fc_test_blob[], fc_test_blob_phys[], fc_test_inputs[];
-extern const uint32_t fc_test_blob_len, fc_test_blob_phys_len, fc_test_inputs_len;
+ * physics blob from `host-fit diagnose --out`, the golden blob with 8 discovered terms,
+ * the input table (ux uy uz temp dt, f32 LE: each sample on its own time step, s). */
+extern const uint8_t fc_test_blob[], fc_test_blob_phys[], fc_test_blob_terms[], fc_test_inputs[];
+extern const uint32_t fc_test_blob_len, fc_test_blob_phys_len, fc_test_blob_terms_len,
+    fc_test_inputs_len;
 
 static char line[96];
 static unsigned pos;
@@ -77,9 +78,32 @@ static int refusals(void) {
     return truncated == FC_ERR_TRUNCATED && flipped == FC_ERR_CRC ? 0 : 1;
 }
 
+/* The golden blob's discovered terms read back: 8 of them, the first a_x*a_y on z, and
+ * an index past the table refused. */
+static int terms(void) {
+    uint32_t n = 0;
+    fc_term t;
+    if (fc_blob_open(&blob, fc_test_blob_terms, fc_test_blob_terms_len) != FC_OK) return 1;
+    int32_t rc = fc_blob_term_count(&blob, &n);
+    int32_t first = fc_blob_term(&blob, 0, &t);
+    int32_t past = fc_blob_term(&blob, n, &t);
+    fc_blob_term(&blob, 0, &t);
+    put("terms "); put_dec(n);
+    put(" first "); put_dec(t.axis);
+    for (int k = 0; k < 3; k++) { put(" "); put_dec(t.factors[k]); }
+    flush();
+    return rc == FC_OK && first == FC_OK && past == FC_ERR_INDEX && n == FC_MAX_TERMS &&
+                   t.axis == 2 && t.factors[0] == FC_FACTOR_AX && t.factors[1] == FC_FACTOR_AY &&
+                   t.factors[2] == FC_FACTOR_NONE
+               ? 0
+               : 1;
+}
+
 int main(void) {
     int bad = run(fc_test_blob, fc_test_blob_len, "");
     bad |= run(fc_test_blob_phys, fc_test_blob_phys_len, "p");
+    bad |= run(fc_test_blob_terms, fc_test_blob_terms_len, "t");
+    bad |= terms();
     bad |= refusals();
     put(bad ? "failed" : "done"); flush();
     return bad;

@@ -51,6 +51,11 @@
 #define FC_ERR_NOT_INITIALISED 3
 
 /*
+ An index past the end of a table (`fc_blob_term`).
+ */
+#define FC_ERR_INDEX 4
+
+/*
  The blob ends before its declared length (cut short), or is shorter than a header.
  */
 #define FC_ERR_TRUNCATED 10
@@ -114,6 +119,36 @@
  The sample period is not a positive, finite number of seconds.
  */
 #define FC_ERR_BAD_SAMPLE_PERIOD 22
+
+/*
+ The table of discovered terms holds more than `FC_MAX_TERMS` entries.
+ */
+#define FC_ERR_TOO_MANY_TERMS 23
+
+/*
+ A discovered term's axis is none of x, y, z.
+ */
+#define FC_ERR_TERM_AXIS 24
+
+/*
+ A discovered term's factors are no canonical term of the vocabulary.
+ */
+#define FC_ERR_TERM_FACTORS 25
+
+/*
+ A discovered term's decay time constant is not positive (or given without a decay).
+ */
+#define FC_ERR_TERM_TIME_CONSTANT 26
+
+/*
+ The same discovered term twice on one axis.
+ */
+#define FC_ERR_DUPLICATE_TERM 27
+
+/*
+ The blob has discovered terms; the library was built without them.
+ */
+#define FC_ERR_TERMS_NOT_BUILT_IN 28
 
 /*
  Any other refusal (a newer firmware-core error).
@@ -222,6 +257,61 @@
 #define FC_RUN_ID_LEN 16
 
 /*
+ The most discovered terms a blob carries.
+ */
+#define FC_MAX_TERMS 8
+
+/*
+ A discovered term's factor code: no factor (after the last).
+ */
+#define FC_FACTOR_NONE 0
+
+/*
+ Factor code: `a_x`, g.
+ */
+#define FC_FACTOR_AX 1
+
+/*
+ Factor code: `abs(a_x)`.
+ */
+#define FC_FACTOR_ABS_AX 2
+
+/*
+ Factor code: `a_y`, g.
+ */
+#define FC_FACTOR_AY 3
+
+/*
+ Factor code: `abs(a_y)`.
+ */
+#define FC_FACTOR_ABS_AY 4
+
+/*
+ Factor code: `a_z`, g.
+ */
+#define FC_FACTOR_AZ 5
+
+/*
+ Factor code: `abs(a_z)`.
+ */
+#define FC_FACTOR_ABS_AZ 6
+
+/*
+ Factor code: `dT`, the sensor temperature minus T0, C.
+ */
+#define FC_FACTOR_DT 7
+
+/*
+ Factor code: `dTdt`, the sensor temperature's rate, C/min.
+ */
+#define FC_FACTOR_DTDT 8
+
+/*
+ Factor code: `decay(power_on,TAU)`, TAU the term's `tau_s`.
+ */
+#define FC_FACTOR_DECAY_POWER_ON 9
+
+/*
  Storage for a validated blob (a view of the bytes in flash). Opaque: fill it with
  `fc_blob_open`.
  */
@@ -236,6 +326,29 @@ typedef struct {
 typedef struct {
   uint64_t _opaque[32];
 } fc_compensator;
+
+/*
+ One discovered term of a blob, as the blob stores it: `U[axis] += coefficient *
+ product of the factors`.
+ */
+typedef struct {
+  /*
+   The output axis the term enters: 0 x, 1 y, 2 z.
+   */
+  uint8_t axis;
+  /*
+   The factor codes (`FC_FACTOR_*`), canonical order, `FC_FACTOR_NONE` after the last.
+   */
+  uint8_t factors[3];
+  /*
+   The decay's time constant, s (0 when there is no `FC_FACTOR_DECAY_POWER_ON`).
+   */
+  float tau_s;
+  /*
+   The coefficient, output units per the term's units.
+   */
+  float coefficient;
+} fc_term;
 
 #ifdef __cplusplus
 extern "C" {
@@ -348,6 +461,31 @@ int32_t fc_blob_run_id(const fc_blob *blob, uint8_t *out);
  writable byte.
  */
 int32_t fc_blob_output_unit(const fc_blob *blob, uint8_t *unit);
+
+/*
+ Write the number of discovered terms the blob carries (0..=`FC_MAX_TERMS`) to
+ `count`.
+
+ Returns `FC_OK`, `FC_ERR_NULL` or `FC_ERR_NOT_INITIALISED` (blob not opened).
+
+ # Safety
+ `blob` is NULL or points to `fc_blob` storage; `count` is NULL or points to a
+ writable `uint32_t`.
+ */
+int32_t fc_blob_term_count(const fc_blob *blob, uint32_t *count);
+
+/*
+ Copy discovered term `index` (0-based) of the blob to `term`, as the blob stores it
+ (validated when the blob was opened).
+
+ Returns `FC_OK`, `FC_ERR_NULL`, `FC_ERR_NOT_INITIALISED` (blob not opened) or
+ `FC_ERR_INDEX` (`index` at or past the count; then nothing is written).
+
+ # Safety
+ `blob` is NULL or points to `fc_blob` storage; `term` is NULL or points to writable
+ `fc_term` storage.
+ */
+int32_t fc_blob_term(const fc_blob *blob, uint32_t index, fc_term *term);
 
 /*
  The format version a blob's header names (bytes 4..6), whatever its validity: to

@@ -15,6 +15,10 @@
 //! uint32_t status = fc_compensate(&comp, volts, temp_c, accel_g);
 //! /* a sample 0.25 s after the previous one (a gap) */
 //! status = fc_compensate_dt(&comp, volts, temp_c, 0.25f, accel_g);
+//! /* the discovered terms the blob carries (compensated by fc_compensate too) */
+//! uint32_t n; fc_term term;
+//! fc_blob_term_count(&blob, &n);
+//! for (uint32_t i = 0; i < n; i++) fc_blob_term(&blob, i, &term);
 //! ```
 #![no_std]
 #![deny(unsafe_code)]
@@ -22,6 +26,8 @@
 use core::mem::{align_of, size_of};
 use firmware_core::blob::{BlobView, RUN_ID_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, FlashCompensator, Method, Status};
+use firmware_core::temperature::Source;
+use firmware_core::terms::{Factor, MAX_TERMS};
 use firmware_core::Error;
 
 /// Bytes of an [`fc_blob`].
@@ -39,6 +45,8 @@ pub const FC_ERR_NULL: i32 = 1;
 pub const FC_ERR_BAD_METHOD: i32 = 2;
 /// The storage was not initialised by `fc_blob_open` / `fc_compensator_init`.
 pub const FC_ERR_NOT_INITIALISED: i32 = 3;
+/// An index past the end of a table (`fc_blob_term`).
+pub const FC_ERR_INDEX: i32 = 4;
 /// The blob ends before its declared length (cut short), or is shorter than a header.
 pub const FC_ERR_TRUNCATED: i32 = 10;
 /// CRC-32 mismatch: the blob is corrupted.
@@ -65,6 +73,18 @@ pub const FC_ERR_SINGULAR: i32 = 20;
 pub const FC_ERR_PHYSICS_NOT_BUILT_IN: i32 = 21;
 /// The sample period is not a positive, finite number of seconds.
 pub const FC_ERR_BAD_SAMPLE_PERIOD: i32 = 22;
+/// The table of discovered terms holds more than `FC_MAX_TERMS` entries.
+pub const FC_ERR_TOO_MANY_TERMS: i32 = 23;
+/// A discovered term's axis is none of x, y, z.
+pub const FC_ERR_TERM_AXIS: i32 = 24;
+/// A discovered term's factors are no canonical term of the vocabulary.
+pub const FC_ERR_TERM_FACTORS: i32 = 25;
+/// A discovered term's decay time constant is not positive (or given without a decay).
+pub const FC_ERR_TERM_TIME_CONSTANT: i32 = 26;
+/// The same discovered term twice on one axis.
+pub const FC_ERR_DUPLICATE_TERM: i32 = 27;
+/// The blob has discovered terms; the library was built without them.
+pub const FC_ERR_TERMS_NOT_BUILT_IN: i32 = 28;
 /// Any other refusal (a newer firmware-core error).
 pub const FC_ERR_OTHER: i32 = 99;
 
@@ -112,6 +132,45 @@ pub const FC_UNIT_OTHER: u8 = 7;
 /// Bytes of a blob's run id.
 pub const FC_RUN_ID_LEN: usize = 16;
 
+/// The most discovered terms a blob carries.
+pub const FC_MAX_TERMS: u32 = 8;
+/// A discovered term's factor code: no factor (after the last).
+pub const FC_FACTOR_NONE: u8 = 0;
+/// Factor code: `a_x`, g.
+pub const FC_FACTOR_AX: u8 = 1;
+/// Factor code: `abs(a_x)`.
+pub const FC_FACTOR_ABS_AX: u8 = 2;
+/// Factor code: `a_y`, g.
+pub const FC_FACTOR_AY: u8 = 3;
+/// Factor code: `abs(a_y)`.
+pub const FC_FACTOR_ABS_AY: u8 = 4;
+/// Factor code: `a_z`, g.
+pub const FC_FACTOR_AZ: u8 = 5;
+/// Factor code: `abs(a_z)`.
+pub const FC_FACTOR_ABS_AZ: u8 = 6;
+/// Factor code: `dT`, the sensor temperature minus T0, C.
+pub const FC_FACTOR_DT: u8 = 7;
+/// Factor code: `dTdt`, the sensor temperature's rate, C/min.
+pub const FC_FACTOR_DTDT: u8 = 8;
+/// Factor code: `decay(power_on,TAU)`, TAU the term's `tau_s`.
+pub const FC_FACTOR_DECAY_POWER_ON: u8 = 9;
+
+/// One discovered term of a blob, as the blob stores it: `U[axis] += coefficient *
+/// product of the factors`.
+#[allow(non_camel_case_types)]
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct fc_term {
+    /// The output axis the term enters: 0 x, 1 y, 2 z.
+    pub axis: u8,
+    /// The factor codes (`FC_FACTOR_*`), canonical order, `FC_FACTOR_NONE` after the last.
+    pub factors: [u8; 3],
+    /// The decay's time constant, s (0 when there is no `FC_FACTOR_DECAY_POWER_ON`).
+    pub tau_s: f32,
+    /// The coefficient, output units per the term's units.
+    pub coefficient: f32,
+}
+
 /// Storage for a validated blob (a view of the bytes in flash). Opaque: fill it with
 /// `fc_blob_open`.
 #[allow(non_camel_case_types)]
@@ -157,6 +216,17 @@ const _: () = {
     assert!(FC_RUN_ID_LEN == RUN_ID_LEN);
 };
 
+// The factor codes and the table's bound are firmware-core's.
+const _: () = {
+    assert!(FC_MAX_TERMS as usize == MAX_TERMS);
+    assert!(FC_FACTOR_AX == Factor::Ax.code() && FC_FACTOR_ABS_AX == Factor::AbsAx.code());
+    assert!(FC_FACTOR_AY == Factor::Ay.code() && FC_FACTOR_ABS_AY == Factor::AbsAy.code());
+    assert!(FC_FACTOR_AZ == Factor::Az.code() && FC_FACTOR_ABS_AZ == Factor::AbsAz.code());
+    assert!(FC_FACTOR_DT == Factor::DT.code() && FC_FACTOR_DTDT == Factor::DTdt.code());
+    assert!(FC_FACTOR_DECAY_POWER_ON == Factor::DecayPowerOn.code());
+    assert!(size_of::<fc_term>() == 12);
+};
+
 // The unit codes are firmware-core's.
 const _: () = {
     use firmware_core::blob::OutputUnit;
@@ -197,6 +267,12 @@ fn code(e: Error) -> i32 {
         Error::Singular => FC_ERR_SINGULAR,
         Error::PhysicsNotBuiltIn => FC_ERR_PHYSICS_NOT_BUILT_IN,
         Error::BadSamplePeriod => FC_ERR_BAD_SAMPLE_PERIOD,
+        Error::TooManyTerms => FC_ERR_TOO_MANY_TERMS,
+        Error::TermAxis => FC_ERR_TERM_AXIS,
+        Error::TermFactors => FC_ERR_TERM_FACTORS,
+        Error::TermTimeConstant => FC_ERR_TERM_TIME_CONSTANT,
+        Error::DuplicateTerm => FC_ERR_DUPLICATE_TERM,
+        Error::TermsNotBuiltIn => FC_ERR_TERMS_NOT_BUILT_IN,
         _ => FC_ERR_OTHER,
     }
 }
@@ -490,6 +566,65 @@ pub unsafe extern "C" fn fc_blob_output_unit(blob: *const fc_blob, unit: *mut u8
     };
     // SAFETY: `unit` is non-NULL and points to a writable byte (the contract).
     unsafe { unit.write(view.output_unit().code()) };
+    FC_OK
+}
+
+/// Write the number of discovered terms the blob carries (0..=`FC_MAX_TERMS`) to
+/// `count`.
+///
+/// Returns `FC_OK`, `FC_ERR_NULL` or `FC_ERR_NOT_INITIALISED` (blob not opened).
+///
+/// # Safety
+/// `blob` is NULL or points to `fc_blob` storage; `count` is NULL or points to a
+/// writable `uint32_t`.
+#[allow(unsafe_code)]
+#[no_mangle]
+pub unsafe extern "C" fn fc_blob_term_count(blob: *const fc_blob, count: *mut u32) -> i32 {
+    if blob.is_null() || count.is_null() {
+        return FC_ERR_NULL;
+    }
+    // SAFETY: `blob` is non-NULL readable `fc_blob` storage (the contract).
+    let Some(view) = (unsafe { view_of(blob) }) else {
+        return FC_ERR_NOT_INITIALISED;
+    };
+    let n = u32::try_from(view.term_count()).unwrap_or(u32::MAX);
+    // SAFETY: `count` is non-NULL and points to a writable u32 (the contract).
+    unsafe { count.write(n) };
+    FC_OK
+}
+
+/// Copy discovered term `index` (0-based) of the blob to `term`, as the blob stores it
+/// (validated when the blob was opened).
+///
+/// Returns `FC_OK`, `FC_ERR_NULL`, `FC_ERR_NOT_INITIALISED` (blob not opened) or
+/// `FC_ERR_INDEX` (`index` at or past the count; then nothing is written).
+///
+/// # Safety
+/// `blob` is NULL or points to `fc_blob` storage; `term` is NULL or points to writable
+/// `fc_term` storage.
+#[allow(unsafe_code)]
+#[no_mangle]
+pub unsafe extern "C" fn fc_blob_term(blob: *const fc_blob, index: u32, term: *mut fc_term) -> i32 {
+    if blob.is_null() || term.is_null() {
+        return FC_ERR_NULL;
+    }
+    // SAFETY: `blob` is non-NULL readable `fc_blob` storage (the contract).
+    let Some(view) = (unsafe { view_of(blob) }) else {
+        return FC_ERR_NOT_INITIALISED;
+    };
+    let j = usize::try_from(index).unwrap_or(usize::MAX);
+    if j >= view.term_count() {
+        return FC_ERR_INDEX;
+    }
+    let r = view.term_raw(j);
+    let out = fc_term {
+        axis: r.axis,
+        factors: r.codes,
+        tau_s: r.tau_s,
+        coefficient: r.coefficient,
+    };
+    // SAFETY: `term` is non-NULL and points to writable `fc_term` storage (the contract).
+    unsafe { term.write(out) };
     FC_OK
 }
 

@@ -8,15 +8,23 @@
     clippy::indexing_slicing,
     clippy::multiple_unsafe_ops_per_block
 )]
-use firmware_core::blob::{example_blob, example_physics, BlobView, MAX_BLOB_LEN};
+use firmware_core::blob::{example_blob, example_physics, example_terms, BlobView, MAX_BLOB_LEN};
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
 use firmware_core_ffi::*;
 use std::mem::MaybeUninit;
 
 fn blob_bytes(physics: bool) -> &'static [u8] {
+    blob_with(physics, false)
+}
+
+/// The example blob, with physics terms and with the example's 8 discovered terms.
+fn blob_with(physics: bool, terms: bool) -> &'static [u8] {
     let mut b = example_blob();
     if physics {
         b.calibration.physics = Some(example_physics());
+    }
+    if terms {
+        b.terms = example_terms();
     }
     let mut buf = vec![0u8; MAX_BLOB_LEN];
     let n = b.encode(&mut buf).unwrap();
@@ -59,8 +67,8 @@ fn init_at(blob: &fc_blob, m: u32, period: f32) -> Result<Box<fc_compensator>, i
 
 #[test]
 fn c_results_are_the_rust_results_bit_for_bit() {
-    for physics in [false, true] {
-        let bytes = blob_bytes(physics);
+    for (physics, terms) in [(false, false), (true, false), (true, true), (false, true)] {
+        let bytes = blob_with(physics, terms);
         let blob = open(bytes).unwrap();
         for (id, m) in [
             (FC_METHOD_CONSTANTS, Method::CorrectConstants),
@@ -102,7 +110,7 @@ fn c_results_are_the_rust_results_bit_for_bit() {
                 assert_eq!(
                     a.map(f32::to_bits),
                     r.accel.map(f32::to_bits),
-                    "{physics} {id} {k}"
+                    "{physics} {terms} {id} {k}"
                 );
                 assert_eq!(st, u32::from(r.status.bits()));
             }
@@ -146,6 +154,79 @@ fn run_id_and_output_unit_are_read_from_c() {
     );
     assert_eq!(id[0], 0xa1);
     assert_eq!(unit, FC_UNIT_M_S2);
+}
+
+/// The discovered terms read from C as the blob stores them; an index past the table
+/// refused.
+#[test]
+fn discovered_terms_are_read_from_c() {
+    let blob = open(blob_with(true, true)).unwrap();
+    let mut n = 0u32;
+    let mut t = fc_term {
+        axis: 9,
+        factors: [9; 3],
+        tau_s: -1.0,
+        coefficient: -1.0,
+    };
+    // SAFETY: opened storage; a writable u32 and fc_term.
+    unsafe {
+        assert_eq!(fc_blob_term_count(&*blob, &mut n), FC_OK);
+        assert_eq!(n, FC_MAX_TERMS);
+        for (i, e) in example_terms().iter().enumerate() {
+            assert_eq!(fc_blob_term(&*blob, i as u32, &mut t), FC_OK);
+            assert_eq!(t.axis, e.axis as u8);
+            assert_eq!(t.factors, e.term.codes());
+            assert_eq!(t.tau_s, e.term.tau_s());
+            assert_eq!(t.coefficient, e.coefficient);
+        }
+        let before = t;
+        assert_eq!(fc_blob_term(&*blob, n, &mut t), FC_ERR_INDEX);
+        assert_eq!(t, before, "nothing written");
+        assert_eq!(fc_blob_term(&*blob, 0, std::ptr::null_mut()), FC_ERR_NULL);
+        // dT*decay(power_on,20min) on z, entry 5
+        assert_eq!(fc_blob_term(&*blob, 5, &mut t), FC_OK);
+        assert_eq!(
+            (t.axis, t.factors, t.tau_s),
+            (
+                2,
+                [FC_FACTOR_DT, FC_FACTOR_DECAY_POWER_ON, FC_FACTOR_NONE],
+                1200.0
+            )
+        );
+        let plain = open(blob_bytes(false)).unwrap();
+        assert_eq!(fc_blob_term_count(&*plain, &mut n), FC_OK);
+        assert_eq!(n, 0);
+        let never = MaybeUninit::<fc_blob>::zeroed().assume_init();
+        assert_eq!(fc_blob_term_count(&never, &mut n), FC_ERR_NOT_INITIALISED);
+    }
+}
+
+/// A term table that is not valid, behind a valid CRC: each failure its own code.
+#[test]
+fn bad_term_tables_are_refused_with_their_codes() {
+    let good = blob_with(false, true).to_vec();
+    let head = good.len() - 4 - 4 - 8 * 12;
+    let reseal = |mut b: Vec<u8>| -> &'static [u8] {
+        let n = b.len() - 4;
+        let c = firmware_core::crc::crc32(&b[..n]);
+        b[n..].copy_from_slice(&c.to_le_bytes());
+        b.leak()
+    };
+    let edit = |at: usize, v: u8| {
+        let mut b = good.clone();
+        b[at] = v;
+        open(reseal(b)).err()
+    };
+    assert_eq!(edit(head, 9), Some(FC_ERR_TOO_MANY_TERMS));
+    assert_eq!(edit(head + 4, 3), Some(FC_ERR_TERM_AXIS));
+    assert_eq!(edit(head + 5, 10), Some(FC_ERR_TERM_FACTORS));
+    // the decay of entry 6 given no time constant
+    let mut b = good.clone();
+    b[head + 4 + 72 + 4..head + 4 + 72 + 8].copy_from_slice(&0f32.to_le_bytes());
+    assert_eq!(open(reseal(b)).err(), Some(FC_ERR_TERM_TIME_CONSTANT));
+    let mut b = good.clone();
+    b.copy_within(head + 4..head + 16, head + 4 + 36);
+    assert_eq!(open(reseal(b)).err(), Some(FC_ERR_DUPLICATE_TERM));
 }
 
 #[test]

@@ -1,5 +1,6 @@
 //! Puts memory.x where the linker finds it; the blobs and the input table come from
-//! `cargo xtask embedded` through FW_TEST_BLOB, FW_TEST_BLOB_PHYS and FW_TEST_INPUTS.
+//! `cargo xtask embedded` through FW_TEST_BLOB, FW_TEST_BLOB_PHYS, FW_TEST_BLOB_TERMS and
+//! FW_TEST_INPUTS.
 //! The two synthetic blobs of the update-cost measurement (a cubic and a 5-breakpoint
 //! table built on the fitted unit's K(T0)) are encoded here, on the host, by the same
 //! firmware-core code, so the firmware links no encoder.
@@ -12,7 +13,7 @@ fn main() {
     std::fs::write(out.join("memory.x"), include_bytes!("memory.x")).unwrap();
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed=memory.x");
-    for v in ["FW_TEST_BLOB", "FW_TEST_BLOB_PHYS", "FW_TEST_INPUTS"] {
+    for v in ["FW_TEST_BLOB", "FW_TEST_BLOB_PHYS", "FW_TEST_BLOB_TERMS", "FW_TEST_INPUTS"] {
         println!("cargo:rerun-if-env-changed={v}");
         if let Some(p) = std::env::var_os(v) {
             println!("cargo:rerun-if-changed={}", PathBuf::from(p).display());
@@ -25,6 +26,7 @@ fn main() {
         let mut b = base.clone();
         b.calibration.update_step_c = 0.0;
         b.calibration.physics = None;
+        b.terms.clear();
         b.calibration.model = if poly {
             TempModel::Poly { terms: [t0, [1e-5; 12], [1e-7; 12], [1e-9; 12]].into_iter().collect() }
         } else {

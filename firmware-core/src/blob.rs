@@ -1,6 +1,6 @@
 //! The coefficient blob flashed beside the firmware, validated and read in place.
 //!
-//! Format version 4: a fixed little-endian layout of f32 words behind a 16-byte header,
+//! Format version 5: a fixed little-endian layout of f32 words behind a 16-byte header,
 //! CRC-32 last. Every time constant is in seconds; the blob holds no sample period (the
 //! firmware is told its own when it makes the compensator). [`BlobView::new`] checks a blob where it lies (flash) and the
 //! compensator reads the tables from those bytes: no copy of the tables on the stack or
@@ -10,12 +10,12 @@
 //! | bytes | content |
 //! |---|---|
 //! | 0..4 | magic `ATCB` |
-//! | 4..6 | format version (u16), [`FORMAT_VERSION`] |
+//! | 4..6 | format version (u16): 5 with a table of discovered terms, else 4 ([`FORMAT_VERSION`], [`OLDEST_FORMAT_VERSION`]) |
 //! | 6..8 | total length n, CRC included (u16) |
 //! | 8..10 | `!n` (u16): a length that disagrees with its complement is corruption, not truncation |
 //! | 10 | model: 1 polynomial, 2 piecewise-linear |
 //! | 11 | rows: polynomial terms (order + 1, 2..=6) or breakpoints (2..=16) |
-//! | 12 | flags: bit 0 clamp (other bits 0) |
+//! | 12 | flags: bit 0 clamp, bit 1 a table of discovered terms follows (format 5; other bits 0) |
 //! | 13 | serial length s (0..=64) |
 //! | 14 | physics section words (0, or [`PHYSICS_WORDS`]) |
 //! | 15 | output unit ([`OutputUnit`] code 0..=7) |
@@ -25,7 +25,14 @@
 //! | | breakpoints (f32 each; piecewise-linear only) |
 //! | | rows x 12 coefficients (f32, [`crate::model::COEFF_NAMES`] order) |
 //! | | physics section (f32 words, [`Physics::to_words`] order) |
+//! | | discovered terms (format 5 only): a head word `[count 1..=8, 0, 0, 0]`, then `count` entries of [`TERM_BYTES`] |
 //! | n-4..n | CRC-32 (IEEE) of bytes 0..n-4 |
+//!
+//! A term entry ([`crate::terms`]), 12 bytes: the output axis it enters (u8: 0 x, 1 y,
+//! 2 z), its three factor codes (u8 each, [`crate::terms::Factor`]: canonical order,
+//! 0 after the last factor), the decay's time constant TAU (f32, s; 0 when the term has
+//! no `decay(power_on,TAU)`) and the coefficient (f32, output units per the term's
+//! units: `U_axis += coefficient * term`).
 //!
 //! [`BlobView::new`] checks, in order: (1) the slice holds a header and a checksum and
 //! the declared length (when it agrees with its complement) is the slice's length
@@ -33,17 +40,26 @@
 //! ([`Error::CrcMismatch`]): any flipped bit, the version's included, reads as
 //! corruption; (3) magic and version ([`Error::BadMagic`],
 //! [`Error::UnsupportedVersion`]); (4) the header against the layout
-//! ([`Error::TableSize`], [`Error::Malformed`]); (5) the content: finite values, range,
-//! increasing breakpoints, physics ranges, K(T0) invertible.
+//! ([`Error::TableSize`], [`Error::Malformed`], [`Error::TooManyTerms`]; built without
+//! the `terms` feature, a blob with a term table is refused here,
+//! [`Error::TermsNotBuiltIn`]); (5) the
+//! content: finite values, range, increasing breakpoints, physics ranges, each term
+//! ([`Error::TermAxis`], [`Error::TermFactors`], [`Error::TermTimeConstant`],
+//! [`Error::NonFinite`]) and no term twice on an axis ([`Error::DuplicateTerm`]), K(T0)
+//! invertible.
 //!
-//! Older blobs: version 3 has the same header (its time constants are per-sample
-//! constants for one sample period, byte 15 is 0 and there is no run id): it passes the
-//! CRC and is refused as `UnsupportedVersion(3)`. Versions 1 and 2 also end with the
-//! CRC-32 of everything before it, but have no length field (bytes 6..10 are content,
-//! which matches its own complement with probability 2^-16). So when the length pair
-//! disagrees, the CRC is taken over the whole slice: a version-2 blob passes it and is
-//! refused as `UnsupportedVersion(2)`, while a current blob with a flipped length bit
-//! fails it (`CrcMismatch`).
+//! Versions: format 5 is format 4 with the table of discovered terms. A blob without
+//! terms is written as format 4, byte for byte what format 4 wrote, so firmware of
+//! format 4 keeps reading every blob that does not need the table; this firmware reads
+//! both (a format-5 blob without a table, or a format-4 one with the flag, is
+//! [`Error::Malformed`]: each blob has one encoding). Version 3 has the same header (its
+//! time constants are per-sample constants for one sample period, byte 15 is 0 and there
+//! is no run id): it passes the CRC and is refused as `UnsupportedVersion(3)`. Versions 1
+//! and 2 also end with the CRC-32 of everything before it, but have no length field
+//! (bytes 6..10 are content, which matches its own complement with probability 2^-16).
+//! So when the length pair disagrees, the CRC is taken over the whole slice: a version-2
+//! blob passes it and is refused as `UnsupportedVersion(2)`, while a current blob with a
+//! flipped length bit fails it (`CrcMismatch`).
 #![deny(clippy::arithmetic_side_effects)]
 use crate::crc::crc32;
 use crate::error::Error;
@@ -52,8 +68,11 @@ use crate::temperature::{
     eval_table, validate_source, Calibration, CoeffRow, ModelKind, Physics, Source, Table,
     TempModel, MAX_BREAKPOINTS, MAX_POLY_ORDER, PHYSICS_WORDS,
 };
+#[cfg(feature = "terms")]
+use crate::terms::RawTerm;
+use crate::terms::{validate_entries, Axis, Tau, Term, TermEntry, TermList, MAX_TERMS};
 
-pub use crate::format::FORMAT_VERSION;
+pub use crate::format::{FORMAT_VERSION, OLDEST_FORMAT_VERSION};
 
 /// The four magic bytes a blob starts with.
 pub const MAGIC: [u8; 4] = *b"ATCB";
@@ -61,8 +80,13 @@ pub const MAGIC: [u8; 4] = *b"ATCB";
 pub const HEADER_LEN: usize = 16;
 /// Bytes of the trailing checksum.
 pub const CRC_LEN: usize = 4;
-/// The largest blob this version can produce (16 breakpoints, 64-byte serial, physics).
-pub const MAX_BLOB_LEN: usize = 1028;
+/// The largest blob this version can produce (16 breakpoints, 64-byte serial, physics,
+/// 8 discovered terms).
+pub const MAX_BLOB_LEN: usize = 1128;
+/// Bytes of one entry of the table of discovered terms.
+pub const TERM_BYTES: usize = 12;
+/// Bytes of the term table's head word (the count and three zero bytes).
+pub const TERMS_HEAD_BYTES: usize = 4;
 /// Bytes of the run id.
 pub const RUN_ID_LEN: usize = 16;
 /// Longest unit serial, bytes of printable ASCII (a recording's own unit names, such as
@@ -72,6 +96,7 @@ pub const MAX_SERIAL_LEN: usize = 64;
 const MODEL_POLY: u8 = 1;
 const MODEL_PWL: u8 = 2;
 const FLAG_CLAMP: u8 = 1;
+const FLAG_TERMS: u8 = 2;
 const ROW_BYTES: usize = 4 * N_COEFFS;
 const SCALAR_BYTES: usize = 16;
 const PHYSICS_BYTES: usize = 4 * PHYSICS_WORDS;
@@ -188,13 +213,22 @@ struct Layout {
     breakpoints: usize,
     table: usize,
     physics: usize,
+    /// The term table's head word (where the CRC lies when there is no table).
+    terms: usize,
     crc: usize,
 }
 
 impl Layout {
     /// `serial`: bytes of serial; `rows`: table rows; `physics`: whether the section is
-    /// there. The sizes are bounded by the header's u8 fields, so nothing overflows.
-    const fn new(kind: ModelKind, rows: usize, serial: usize, physics: bool) -> Layout {
+    /// there; `terms`: entries of the term table (0: no table). The sizes are bounded by
+    /// the header's u8 fields and [`MAX_TERMS`], so nothing overflows.
+    const fn new(
+        kind: ModelKind,
+        rows: usize,
+        serial: usize,
+        physics: bool,
+        terms: usize,
+    ) -> Layout {
         let padded = serial.saturating_add(3) & !3;
         let run_id = HEADER_LEN.saturating_add(padded);
         let scalars = run_id.saturating_add(RUN_ID_LEN);
@@ -205,13 +239,21 @@ impl Layout {
         };
         let table = breakpoints.saturating_add(bp_bytes);
         let physics_at = table.saturating_add(rows.saturating_mul(ROW_BYTES));
-        let crc = physics_at.saturating_add(if physics { PHYSICS_BYTES } else { 0 });
+        let terms_at = physics_at.saturating_add(if physics { PHYSICS_BYTES } else { 0 });
+        let crc = if terms > 0 {
+            terms_at
+                .saturating_add(TERMS_HEAD_BYTES)
+                .saturating_add(terms.saturating_mul(TERM_BYTES))
+        } else {
+            terms_at
+        };
         Layout {
             run_id,
             scalars,
             breakpoints,
             table,
             physics: physics_at,
+            terms: terms_at,
             crc,
         }
     }
@@ -229,14 +271,23 @@ const _: () = {
     // the length fields are u16
     assert!(MAX_BLOB_LEN <= u16::MAX as usize);
     // the largest blob of either kind fits MAX_BLOB_LEN, so every valid blob re-encodes
-    let pwl = Layout::new(ModelKind::Pwl, MAX_BREAKPOINTS, MAX_SERIAL_LEN, true);
+    let pwl = Layout::new(
+        ModelKind::Pwl,
+        MAX_BREAKPOINTS,
+        MAX_SERIAL_LEN,
+        true,
+        MAX_TERMS,
+    );
     let poly = Layout::new(
         ModelKind::Poly,
         MAX_POLY_ORDER.saturating_add(1),
         MAX_SERIAL_LEN,
         true,
+        MAX_TERMS,
     );
     assert!(pwl.total() <= MAX_BLOB_LEN && poly.total() <= MAX_BLOB_LEN);
+    // the term count fits the head's byte, and an entry keeps the words aligned
+    assert!(MAX_TERMS <= 255 && TERM_BYTES % 4 == 0 && TERMS_HEAD_BYTES == 4);
     // the row and word counts fit the header's u8 fields
     assert!(MAX_BREAKPOINTS <= 255);
     assert!(PHYSICS_WORDS <= 255);
@@ -271,9 +322,18 @@ pub struct BlobView<'a> {
     kind: ModelKind,
     rows: u8,
     clamp: bool,
+    /// Entries of the term table (0: none; only with the `terms` feature, as every field
+    /// and method of the table: a firmware without it refuses a table, and links none of
+    /// its code).
+    #[cfg(feature = "terms")]
+    n_terms: u8,
     scalars: u16,
     breakpoints: u16,
     table: u16,
+    /// The term table's head word (the CRC's offset when there is none): where the f32
+    /// words that [`Source::all_finite`] checks end.
+    #[cfg(feature = "terms")]
+    terms: u16,
 }
 
 impl<'a> BlobView<'a> {
@@ -301,14 +361,20 @@ impl<'a> BlobView<'a> {
             return Err(Error::BadMagic);
         }
         let version = u16_at(bytes, 4).unwrap_or(0);
-        if version != FORMAT_VERSION {
+        if !(OLDEST_FORMAT_VERSION..=FORMAT_VERSION).contains(&version) {
             return Err(Error::UnsupportedVersion(version));
+        }
+        // a firmware without `terms` neither validates nor applies a table it cannot
+        // compensate: a blob with one (format 5) is refused when it is opened, and no code
+        // of the table is linked (its flash budget)
+        if cfg!(not(feature = "terms")) && version == FORMAT_VERSION {
+            return Err(Error::TermsNotBuiltIn);
         }
         // A current-version blob with a valid CRC must declare its own length.
         if declared_len(bytes) != Some(n) {
             return Err(Error::Malformed);
         }
-        let view = Self::parse_header(bytes)?;
+        let view = Self::parse_header(bytes, version)?;
         validate_source(&view)?;
         let c0 = Coeffs::from_array(&eval_table(&view, view.t0_c(), view.t0_c()));
         invert(&c0.k).ok_or(Error::Singular)?;
@@ -325,7 +391,7 @@ impl<'a> BlobView<'a> {
     }
 
     /// The header's fields against the layout (CRC, magic and version already checked).
-    fn parse_header(bytes: &'a [u8]) -> Result<Self, Error> {
+    fn parse_header(bytes: &'a [u8], version: u16) -> Result<Self, Error> {
         let h = bytes.first_chunk::<HEADER_LEN>().ok_or(Error::Truncated)?;
         let [_, _, _, _, _, _, _, _, _, _, model, rows, flags, serial, physics, unit] = *h;
         let kind = match model {
@@ -345,13 +411,24 @@ impl<'a> BlobView<'a> {
             PHYSICS_WORDS => true,
             _ => return Err(Error::Malformed),
         };
-        if flags & !FLAG_CLAMP != 0
+        // format 5 is written only with a term table, format 4 never has one (and a
+        // firmware without `terms` refused format 5 when it read the version)
+        let has_terms = cfg!(feature = "terms") && version == FORMAT_VERSION;
+        let terms_flag = if has_terms { FLAG_TERMS } else { 0 };
+        if flags & !FLAG_CLAMP != terms_flag
             || OutputUnit::from_code(unit).is_none()
             || usize::from(serial) > MAX_SERIAL_LEN
         {
             return Err(Error::Malformed);
         }
-        let l = Layout::new(kind, usize::from(rows), usize::from(serial), has_physics);
+        let (rows_n, serial_n) = (usize::from(rows), usize::from(serial));
+        let n_terms = if has_terms {
+            let base = Layout::new(kind, rows_n, serial_n, has_physics, 0);
+            terms_head(bytes, base.terms)?
+        } else {
+            0
+        };
+        let l = Layout::new(kind, rows_n, serial_n, has_physics, usize::from(n_terms));
         if l.total() != bytes.len() {
             return Err(Error::Malformed);
         }
@@ -379,10 +456,27 @@ impl<'a> BlobView<'a> {
             kind,
             rows,
             clamp: flags & FLAG_CLAMP != 0,
+            #[cfg(feature = "terms")]
+            n_terms,
             scalars: off(l.scalars)?,
             breakpoints: off(l.breakpoints)?,
             table: off(l.table)?,
+            #[cfg(feature = "terms")]
+            terms: off(l.terms)?,
         })
+    }
+
+    /// The format version of the blob (4, or 5 with a term table).
+    pub fn version(&self) -> u16 {
+        u16_at(self.bytes, 4).unwrap_or(0)
+    }
+
+    /// The offset of term entry `j`.
+    #[cfg(feature = "terms")]
+    fn term_at(&self, j: usize) -> usize {
+        usize::from(self.terms)
+            .saturating_add(TERMS_HEAD_BYTES)
+            .saturating_add(j.saturating_mul(TERM_BYTES))
     }
 
     /// The blob's bytes.
@@ -450,8 +544,29 @@ impl<'a> BlobView<'a> {
                 model,
                 physics: self.physics(),
             },
+            terms: (0..self.term_count())
+                .filter_map(|j| self.term_raw(j).entry().ok())
+                .collect(),
         }
     }
+}
+
+/// The number of entries the term table's head word at `at` declares: 1..=[`MAX_TERMS`]
+/// ([`Error::Malformed`] for 0, for non-zero reserved bytes or no word there;
+/// [`Error::TooManyTerms`] above the maximum).
+fn terms_head(bytes: &[u8], at: usize) -> Result<u8, Error> {
+    let head = bytes
+        .get(at..)
+        .and_then(|s| s.first_chunk::<TERMS_HEAD_BYTES>())
+        .ok_or(Error::Malformed)?;
+    let [count, r0, r1, r2] = *head;
+    if count == 0 || (r0 | r1 | r2) != 0 {
+        return Err(Error::Malformed);
+    }
+    if usize::from(count) > MAX_TERMS {
+        return Err(Error::TooManyTerms);
+    }
+    Ok(count)
 }
 
 /// A serial is printable ASCII (a unit name).
@@ -541,11 +656,16 @@ impl Source for BlobView<'_> {
         }))
     }
     /// Every f32 word of the blob, scalars to physics section, in one pass over the
-    /// bytes (an exponent of all ones is an infinity or a NaN).
+    /// bytes (an exponent of all ones is an infinity or a NaN); the term table's words
+    /// are checked entry by entry ([`RawTerm::entry`]).
     fn all_finite(&self) -> bool {
+        #[cfg(feature = "terms")]
+        let end = usize::from(self.terms);
+        #[cfg(not(feature = "terms"))]
+        let end = self.bytes.len().saturating_sub(CRC_LEN);
         let words = self
             .bytes
-            .get(usize::from(self.scalars)..self.bytes.len().saturating_sub(CRC_LEN))
+            .get(usize::from(self.scalars)..end)
             .unwrap_or(&[]);
         words.chunks_exact(4).all(|w| {
             let bits = u32::from_le_bytes([
@@ -556,6 +676,45 @@ impl Source for BlobView<'_> {
             ]);
             bits & 0x7F80_0000 != 0x7F80_0000
         })
+    }
+    /// (Without the `terms` feature the default, 0: such a firmware refuses a table when
+    /// it opens the blob.)
+    #[cfg(feature = "terms")]
+    #[inline]
+    fn term_count(&self) -> usize {
+        usize::from(self.n_terms)
+    }
+    /// Entry `j` read where it lies ([`RawTerm::none`] past the table).
+    #[cfg(feature = "terms")]
+    #[inline]
+    fn term_raw(&self, j: usize) -> RawTerm<f32> {
+        let at = self.term_at(j);
+        match self
+            .bytes
+            .get(at..)
+            .and_then(|s| s.first_chunk::<TERM_BYTES>())
+        {
+            Some(&[axis, c0, c1, c2, ..]) if j < self.term_count() => RawTerm {
+                axis,
+                codes: [c0, c1, c2],
+                tau_s: f32_at(self.bytes, at.saturating_add(4)),
+                coefficient: f32_at(self.bytes, at.saturating_add(8)),
+            },
+            _ => RawTerm::none(),
+        }
+    }
+    /// The axis and codes of entry `j`: one word, what every sample reads.
+    #[cfg(feature = "terms")]
+    #[inline]
+    fn term_shape(&self, j: usize) -> (u8, [u8; 3]) {
+        match self
+            .bytes
+            .get(self.term_at(j)..)
+            .and_then(|s| s.first_chunk::<4>())
+        {
+            Some(&[axis, c0, c1, c2]) if j < self.term_count() => (axis, [c0, c1, c2]),
+            _ => (u8::MAX, [0; 3]),
+        }
     }
 }
 
@@ -572,6 +731,9 @@ pub struct Blob {
     pub run_id: RunId,
     /// Temperature model and its use.
     pub calibration: Calibration<f32>,
+    /// The discovered terms of the unit's state (empty: none; a blob with terms is
+    /// format 5). Compensate with them: [`crate::compensate::Compensator::with_terms`].
+    pub terms: TermList<f32>,
 }
 
 impl Blob {
@@ -581,24 +743,35 @@ impl Blob {
             return Err(Error::Malformed);
         }
         self.calibration.validate()?;
+        validate_entries(&self.terms)?;
         let c0 = Coeffs::from_array(&self.calibration.at_t0());
         invert(&c0.k).map(|_| ()).ok_or(Error::Singular)
     }
 
-    /// Write the blob into `buf` (format [`FORMAT_VERSION`]), returning the number of
+    /// The format version the blob is written in: 5 with discovered terms, else 4.
+    pub fn version(&self) -> u16 {
+        if self.terms.is_empty() {
+            OLDEST_FORMAT_VERSION
+        } else {
+            FORMAT_VERSION
+        }
+    }
+
+    /// Write the blob into `buf` (format [`Blob::version`]), returning the number of
     /// bytes written. No allocator: the caller's buffer, [`MAX_BLOB_LEN`] always suffices.
     pub fn encode(&self, buf: &mut [u8]) -> Result<usize, Error> {
         self.validate()?;
         let cal = &self.calibration;
         let (kind, rows) = (cal.model.kind(), cal.model.rows());
         let serial = self.serial.as_bytes();
-        let l = Layout::new(kind, rows, serial.len(), cal.physics.is_some());
+        let n_terms = self.terms.len();
+        let l = Layout::new(kind, rows, serial.len(), cal.physics.is_some(), n_terms);
         let n = l.total();
         let out = buf.get_mut(..n).ok_or(Error::BufferTooSmall)?;
         out.fill(0);
         let n16 = u16::try_from(n).map_err(|_| Error::BufferTooSmall)?;
         let [m0, m1, m2, m3] = MAGIC;
-        let [v0, v1] = FORMAT_VERSION.to_le_bytes();
+        let [v0, v1] = self.version().to_le_bytes();
         let [n0, n1] = n16.to_le_bytes();
         let [i0, i1] = (!n16).to_le_bytes();
         let model = match kind {
@@ -625,7 +798,7 @@ impl Blob {
             i1,
             model,
             small(rows)?,
-            if cal.clamp { FLAG_CLAMP } else { 0 },
+            (if cal.clamp { FLAG_CLAMP } else { 0 }) | (if n_terms > 0 { FLAG_TERMS } else { 0 }),
             small(serial.len())?,
             small(physics_words)?,
             self.output_unit.code(),
@@ -652,6 +825,17 @@ impl Blob {
         if let Some(p) = &cal.physics {
             for v in p.to_words() {
                 w.f32(v)?;
+            }
+        }
+        w.at = l.terms;
+        if n_terms > 0 {
+            w.bytes(&[small(n_terms)?, 0, 0, 0])?;
+            for e in &self.terms {
+                let r = e.raw();
+                let [c0, c1, c2] = r.codes;
+                w.bytes(&[r.axis, c0, c1, c2])?;
+                w.f32(r.tau_s)?;
+                w.f32(r.coefficient)?;
             }
         }
         let body = w.out.get(..l.crc).ok_or(Error::BufferTooSmall)?;
@@ -720,7 +904,35 @@ pub fn example_blob() -> Blob {
             },
             physics: None,
         },
+        terms: TermList::new(),
     }
+}
+
+/// Discovered terms of every kind of factor, a full table of [`MAX_TERMS`], each of a
+/// plausible size (about 0.1-0.3 mg on the paper unit): the terms half of the examples,
+/// benchmarks and tests (set it as `terms` of [`example_blob`]).
+pub fn example_terms() -> TermList<f32> {
+    use crate::terms::Factor::*;
+    let tau = |s: f32| Tau::from_seconds(s);
+    let list: [(Axis, &[crate::terms::Factor], Option<Tau>, f32); MAX_TERMS] = [
+        (Axis::Z, &[Ax, Ay], None, 1.5e-4),
+        (Axis::X, &[Ax, Ax, Ax], None, -8e-5),
+        (Axis::Y, &[Az, Az, DT], None, 2e-6),
+        (Axis::X, &[AbsAy], None, 6e-5),
+        (Axis::Y, &[Ay, DTdt], None, 4e-5),
+        (Axis::Z, &[DT, DecayPowerOn], tau(1200.0), -3e-6),
+        (Axis::X, &[DecayPowerOn], tau(25.0), 1.2e-4),
+        (Axis::Z, &[Ax, AbsAx, Az], None, 5e-5),
+    ];
+    list.iter()
+        .filter_map(|(axis, f, t, c)| {
+            Term::new(f, *t).ok().map(|term| TermEntry {
+                axis: *axis,
+                term,
+                coefficient: *c,
+            })
+        })
+        .collect()
 }
 
 /// In-flight terms of every kind, each of a plausible size: the physics half of the

@@ -7,7 +7,26 @@
 //! The compensator is told its sample period when it is made (fixed-rate sampling:
 //! [`Compensator::compensate`]); [`Compensator::compensate_dt`] takes each sample's own
 //! time step instead (a temperature read at its own rate, a logger with gaps). Only the
-//! physics terms use the time (their state machines, [`crate::inflight`]).
+//! physics terms and the discovered terms use the time (their state machines,
+//! [`crate::inflight`]).
+//!
+//! # Discovered terms
+//! A blob's term table ([`crate::terms`]) takes the physics path: each term's state part
+//! (its `dT`, `dTdt` and `decay(power_on,TAU)` factors, from the machines: the sensor
+//! temperature, the rate and the time since power-on at their last step) times its
+//! coefficient is kept when the machines step; at every sample its force part is
+//! evaluated at the estimated specific force and the sum on each axis removed after the
+//! inversion, as the K2 and scale-asymmetry terms are: `a = a_hat - N e(a_hat)` with `N`
+//! the inverse in use (N(T) for method 1, N(T0) for method 2). The error of that first-
+//! order correction is second order in the terms: `|a - a_true| <= |N|^2 L |e|`, `L` the
+//! Lipschitz constant of `e` in `a` (held by `tests/terms.rs`). The work per sample is
+//! fixed by the table's size (at most [`crate::terms::MAX_TERMS`]): no other loop.
+//!
+//! # Error bound against f64
+//! The f32 path stays within `F32_BOUND_G` (2e-6 g, [`crate::model`]) of the f64 path
+//! of the same code for the tables alone; with discovered terms the terms' f32 error adds
+//! at most [`TERMS_F32_BOUND_G`] for terms of the catalogue's sizes (held by
+//! `tests/terms.rs` at 10 Hz, 100 Hz and 1 kHz).
 use crate::error::Error;
 #[cfg(feature = "physics")]
 use crate::inflight::{Machines, Tick};
@@ -15,7 +34,19 @@ use crate::model::{
     add3, all_finite, apply, diagonal, invert, mat_mul, mat_sub, mat_vec, sub3, Coeffs, Mat3, Vec3,
 };
 use crate::real::Real;
-use crate::temperature::{eval_table, Calibration, Source};
+use crate::temperature::{eval_table, Calibration, Source, WithTerms};
+use crate::terms::TermEntry;
+#[cfg(feature = "terms")]
+use crate::terms::{force_values, product, set_decay, state_values, UnitState, MAX_TERMS};
+
+/// What discovered terms add to the f32 path's departure from the f64 one, g, for
+/// terms whose contributions stay within 1e-3 of the output scale (each at most 1e-3 V
+/// on a 0.5 V/g unit, 2 mg, at |a| <= 1 g and the machines' state): the f32 rounding of
+/// the state parts (the rate's f32 error, 1e-5 C/s, is the largest: 6e-4 C/min on a
+/// dTdt coefficient) and of the force parts at the estimated specific force, whose own
+/// f32 error moves them. Held by `tests/terms.rs` (the departure with the terms minus
+/// the departure without them, sample by sample: at most 5e-7 g seen).
+pub const TERMS_F32_BOUND_G: f64 = 1e-6;
 
 /// Which temperature-error model method 2 subtracts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,8 +131,9 @@ enum Path {
 }
 
 /// The compensator: borrows the calibration (a [`crate::blob::BlobView`] of the blob in
-/// flash, or an owned [`Calibration`] on the host) and holds only the cached matrices
-/// (about 200 bytes in f32; at most 256, checked when the crate compiles).
+/// flash, or an owned [`Calibration`] on the host) and holds only the cached matrices,
+/// the machines' state and the discovered terms' weights (240 bytes in f32 on the MCU;
+/// at most 256 on the MCU and a 64-bit host alike, checked when the crate compiles).
 #[derive(Clone, Debug)]
 pub struct Compensator<S: Source> {
     src: S,
@@ -126,7 +158,14 @@ pub struct Compensator<S: Source> {
     /// The state machines of the physics terms.
     #[cfg(feature = "physics")]
     ph: Machines<S::Real>,
-    /// K(T0), for method 2's dK at each update.
+    /// Each discovered term's coefficient times its state part, as of the machines' last
+    /// step.
+    #[cfg(feature = "terms")]
+    weights: [S::Real; MAX_TERMS],
+    /// K(T0), for method 2's dK at each update. With `terms` it is re-evaluated there
+    /// instead (the same evaluation, the same bits): the weights take its room, so the
+    /// state stays within 256 bytes on a 64-bit host too.
+    #[cfg(not(feature = "terms"))]
     k0: Mat3<S::Real>,
 }
 
@@ -147,6 +186,29 @@ impl<'a, R: Real> Compensator<&'a Calibration<R>> {
     pub fn new(cal: &'a Calibration<R>, method: Method, sample_period_s: R) -> Result<Self, Error> {
         cal.validate()?;
         Self::with_source(cal, method, sample_period_s)
+    }
+}
+
+impl<'a, R: Real> Compensator<WithTerms<'a, R>> {
+    /// [`Compensator::new`] over an owned calibration and its discovered terms (the host's
+    /// form of a blob with a term table: `Blob::calibration` and `Blob::terms`).
+    ///
+    /// Refused as `new`, and: a term table that is not valid
+    /// ([`crate::temperature::source_terms`]); without the `terms` feature, any term
+    /// ([`Error::TermsNotBuiltIn`]).
+    pub fn with_terms(
+        cal: &'a Calibration<R>,
+        terms: &'a [TermEntry<R>],
+        method: Method,
+        sample_period_s: R,
+    ) -> Result<Self, Error> {
+        let src = WithTerms {
+            calibration: cal,
+            terms,
+        };
+        cal.validate()?;
+        crate::temperature::validate_source(&src)?;
+        Self::with_source(src, method, sample_period_s)
     }
 }
 
@@ -178,6 +240,10 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
         if !(sample_period_s > R::ZERO && sample_period_s.is_finite()) {
             return Err(Error::BadSamplePeriod);
         }
+        #[cfg(not(feature = "terms"))]
+        if src.term_count() > 0 {
+            return Err(Error::TermsNotBuiltIn);
+        }
         #[cfg(not(feature = "physics"))]
         if src.has_physics() {
             return Err(Error::PhysicsNotBuiltIn);
@@ -190,6 +256,7 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
             path: Path::Constants,
             method,
             n0,
+            #[cfg(not(feature = "terms"))]
             k0: c0.k,
             u00: c0.u0,
             t_cached: t0,
@@ -203,7 +270,12 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
             #[cfg(feature = "physics")]
             // power-on: the machines start at the first sample in range
             ph: Machines::default(),
+            #[cfg(feature = "terms")]
+            weights: [R::ZERO; MAX_TERMS],
         };
+        // until the machines start, the terms' state is that of power-on at T0
+        #[cfg(feature = "terms")]
+        s.weigh_terms(&UnitState::default());
         s.set_method(method);
         Ok(s)
     }
@@ -221,7 +293,7 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
             Method::CorrectResult(_) => Path::Result,
         };
         #[cfg(feature = "physics")]
-        if self.src.has_physics() {
+        if self.src.has_physics() || self.src.term_count() > 0 {
             self.path = Path::Physics;
         }
         self.update(self.t_cached);
@@ -289,6 +361,20 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
         self.sticky
     }
 
+    /// K(T0): kept without `terms`, re-evaluated with it (as at construction: the same
+    /// evaluation, so the same bits).
+    #[inline]
+    fn k0(&self) -> Mat3<R> {
+        #[cfg(not(feature = "terms"))]
+        let k0 = self.k0;
+        #[cfg(feature = "terms")]
+        let k0 = {
+            let t0 = self.src.t0_c();
+            Coeffs::from_array(&eval_table(self.src.table(), t0, t0)).k
+        };
+        k0
+    }
+
     /// Recompute the cached matrices and range flags for a finite temperature `t`.
     fn update(&mut self, t: R) {
         let te = self.effective_temperature(t);
@@ -304,7 +390,7 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
                 None => self.sticky = Status::SINGULAR,
             },
             Method::CorrectResult(em) => {
-                let dk = mat_sub(&c.k, &self.k0);
+                let dk = mat_sub(&c.k, &self.k0());
                 let du0 = sub3(c.u0, self.u00);
                 // delta = N0 (dK a + dU0) = (N0 dK) a + N0 dU0; the simplified model
                 // uses diag(N0) in place of N0.
@@ -386,23 +472,80 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
     }
 
     /// Start or step the physics terms' machines at sensor temperature `x`: reads every
-    /// term from the source (flash); at most once per [`crate::inflight::MIN_STEP_S`].
-    #[cfg(feature = "physics")]
+    /// term from the source (flash); at most once per [`crate::inflight::MIN_STEP_S`]. A
+    /// source with discovered terms and no physics section steps neutral machines (their
+    /// clock, rate and time since power-on), then the terms' weights are renewed.
+    #[cfg(feature = "terms")]
     #[inline(never)]
     fn step_machines(&mut self, tick: Tick<R>, x: R) {
-        // Path::Physics is set only for a source with physics terms
+        let p = self
+            .src
+            .physics()
+            .unwrap_or_else(crate::temperature::Physics::neutral);
+        let t0 = self.src.t0_c();
+        let rate = self.ph.apply(tick, &p, x, t0);
+        self.weigh_terms(&UnitState {
+            dt_c: self.ph.sensor_temperature() - t0,
+            dtdt_c_per_min: rate * R::from_f32(60.0),
+            since_power_on_s: self.ph.since_power_on(),
+        });
+    }
+
+    /// Start or step the physics terms' machines (without the `terms` feature: a source
+    /// on the physics path has physics terms).
+    #[cfg(all(feature = "physics", not(feature = "terms")))]
+    #[inline(never)]
+    fn step_machines(&mut self, tick: Tick<R>, x: R) {
         if let Some(p) = self.src.physics() {
-            self.ph.apply(tick, &p, x, self.src.t0_c());
+            let _ = self.ph.apply(tick, &p, x, self.src.t0_c());
         }
+    }
+
+    /// Each discovered term's coefficient times its state part in state `s`
+    /// ([`crate::terms::TermEntry::weight`]'s arithmetic), read from the source (flash).
+    #[cfg(feature = "terms")]
+    fn weigh_terms(&mut self, s: &UnitState<R>) {
+        let n = self.src.term_count();
+        // the state table once, its decay slot per term: `state_values(s, tau)` each time
+        let mut v = state_values(s, 0.0);
+        for (j, w) in self.weights.iter_mut().enumerate().take(n) {
+            let t = self.src.term_raw(j);
+            set_decay(&mut v, s, t.tau_s);
+            *w = t.coefficient * product(&v, t.codes);
+        }
+    }
+
+    /// Add each discovered term's contribution at specific force `a` to its axis's
+    /// error `e` (its weight times its force part; table order).
+    #[cfg(feature = "terms")]
+    #[inline]
+    fn add_terms(&self, e: &mut [R; 3], a: Vec3<R>) {
+        let n = self.src.term_count();
+        if n == 0 {
+            return;
+        }
+        let f = force_values(a);
+        // a fourth slot takes an axis code that is none (never after validation): the
+        // masked index needs no bounds check
+        let [e0, e1, e2] = *e;
+        let mut acc = [e0, e1, e2, R::ZERO];
+        for (j, w) in self.weights.iter().enumerate().take(n) {
+            let (axis, codes) = self.src.term_shape(j);
+            if let Some(slot) = acc.get_mut(usize::from(axis & 3)) {
+                *slot = *slot + *w * product(&f, codes);
+            }
+        }
+        let [a0, a1, a2, _] = acc;
+        *e = [a0, a1, a2];
     }
 
     /// The physics terms around the core path: the temperature (when within 40 C of the
     /// valid range) steps the machines on their clock ([`crate::inflight`]); the model is
     /// evaluated at the lagged element temperature and the offsets of temperature rate,
     /// hysteresis and warm-up are removed from the voltages (both as of the machines'
-    /// last step); then the K2 and scale-asymmetry terms are corrected to first order
-    /// (`a = a_hat - N (k2 a_hat^2 + c |a_hat|)`, error second order in those terms),
-    /// read from the source (flash) on every sample.
+    /// last step); then the K2 and scale-asymmetry terms and the discovered terms are
+    /// corrected to first order (`a = a_hat - N (k2 a_hat^2 + c |a_hat| + e_terms(a_hat))`,
+    /// error second order in those terms), read from the source (flash) on every sample.
     #[cfg(feature = "physics")]
     #[inline(never)]
     fn compensate_physics(&mut self, u: Vec3<R>, temp_c: R, dt_s: R) -> Output<R> {
@@ -427,18 +570,19 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
         {
             return out;
         }
-        // Path::Physics is set only for a source with physics terms
-        let Some(p) = self.src.physics() else {
+        // Path::Physics: physics terms, discovered terms, or both
+        #[cfg(feature = "terms")]
+        let mut e = match self.src.physics() {
+            Some(p) => second_order(&p, out.accel),
+            None => [R::ZERO; 3],
+        };
+        #[cfg(feature = "terms")]
+        self.add_terms(&mut e, out.accel);
+        // without `terms`, Path::Physics is set only for a source with physics terms
+        #[cfg(not(feature = "terms"))]
+        let Some(e) = self.src.physics().map(|p| second_order(&p, out.accel)) else {
             return out;
         };
-        let [a0, a1, a2] = out.accel;
-        let [k0, k1, k2] = p.k2;
-        let [c0, c1, c2] = p.asymmetry;
-        let e = [
-            k0 * a0 * a0 + c0 * a0.abs(),
-            k1 * a1 * a1 + c1 * a1.abs(),
-            k2 * a2 * a2 + c2 * a2.abs(),
-        ];
         let n = if m2 { &self.n0 } else { &self.n };
         out.accel = sub3(out.accel, mat_vec(n, e));
         let [b0, b1, b2] = out.accel;
@@ -474,6 +618,20 @@ impl<S: Source<Real = R>, R: Real> Compensator<S> {
         }
         Output { accel, status }
     }
+}
+
+/// The K2 and scale-asymmetry terms at the estimated specific force `a`, per axis.
+#[cfg(feature = "physics")]
+#[inline]
+fn second_order<R: Real>(p: &crate::temperature::Physics<R>, a: Vec3<R>) -> Vec3<R> {
+    let [a0, a1, a2] = a;
+    let [k0, k1, k2] = p.k2;
+    let [c0, c1, c2] = p.asymmetry;
+    [
+        k0 * a0 * a0 + c0 * a0.abs(),
+        k1 * a1 * a1 + c1 * a1.abs(),
+        k2 * a2 * a2 + c2 * a2.abs(),
+    ]
 }
 
 /// Why the output is not finite: a non-finite input, or an overflow. Either way the

@@ -18,8 +18,10 @@ pub enum Error {
     /// (an older blob: re-export it with the current host-fit).
     UnsupportedVersion(u16),
     /// The header and the layout disagree, reserved bytes are not zero, the output-unit
-    /// code is unknown, or the serial is not printable ASCII (a valid checksum over content no encoder of this version
-    /// writes; on encoding: a serial that is not printable ASCII).
+    /// code is unknown, the serial is not printable ASCII, or the version and the term
+    /// table disagree (format 5 without a table, format 4 with one): a valid checksum over
+    /// content no encoder of this version writes; on encoding, a serial that is not
+    /// printable ASCII.
     Malformed,
     /// Bytes follow the length the header declares.
     TrailingBytes,
@@ -43,6 +45,23 @@ pub enum Error {
     /// The sample period given to the compensator is not a positive, finite number of
     /// seconds.
     BadSamplePeriod,
+    /// The table of discovered terms holds more than
+    /// [`crate::terms::MAX_TERMS`] entries.
+    TooManyTerms,
+    /// A discovered term's output axis is none of x, y, z.
+    TermAxis,
+    /// A discovered term's factors are no term of the vocabulary's MCU subset in
+    /// canonical form: an unknown factor code, none or more than three factors, out of
+    /// canonical order, `abs(a_i)` twice, two decays.
+    TermFactors,
+    /// A discovered term's decay time constant is not a positive, finite number of
+    /// seconds, or a term without a decay gives one.
+    TermTimeConstant,
+    /// The same discovered term twice on one axis.
+    DuplicateTerm,
+    /// The calibration has discovered terms but the firmware was built without the
+    /// `terms` feature (compensating without them would be silently wrong).
+    TermsNotBuiltIn,
 }
 
 impl fmt::Display for Error {
@@ -53,7 +72,8 @@ impl fmt::Display for Error {
             Error::BadMagic => f.write_str("not a coefficient blob (bad magic)"),
             Error::UnsupportedVersion(v) => write!(
                 f,
-                "unsupported blob format version {v} (this firmware reads version {})",
+                "unsupported blob format version {v} (this firmware reads versions {} to {})",
+                crate::format::OLDEST_FORMAT_VERSION,
                 crate::format::FORMAT_VERSION
             ),
             Error::Malformed => f.write_str("blob header and layout disagree"),
@@ -73,6 +93,22 @@ impl fmt::Display for Error {
             }
             Error::BadSamplePeriod => {
                 f.write_str("the sample period is not a positive, finite number of seconds")
+            }
+            Error::TooManyTerms => write!(
+                f,
+                "more than {} discovered terms",
+                crate::terms::MAX_TERMS
+            ),
+            Error::TermAxis => f.write_str("a discovered term's axis is none of x, y, z"),
+            Error::TermFactors => {
+                f.write_str("a discovered term's factors are no canonical term of the vocabulary")
+            }
+            Error::TermTimeConstant => f.write_str(
+                "a discovered term's decay time constant is not a positive number of seconds, or given without a decay",
+            ),
+            Error::DuplicateTerm => f.write_str("a discovered term twice on one axis"),
+            Error::TermsNotBuiltIn => {
+                f.write_str("the blob has discovered terms; firmware built without `terms`")
             }
         }
     }

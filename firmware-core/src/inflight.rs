@@ -327,6 +327,39 @@ impl<R: Real> Warmup<R> {
     }
 }
 
+/// Seconds elapsed, summed step by step with a compensation term (Kahan): the sum stays
+/// within `2 eps` of itself (eps the type's) of the exact sum of the steps however many
+/// there are, where a plain f32 sum of 0.1 s steps would drift by up to
+/// `n ulp(t)/2` (0.6 s after 1000 s).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Elapsed<R> {
+    sum: R,
+    lost: R,
+}
+
+impl<R: Real> Elapsed<R> {
+    /// Start at `s` seconds.
+    pub fn set(&mut self, s: R) {
+        self.sum = s;
+        self.lost = R::ZERO;
+    }
+
+    /// Add a step of `h` seconds.
+    #[inline]
+    pub fn add(&mut self, h: R) {
+        let y = h - self.lost;
+        let t = self.sum + y;
+        self.lost = (t - self.sum) - y;
+        self.sum = t;
+    }
+
+    /// The seconds elapsed.
+    pub fn value(&self) -> R {
+        self.sum
+    }
+}
+
 /// The hysteresis direction at power-on at temperature `x`: the direction that brought
 /// the unit there from its reference `t0` when it is more than the threshold away from
 /// it (a cold start was cooled to), else the blob's initial direction.
@@ -355,9 +388,13 @@ pub struct Machines<R> {
     dir: Direction<R>,
     warm: Warmup<R>,
     offset: [R; 3],
-    /// A power-on of the sensor is pending ([`Machines::power_on`]), this many seconds
-    /// before the next sample.
-    on_pending: bool,
+    /// The time since the latest power-on, as of the last step (a discovered term's
+    /// `decay(power_on,TAU)`; only with the `terms` feature: flash and state).
+    #[cfg(feature = "terms")]
+    since_on: Elapsed<R>,
+    /// A power-on of the sensor is pending ([`Machines::power_on`]) this many seconds
+    /// before the next sample; negative: none (no flag beside it: the compensator's
+    /// state stays within its 256 bytes on a 64-bit host too).
     on_s: R,
 }
 
@@ -372,8 +409,9 @@ impl<R: Real> Default for Machines<R> {
             dir: Direction::default(),
             warm: Warmup::default(),
             offset: [R::ZERO; 3],
-            on_pending: false,
-            on_s: R::ZERO,
+            #[cfg(feature = "terms")]
+            since_on: Elapsed::default(),
+            on_s: -R::ONE,
         }
     }
 }
@@ -385,17 +423,20 @@ impl<R: Real> Machines<R> {
     }
 
     /// Start or step at sensor temperature `x`, the reference temperature being `t0`
-    /// (`Tick::Hold` changes nothing).
+    /// (`Tick::Hold` changes nothing); returns the temperature's rate at this step, C/s
+    /// (0 at the start and for `Hold`): what a discovered term's `dTdt` reads.
     #[inline]
-    pub fn apply(&mut self, tick: Tick<R>, p: &Physics<R>, x: R, t0: R) {
+    pub fn apply(&mut self, tick: Tick<R>, p: &Physics<R>, x: R, t0: R) -> R {
         let (rate, dir, w) = match tick {
-            Tick::Hold => return,
+            Tick::Hold => return R::ZERO,
             Tick::Start(since_on) => {
                 self.x = x;
                 self.lag.start();
                 self.rate.start();
                 self.dir.start(power_on_direction(p, x, t0), x);
-                self.on_pending = false;
+                self.on_s = -R::ONE;
+                #[cfg(feature = "terms")]
+                self.since_on.set(since_on);
                 let w = self.warm.start(Step::new(since_on, p.warmup_tau_s));
                 (R::ZERO, self.dir.value(), w)
             }
@@ -405,10 +446,15 @@ impl<R: Real> Machines<R> {
                 self.lag.step(Step::new(h, p.lag_tau_s), dx);
                 let rate = self.rate.step(Step::new(h, p.rate_tau_s), dx, h);
                 let dir = self.dir.step(p.hysteresis_threshold_c, x);
-                let w = if self.on_pending {
-                    self.on_pending = false;
-                    self.warm.start(Step::new(self.on_s, p.warmup_tau_s))
+                let w = if self.on_s >= R::ZERO {
+                    let on = self.on_s;
+                    self.on_s = -R::ONE;
+                    #[cfg(feature = "terms")]
+                    self.since_on.set(on);
+                    self.warm.start(Step::new(on, p.warmup_tau_s))
                 } else {
+                    #[cfg(feature = "terms")]
+                    self.since_on.add(h);
                     self.warm.step(Step::new(h, p.warmup_tau_s))
                 };
                 (rate, dir, w)
@@ -421,6 +467,7 @@ impl<R: Real> Machines<R> {
             r1 * rate + h1 * half + d1 * w,
             r2 * rate + h2 * half + d2 * w,
         ];
+        rate
     }
 
     /// One sample at sensor temperature `x`, `dt` seconds after the previous one (or
@@ -429,7 +476,7 @@ impl<R: Real> Machines<R> {
     #[inline]
     pub fn sample(&mut self, p: &Physics<R>, x: R, dt: R, t0: R) -> bool {
         let tick = self.clock.tick(dt);
-        self.apply(tick, p, x, t0);
+        let _ = self.apply(tick, p, x, t0);
         tick != Tick::Hold
     }
 
@@ -440,8 +487,8 @@ impl<R: Real> Machines<R> {
     /// power-on.
     pub fn power_on(&mut self, since_s: R) {
         if self.clock.started() {
-            self.on_pending = true;
-            self.on_s = since_s;
+            // a negative or NaN time is no time: the warm-up at full weight, as before
+            self.on_s = if since_s > R::ZERO { since_s } else { R::ZERO };
             self.clock.force_step();
         }
     }
@@ -457,6 +504,19 @@ impl<R: Real> Machines<R> {
     #[inline]
     pub fn offset(&self) -> [R; 3] {
         self.offset
+    }
+
+    /// The sensor temperature at the last step, C.
+    #[inline]
+    pub fn sensor_temperature(&self) -> R {
+        self.x
+    }
+
+    /// The time since the latest power-on at the last step, s (with the `terms` feature).
+    #[cfg(feature = "terms")]
+    #[inline]
+    pub fn since_power_on(&self) -> R {
+        self.since_on.value()
     }
 }
 
@@ -615,6 +675,43 @@ mod tests {
         assert_eq!(a.offset()[..2], b.offset()[..2]);
         assert!((a.offset()[2] - (-0.3f64).exp()).abs() < 1e-12);
         assert!((b.offset()[2] - (-0.9f64).exp()).abs() < 1e-9);
+    }
+
+    /// The time since power-on in f32: a day of 0.1 s steps summed with the compensation
+    /// term stays within 2 eps of the exact sum of the (f32) steps, where a plain f32
+    /// sum is off by seconds; and the machines keep it, a power-on restarting it.
+    #[cfg(feature = "terms")]
+    #[test]
+    fn elapsed_time_keeps_its_digits() {
+        let (mut e, mut plain, mut exact) = (Elapsed::<f32>::default(), 0.0f32, 0.0f64);
+        let h = 0.1f32;
+        for _ in 0..864_000 {
+            e.add(h);
+            plain += h;
+            exact += f64::from(h);
+        }
+        let rel = (f64::from(e.value()) - exact).abs() / exact;
+        assert!(rel <= 2.0 * f64::from(f32::EPSILON) / 2.0, "{rel:e}");
+        assert!((f64::from(plain) - exact).abs() > 1.0, "a plain sum drifts");
+        let p = Physics::<f32>::neutral();
+        let mut m = Machines::<f32>::default();
+        m.sample(&p, 20.0, 5.0, 20.0);
+        assert_eq!(m.since_power_on(), 5.0);
+        for _ in 0..1000 {
+            m.sample(&p, 20.0, 0.01, 20.0);
+        }
+        assert!(
+            (m.since_power_on() - 15.0).abs() < 1e-4,
+            "{}",
+            m.since_power_on()
+        );
+        m.power_on(2.0);
+        m.sample(&p, 20.0, 0.01, 20.0);
+        assert_eq!(m.since_power_on(), 2.0);
+        // a negative or NaN time since power-on is none
+        m.power_on(f32::NAN);
+        m.sample(&p, 20.0, 0.01, 20.0);
+        assert_eq!(m.since_power_on(), 0.0);
     }
 
     #[test]

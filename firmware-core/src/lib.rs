@@ -26,6 +26,10 @@
 //!   compensator is given (or each sample's own time step, [`compensate::Compensator::compensate_dt`]).
 //!   Without it the compensation path is smaller, and a blob that carries such terms is
 //!   refused by [`compensate::Compensator::new`] with [`Error::PhysicsNotBuiltIn`].
+//! - `terms` (default, needs `physics`): the discovered terms of a blob's term table
+//!   ([`terms`]: force products and powers, `dT`, `dTdt`, `decay(power_on,TAU)`), on the
+//!   same clock. Without it a blob with such terms is refused by
+//!   [`compensate::Compensator::new`] with [`Error::TermsNotBuiltIn`].
 //! - `defmt`: `defmt::Format` on the public types.
 // no_std always (the error type uses core::error::Error); unit tests use std.
 #![cfg_attr(not(test), no_std)]
@@ -50,6 +54,7 @@ pub mod inflight;
 pub mod model;
 pub mod real;
 pub mod temperature;
+pub mod terms;
 
 pub use error::Error;
 pub use real::Real;

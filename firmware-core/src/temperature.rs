@@ -8,6 +8,7 @@
 use crate::error::Error;
 use crate::model::N_COEFFS;
 use crate::real::Real;
+use crate::terms::{validate_entries, RawTerm, TermEntry, TermList, MAX_TERMS};
 
 /// Highest polynomial order a table holds.
 pub const MAX_POLY_ORDER: usize = 5;
@@ -408,6 +409,126 @@ pub trait Source: Copy {
     fn physics(&self) -> Option<Physics<Self::Real>>;
     /// Every value (scalars, table, physics terms) is finite.
     fn all_finite(&self) -> bool;
+    /// The number of discovered terms ([`crate::terms`]; 0: none).
+    #[inline]
+    fn term_count(&self) -> usize {
+        0
+    }
+    /// Entry `j` of the term table, as stored ([`RawTerm::none`] out of range).
+    #[inline]
+    fn term_raw(&self, j: usize) -> RawTerm<Self::Real> {
+        let _ = j;
+        RawTerm::none()
+    }
+    /// The axis and factor codes of entry `j` (what every sample reads).
+    #[inline]
+    fn term_shape(&self, j: usize) -> (u8, [u8; 3]) {
+        let r = self.term_raw(j);
+        (r.axis, r.codes)
+    }
+}
+
+/// An owned calibration with its discovered terms (the host's form of a blob with a term
+/// table): a [`Source`] for [`crate::compensate::Compensator::with_terms`].
+#[derive(Clone, Copy, Debug)]
+pub struct WithTerms<'a, R> {
+    /// The calibration.
+    pub calibration: &'a Calibration<R>,
+    /// Its discovered terms (at most [`MAX_TERMS`]).
+    pub terms: &'a [TermEntry<R>],
+}
+
+impl<'a, R: Real> Source for WithTerms<'a, R> {
+    type Real = R;
+    type Table = TempModel<R>;
+    #[inline]
+    fn table(&self) -> &TempModel<R> {
+        &self.calibration.model
+    }
+    #[inline]
+    fn t0_c(&self) -> R {
+        self.calibration.t0_c
+    }
+    #[inline]
+    fn t_min_c(&self) -> R {
+        self.calibration.t_min_c
+    }
+    #[inline]
+    fn t_max_c(&self) -> R {
+        self.calibration.t_max_c
+    }
+    #[inline]
+    fn clamp(&self) -> bool {
+        self.calibration.clamp
+    }
+    #[inline]
+    fn update_step_c(&self) -> R {
+        self.calibration.update_step_c
+    }
+    #[inline]
+    fn has_physics(&self) -> bool {
+        self.calibration.physics.is_some()
+    }
+    #[inline]
+    fn physics(&self) -> Option<Physics<R>> {
+        self.calibration.physics.clone()
+    }
+    fn all_finite(&self) -> bool {
+        Source::all_finite(&self.calibration)
+    }
+    #[inline]
+    fn term_count(&self) -> usize {
+        self.terms.len()
+    }
+    #[inline]
+    fn term_raw(&self, j: usize) -> RawTerm<R> {
+        self.terms.get(j).map_or_else(RawTerm::none, TermEntry::raw)
+    }
+}
+
+/// The term table of a source checked where it lies, entry by entry (no term built: the
+/// firmware's validation, [`crate::terms::check_codes`]): at most [`MAX_TERMS`]
+/// ([`Error::TooManyTerms`]), each axis x, y or z ([`Error::TermAxis`]), canonical codes
+/// and TAU, a finite coefficient ([`Error::NonFinite`]), no entry equal to an earlier one
+/// on its axis ([`Error::DuplicateTerm`]). The same rules as [`source_terms`].
+pub fn validate_terms<S: Source>(s: &S) -> Result<(), Error> {
+    let n = s.term_count();
+    if n > MAX_TERMS {
+        return Err(Error::TooManyTerms);
+    }
+    for j in 0..n {
+        let t = s.term_raw(j);
+        if t.axis > 2 {
+            return Err(Error::TermAxis);
+        }
+        crate::terms::check_codes(t.codes, t.tau_s)?;
+        if !t.coefficient.is_finite() {
+            return Err(Error::NonFinite);
+        }
+        for k in 0..j {
+            let e = s.term_shape(k);
+            if e == (t.axis, t.codes) && s.term_raw(k).tau_s.to_bits() == t.tau_s.to_bits() {
+                return Err(Error::DuplicateTerm);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The term table of a source, each entry checked ([`RawTerm::entry`]) and the list
+/// ([`validate_entries`]): at most [`MAX_TERMS`] ([`Error::TooManyTerms`]).
+pub fn source_terms<S: Source>(s: &S) -> Result<TermList<S::Real>, Error> {
+    let n = s.term_count();
+    if n > MAX_TERMS {
+        return Err(Error::TooManyTerms);
+    }
+    let mut out = TermList::new();
+    for j in 0..n {
+        out.push(s.term_raw(j).entry()?)
+            .map_err(|_| Error::TooManyTerms)?;
+    }
+    validate_entries(&out)?;
+    Ok(out)
 }
 
 impl<R: Real> Source for &Calibration<R> {
@@ -457,8 +578,9 @@ impl<R: Real> Source for &Calibration<R> {
 }
 
 /// The checks every calibration passes, in the order of their errors: table size,
-/// every value finite, range and step, physics ranges, breakpoint order. (Whether K(T0) is invertible is checked
-/// by the blob and the compensator.)
+/// every value finite, range and step, physics ranges, breakpoint order, the discovered
+/// terms ([`validate_terms`], with the `terms` feature). (Whether K(T0) is invertible is checked by the blob and the
+/// compensator.)
 pub fn validate_source<S: Source>(s: &S) -> Result<(), Error> {
     table_size(s.table())?;
     if !s.all_finite() {
@@ -470,7 +592,12 @@ pub fn validate_source<S: Source>(s: &S) -> Result<(), Error> {
     if let Some(p) = s.physics() {
         p.validate_ranges()?;
     }
-    breakpoints_increasing(s.table())
+    breakpoints_increasing(s.table())?;
+    // without the `terms` feature a blob with a table is refused when it is opened, an
+    // owned one by the compensator: no table is validated (flash), none compensated
+    #[cfg(feature = "terms")]
+    validate_terms(s)?;
+    Ok(())
 }
 
 impl<R: Real> Calibration<R> {

@@ -1,16 +1,20 @@
-//! Golden vectors of the blob (format 4) and the compensator reading it in place (the
-//! tables alone, and with physics terms on an uneven clock), and corruption of every
-//! kind, each refused with the right error.
+//! Golden vectors of the blob (format 4, and format 5 with discovered terms) and the
+//! compensator reading it in place (the tables alone, with physics terms, and with
+//! physics and discovered terms on an uneven clock), and corruption of every kind, each
+//! refused with the right error.
 //!
 //! The expected bytes and f32 output bits are committed under tests/data/ and checked
 //! against an independent reading of the documented layout. If the format changes on
 //! purpose, regenerate them with `UPDATE_GOLDEN=1 cargo test -p firmware-core --test
 //! blob_loopback` and bump `FORMAT_VERSION`. The tables' output bits did not change from
-//! format 2 to 3 to 4 (example_outputs.txt): the tables read from flash give the same
-//! bits as the owned ones. The physics outputs are new in format 4 (time constants in
-//! seconds, the machines on the sample's own time step).
+//! format 2 to 3 to 4 to 5 (example_outputs.txt): the tables read from flash give the
+//! same bits as the owned ones. The physics outputs are new in format 4 (time constants
+//! in seconds, the machines on the sample's own time step), and did not change with
+//! format 5 (example_outputs_physics.txt); the discovered terms' are new in format 5
+//! (example_blob_terms.hex, example_outputs_terms.txt).
 use firmware_core::blob::{
-    example_blob, Blob, BlobView, OutputUnit, RunId, FORMAT_VERSION, MAX_BLOB_LEN,
+    example_blob, example_terms, Blob, BlobView, OutputUnit, RunId, FORMAT_VERSION, MAX_BLOB_LEN,
+    OLDEST_FORMAT_VERSION,
 };
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
 use firmware_core::temperature::{Physics, TempModel};
@@ -322,7 +326,7 @@ fn an_old_blob_names_its_version() {
     assert_eq!(BlobView::new(&v3).err(), Some(Error::UnsupportedVersion(3)));
     assert_eq!(
         Error::UnsupportedVersion(3).to_string(),
-        "unsupported blob format version 3 (this firmware reads version 4)"
+        "unsupported blob format version 3 (this firmware reads versions 4 to 5)"
     );
     let v2 = unhex(&std::fs::read_to_string(data("example_blob_v2.hex")).unwrap());
     assert_eq!(&v2[..6], b"ATCB\x02\x00");
@@ -333,11 +337,11 @@ fn an_old_blob_names_its_version() {
         assert_eq!(BlobView::new(&flipped).err(), Some(Error::CrcMismatch));
     }
     // a newer version with a valid CRC and length
-    let mut v5 = encoded();
-    v5[4] = 5;
+    let mut v6 = encoded();
+    v6[4] = 6;
     assert_eq!(
-        BlobView::new(&reseal(v5)).err(),
-        Some(Error::UnsupportedVersion(5))
+        BlobView::new(&reseal(v6)).err(),
+        Some(Error::UnsupportedVersion(6))
     );
     let mut magic = encoded();
     magic[0] = b'X';
@@ -432,6 +436,10 @@ fn decode_then_encode_gives_the_same_bytes() {
             .collect(),
     };
     poly.serial.clear();
+    if cfg!(feature = "terms") {
+        poly.terms = example_terms().into_iter().take(3).collect();
+        blobs.push(terms_blob());
+    }
     blobs.push(poly);
     for b in blobs {
         let bytes = encode(&b);
@@ -456,7 +464,9 @@ proptest! {
     fn random_content_behind_a_valid_crc(head in prop::collection::vec(any::<u8>(), 6..7),
                                          body in prop::collection::vec(any::<u8>(), 0..400)) {
         let mut b = b"ATCB".to_vec();
-        b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        // the version that goes with the flags' term-table bit
+        let v = if head[2] & 2 != 0 { FORMAT_VERSION } else { OLDEST_FORMAT_VERSION };
+        b.extend_from_slice(&v.to_le_bytes());
         let n = (16 + body.len() + 4) as u16;
         b.extend_from_slice(&n.to_le_bytes());
         b.extend_from_slice(&(!n).to_le_bytes());
@@ -470,7 +480,8 @@ proptest! {
     }
 }
 
-/// The largest blob the format allows (64-character serial, 16 breakpoints, physics terms)
+/// The largest blob the format allows (64-character serial, 16 breakpoints, physics
+/// terms, 8 discovered terms)
 /// encodes to exactly `MAX_BLOB_LEN` (also a compile-time assertion in blob.rs).
 #[test]
 fn the_largest_blob_fits_the_fixed_buffer() {
@@ -491,9 +502,228 @@ fn the_largest_blob_fits_the_fixed_buffer() {
             .collect(),
     };
     b.calibration.physics = Some(physics());
+    b.terms = example_terms();
     let mut big = vec![0u8; 4 * MAX_BLOB_LEN];
     let n = b.encode(&mut big).unwrap();
-    assert_eq!(n, 1028);
+    assert_eq!(n, 1028 + 4 + 8 * 12);
     assert_eq!(n, MAX_BLOB_LEN);
-    assert_eq!(Blob::decode(&big[..n]), Ok(b));
+    if cfg!(feature = "terms") {
+        assert_eq!(Blob::decode(&big[..n]), Ok(b));
+    } else {
+        assert_eq!(Blob::decode(&big[..n]), Err(Error::TermsNotBuiltIn));
+    }
+}
+
+/// The golden blob of format 5: the paper unit with physics terms and a full table of
+/// discovered terms of every kind of factor ([`example_terms`]).
+fn terms_blob() -> Blob {
+    let mut b = physics_blob();
+    b.terms = example_terms();
+    b
+}
+
+/// Format 5: the version, the flag, the table's head and its entries where the layout
+/// says, read back by hand; the tables and the physics section as in format 4.
+#[cfg(feature = "terms")]
+#[test]
+fn golden_terms_blob_follows_the_documented_layout() {
+    let b = encode(&terms_blob());
+    golden("example_blob_terms.hex", &hex(&b));
+    let with_physics = encode(&physics_blob());
+    assert_eq!(b.len(), with_physics.len() + 4 + 8 * 12);
+    assert_eq!(u16::from_le_bytes([b[4], b[5]]), 5);
+    assert_eq!(b[12], 2, "flags: no clamp, a term table");
+    // everything up to the physics section's end is format 4's, but the flag
+    let head = with_physics.len() - 4;
+    assert_eq!(b[10..12], with_physics[10..12]);
+    assert_eq!(b[13..head], with_physics[13..head]);
+    assert_eq!(&b[head..head + 4], &[8, 0, 0, 0]);
+    let terms = example_terms();
+    for (j, e) in terms.iter().enumerate() {
+        let at = head + 4 + 12 * j;
+        assert_eq!(b[at], e.axis as u8, "entry {j}");
+        assert_eq!(b[at + 1..at + 4], e.term.codes());
+        assert_eq!(f32_le(&b, at + 4), e.term.tau_s());
+        assert_eq!(f32_le(&b, at + 8), e.coefficient);
+    }
+    // entry 0: a_x*a_y on z; entry 5: dT*decay(power_on,20min) on z
+    assert_eq!(&b[head + 4..head + 8], &[2, 1, 3, 0]);
+    assert_eq!(&b[head + 4 + 60..head + 4 + 64], &[2, 7, 9, 0]);
+    assert_eq!(f32_le(&b, head + 4 + 64), 1200.0);
+    let v = BlobView::new(&b).unwrap();
+    assert_eq!(v.version(), 5);
+    assert_eq!(v.to_blob().terms, terms);
+    assert_eq!(
+        terms.iter().map(|e| e.term.to_string()).collect::<Vec<_>>(),
+        [
+            "a_x*a_y",
+            "a_x^3",
+            "a_z^2*dT",
+            "abs(a_y)",
+            "a_y*dTdt",
+            "dT*decay(power_on,20min)",
+            "decay(power_on,25s)",
+            "a_x*abs(a_x)*a_z",
+        ]
+    );
+    // a blob without terms is still format 4, byte for byte
+    assert_eq!(BlobView::new(&with_physics).unwrap().version(), 4);
+    assert_eq!(
+        std::fs::read_to_string(data("example_blob_physics.hex")).unwrap(),
+        hex(&with_physics)
+    );
+}
+
+/// Built without `terms`, the blob with discovered terms is refused when it is opened,
+/// never compensated without them (its table not even validated: flash); the committed
+/// bytes are still the encoder's.
+#[cfg(not(feature = "terms"))]
+#[test]
+fn without_the_feature_the_terms_blob_is_refused() {
+    let bytes = unhex(&std::fs::read_to_string(data("example_blob_terms.hex")).unwrap());
+    assert_eq!(bytes, encode(&terms_blob()));
+    assert_eq!(BlobView::new(&bytes).err(), Some(Error::TermsNotBuiltIn));
+    assert_eq!(Blob::decode(&bytes).err(), Some(Error::TermsNotBuiltIn));
+}
+
+/// The discovered terms on an uneven clock, as bits: the golden blob's compensator in
+/// place and the owned one (calibration and terms), sample by sample with each sample's
+/// own time step, over a tilt sweep (the force factors move) while the temperature warms
+/// (dT and dTdt move) from power-on (the decays), with a power cycle of the sensor.
+#[cfg(feature = "terms")]
+#[test]
+fn golden_terms_outputs_on_an_uneven_clock() {
+    let bytes = unhex(&std::fs::read_to_string(data("example_blob_terms.hex")).unwrap());
+    let view = BlobView::new(&bytes).unwrap();
+    let owned = Blob::decode(&bytes).unwrap();
+    let mut out = String::from(
+        "# method dt_bits temp_bits ux uy uz -> ax ay az status (f32 bits); P = the sensor powered on 2 s before the next sample\n",
+    );
+    for (name, m) in METHODS {
+        let mut flash = Compensator::from_blob(view, m, 0.01).unwrap();
+        let mut host = Compensator::with_terms(&owned.calibration, &owned.terms, m, 0.01).unwrap();
+        let mut t = 0.0f32;
+        for (i, dt) in [
+            0.0f32, 0.2, 1.0, 1.0, 10.0, 10.0, 0.001, 0.001, 0.05, 0.05, 3.0,
+        ]
+        .into_iter()
+        .cycle()
+        .take(40)
+        .enumerate()
+        {
+            if i == 30 {
+                flash.power_on(2.0);
+                host.power_on(2.0);
+                out.push_str("P\n");
+            }
+            t += dt;
+            let temp = -30.0 + 0.1 * t.min(600.0);
+            // the paper unit's outputs tilted about y by i * 9 degrees (rough volts)
+            let ang = i as f32 * 0.157;
+            let u = [0.55 * ang.sin(), -0.0044, -0.55 * ang.cos()];
+            let o = flash.compensate_dt(u, temp, dt);
+            let h = host.compensate_dt(u, temp, dt);
+            assert_eq!(o.accel.map(f32::to_bits), h.accel.map(f32::to_bits));
+            assert_eq!(o.status, h.status);
+            out.push_str(&format!(
+                "{name} {:08x} {:08x} {:08x} {:08x} {:08x} -> {:08x} {:08x} {:08x} {}\n",
+                dt.to_bits(),
+                temp.to_bits(),
+                u[0].to_bits(),
+                u[1].to_bits(),
+                u[2].to_bits(),
+                o.accel[0].to_bits(),
+                o.accel[1].to_bits(),
+                o.accel[2].to_bits(),
+                o.status.bits()
+            ));
+        }
+    }
+    golden("example_outputs_terms.txt", &out);
+}
+
+/// Every check of the term table behind a valid CRC: each failure its own error.
+#[cfg(feature = "terms")]
+#[test]
+fn term_table_checks_behind_a_valid_crc() {
+    let good = encode(&terms_blob());
+    let head = good.len() - 4 - 4 - 8 * 12;
+    let entry = |j: usize| head + 4 + 12 * j;
+    let edit = |f: &dyn Fn(&mut Vec<u8>)| {
+        let mut b = good.clone();
+        f(&mut b);
+        BlobView::new(&reseal(b)).err()
+    };
+    let put =
+        |b: &mut Vec<u8>, off: usize, v: f32| b[off..off + 4].copy_from_slice(&v.to_le_bytes());
+    assert_eq!(edit(&|_| {}), None);
+    assert_eq!(edit(&|b| b[head] = 0), Some(Error::Malformed)); // no entry declared
+    assert_eq!(edit(&|b| b[head] = 9), Some(Error::TooManyTerms));
+    assert_eq!(edit(&|b| b[head] = 7), Some(Error::Malformed)); // disagrees with the length
+    assert_eq!(edit(&|b| b[head + 2] = 1), Some(Error::Malformed)); // reserved
+    assert_eq!(edit(&|b| b[entry(0)] = 3), Some(Error::TermAxis));
+    assert_eq!(edit(&|b| b[entry(0) + 1] = 10), Some(Error::TermFactors)); // unknown
+    assert_eq!(edit(&|b| b[entry(0) + 1] = 4), Some(Error::TermFactors)); // out of order
+    assert_eq!(edit(&|b| b[entry(0) + 2] = 0), None); // a_x alone: a valid term
+    assert_eq!(edit(&|b| b[entry(0) + 1] = 0), Some(Error::TermFactors)); // a gap
+    assert_eq!(
+        edit(&|b| b[entry(3)..entry(3) + 4].copy_from_slice(&[0, 4, 4, 0])),
+        Some(Error::TermFactors) // abs(a_y)^2: not canonical
+    );
+    assert_eq!(
+        edit(&|b| put(b, entry(6) + 4, -25.0)),
+        Some(Error::TermTimeConstant)
+    );
+    assert_eq!(
+        edit(&|b| put(b, entry(6) + 4, 0.0)),
+        Some(Error::TermTimeConstant)
+    );
+    assert_eq!(
+        edit(&|b| put(b, entry(6) + 4, f32::NAN)),
+        Some(Error::TermTimeConstant)
+    );
+    assert_eq!(
+        edit(&|b| put(b, entry(0) + 4, 5.0)),
+        Some(Error::TermTimeConstant)
+    ); // no decay
+    assert_eq!(
+        edit(&|b| put(b, entry(0) + 8, f32::INFINITY)),
+        Some(Error::NonFinite)
+    );
+    // entry 3 made a copy of entry 0 (a_x*a_y on z)
+    assert_eq!(
+        edit(&|b| b.copy_within(entry(0)..entry(0) + 12, entry(3))),
+        Some(Error::DuplicateTerm)
+    );
+    // the same term on another axis is another entry
+    assert_eq!(
+        edit(&|b| {
+            b.copy_within(entry(0)..entry(0) + 12, entry(3));
+            b[entry(3)] = 0;
+        }),
+        None
+    );
+    // version and flag disagree: format 5 without the flag, format 4 with it
+    assert_eq!(edit(&|b| b[12] = 0), Some(Error::Malformed));
+    assert_eq!(edit(&|b| b[4] = 4), Some(Error::Malformed));
+    let plain = encoded();
+    let mut v5 = plain.clone();
+    v5[4] = 5;
+    assert_eq!(BlobView::new(&reseal(v5)).err(), Some(Error::Malformed));
+    // every flipped bit of the terms blob is corruption too
+    for i in 0..good.len() {
+        let mut b = good.clone();
+        b[i] ^= 1 << (i % 8);
+        assert_eq!(
+            BlobView::new(&b).err(),
+            Some(Error::CrcMismatch),
+            "byte {i}"
+        );
+    }
+    // the owned form refuses what it cannot encode
+    let mut dup = terms_blob();
+    let first = dup.terms[0];
+    dup.terms[3] = first;
+    let mut buf = [0u8; MAX_BLOB_LEN];
+    assert_eq!(dup.encode(&mut buf), Err(Error::DuplicateTerm));
 }

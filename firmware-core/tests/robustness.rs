@@ -1,11 +1,15 @@
 //! The compensator at its edges: any f32 bit pattern for the voltages, the
-//! temperature and the time step, with and without the physics terms, never panics and never yields a
-//! non-finite acceleration without a flag; blobs round-trip and every bit flip is caught.
+//! temperature and the time step, with and without the physics terms and discovered
+//! terms, never panics and never yields a non-finite acceleration without a flag; blobs
+//! round-trip and every bit flip is caught.
 mod common;
 
-use firmware_core::blob::{example_physics, Blob, BlobView, OutputUnit, RunId, MAX_BLOB_LEN};
+use firmware_core::blob::{
+    example_physics, example_terms, Blob, BlobView, OutputUnit, RunId, MAX_BLOB_LEN,
+};
 use firmware_core::compensate::{Compensator, ErrorModel, Method, Status};
 use firmware_core::temperature::{Calibration, TempModel};
+use firmware_core::terms::TermList;
 use proptest::prelude::*;
 
 /// Any f32: normal values of every size, subnormals, zeros, infinities and NaNs.
@@ -21,6 +25,11 @@ fn any_f32() -> impl Strategy<Value = f32> {
     ]
 }
 
+/// The first `n` of the example's discovered terms (0: none).
+fn terms(n: usize) -> TermList<f32> {
+    example_terms().into_iter().take(n).collect()
+}
+
 const METHODS: [Method; 3] = [
     Method::CorrectConstants,
     Method::CorrectResult(ErrorModel::Full),
@@ -32,13 +41,21 @@ proptest! {
 
     #[test]
     fn no_input_sequence_gives_an_unflagged_non_finite_output(
-        cal in common::unit(), phys in any::<bool>(), m in 0usize..3,
+        cal in common::unit(), phys in any::<bool>(), n_terms in 0usize..=8, m in 0usize..3,
         seq in prop::collection::vec((prop::array::uniform3(any_f32()), any_f32(), any_f32()), 1..40)) {
         let mut cal: Calibration<f32> = cal;
+        let terms = terms(n_terms);
+        if n_terms > 0 && !cfg!(feature = "terms") {
+            // never compensated without its terms
+            prop_assert_eq!(
+                Compensator::with_terms(&cal, &terms, METHODS[m], 0.01).err(),
+                Some(firmware_core::Error::TermsNotBuiltIn)
+            );
+            return Ok(());
+        }
         if phys {
             cal.physics = Some(example_physics());
             if !cfg!(feature = "physics") {
-                // never compensated without its terms
                 prop_assert_eq!(
                     Compensator::new(&cal, METHODS[m], 0.01).err(),
                     Some(firmware_core::Error::PhysicsNotBuiltIn)
@@ -46,7 +63,7 @@ proptest! {
                 return Ok(());
             }
         }
-        let mut c = Compensator::new(&cal, METHODS[m], 0.01).unwrap();
+        let mut c = Compensator::with_terms(&cal, &terms, METHODS[m], 0.01).unwrap();
         for (u, t, dt) in seq {
             // half the samples on their own time step, any bits
             let o = if dt.to_bits() & 1 == 0 { c.compensate(u, t) } else { c.compensate_dt(u, t, dt) };
@@ -71,7 +88,7 @@ proptest! {
 
     #[test]
     fn decode_of_encode_is_identity_and_flips_are_caught(cal in common::unit(), poly in any::<bool>(),
-            with_phys in any::<bool>(), flip in any::<prop::sample::Index>()) {
+            with_phys in any::<bool>(), n_terms in 0usize..=8, flip in any::<prop::sample::Index>()) {
         let mut cal: Calibration<f32> = cal;
         if poly {
             let t0 = cal.at_t0();
@@ -82,9 +99,15 @@ proptest! {
         }
         let mut serial = heapless::String::new();
         serial.push_str("UNIT-7").unwrap();
-        let blob = Blob { serial, output_unit: OutputUnit::Counts, run_id: RunId([7; 16]), calibration: cal };
+        let blob = Blob { serial, output_unit: OutputUnit::Counts, run_id: RunId([7; 16]), calibration: cal, terms: terms(n_terms) };
         let mut buf = [0u8; MAX_BLOB_LEN];
         let n = blob.encode(&mut buf).unwrap();
+        prop_assert_eq!(buf[4], if n_terms > 0 { 5 } else { 4 });
+        if n_terms > 0 && !cfg!(feature = "terms") {
+            // refused when opened, never half-applied
+            prop_assert_eq!(Blob::decode(&buf[..n]).err(), Some(firmware_core::Error::TermsNotBuiltIn));
+            return Ok(());
+        }
         prop_assert_eq!(Blob::decode(&buf[..n]).unwrap(), blob);
         let bit = flip.index(n * 8);
         let mut bad = buf[..n].to_vec();
@@ -97,7 +120,7 @@ proptest! {
     /// the host's f32 evaluation is the firmware's.
     #[test]
     fn flash_and_owned_calibrations_agree_bit_for_bit(cal in common::unit(), poly in any::<bool>(),
-            with_phys in any::<bool>(), m in 0usize..3,
+            with_phys in any::<bool>(), n_terms in 0usize..=8, m in 0usize..3,
             seq in prop::collection::vec((prop::array::uniform3(any_f32()), any_f32(), any_f32()), 1..40)) {
         let mut cal: Calibration<f32> = cal;
         if poly {
@@ -108,12 +131,13 @@ proptest! {
         if with_phys && cfg!(feature = "physics") {
             cal.physics = Some(example_physics());
         }
-        let blob = Blob { serial: heapless::String::new(), output_unit: OutputUnit::Unstated, run_id: RunId::NONE, calibration: cal };
+        let terms = if cfg!(feature = "terms") { terms(n_terms) } else { TermList::new() };
+        let blob = Blob { serial: heapless::String::new(), output_unit: OutputUnit::Unstated, run_id: RunId::NONE, calibration: cal, terms };
         let mut buf = [0u8; MAX_BLOB_LEN];
         let n = blob.encode(&mut buf).unwrap();
         let view = BlobView::new(&buf[..n]).unwrap();
         let mut flash = Compensator::from_blob(view, METHODS[m], 0.01).unwrap();
-        let mut owned = Compensator::new(&blob.calibration, METHODS[m], 0.01).unwrap();
+        let mut owned = Compensator::with_terms(&blob.calibration, &blob.terms, METHODS[m], 0.01).unwrap();
         for (u, t, dt) in seq {
             let (a, b) = (flash.compensate_dt(u, t, dt), owned.compensate_dt(u, t, dt));
             prop_assert_eq!(a.accel.map(f32::to_bits), b.accel.map(f32::to_bits));

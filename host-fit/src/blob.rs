@@ -1,11 +1,14 @@
-//! From a fitted model to a flashed blob and back: f32 tables, the f32-vs-f64 check,
-//! encoding, reading a blob file, and what `inspect` shows of it.
+//! From a fitted model to a flashed blob and back: f32 tables, the discovered terms'
+//! table, the f32-vs-f64 check, encoding, reading a blob file, and what `inspect` shows
+//! of it.
 use crate::data::output_unit::OutputUnit;
 use crate::error::{ErrorKind, HostError, Result};
-use crate::model::precision::check;
-use firmware_core::blob::{Blob, RunId, FORMAT_VERSION, MAGIC, MAX_BLOB_LEN, MAX_SERIAL_LEN};
+use crate::model::precision::check_with_terms;
+use crate::terms::{unit_table, AxisTerm};
+use firmware_core::blob::{Blob, RunId, MAGIC, MAX_BLOB_LEN, MAX_SERIAL_LEN};
 use firmware_core::model::COEFF_NAMES;
 use firmware_core::temperature::{Calibration, Physics, TempModel};
+use firmware_core::terms::{TermEntry, TermList};
 use serde::Serialize;
 use std::path::Path;
 
@@ -27,18 +30,38 @@ pub fn build_blob_checked(
     output_unit: &OutputUnit,
     cal64: &Calibration<f64>,
 ) -> Result<(Blob, Vec<u8>, (f64, f64))> {
+    build_blob_with_terms(serial, output_unit, cal64, &[])
+}
+
+/// [`build_blob_checked`] with discovered terms of the unit's state on their axes (the
+/// `discovered` findings a diagnosis flashes): the blob's term table (format 5; a term of
+/// the rig or the recording's time, more than 8 terms, a term twice on one axis or a
+/// non-finite coefficient are refused, each error naming the term). The f32 check covers
+/// the terms too.
+pub fn build_blob_with_terms(
+    serial: &str,
+    output_unit: &OutputUnit,
+    cal64: &Calibration<f64>,
+    terms: &[AxisTerm],
+) -> Result<(Blob, Vec<u8>, (f64, f64))> {
     let s = blob_serial(serial)?;
+    let terms64 = unit_table(terms)
+        .map_err(|e| HostError::new(ErrorKind::Blob, format!("cannot build the blob: {e}")))?;
     let blob = Blob {
         serial: s,
         output_unit: output_unit.in_blob(),
         run_id: RunId::NONE,
         calibration: cal64.convert(),
+        terms: terms64
+            .iter()
+            .map(TermEntry::convert)
+            .collect::<TermList<f32>>(),
     };
     let mut buf = [0u8; MAX_BLOB_LEN];
     let n = blob
         .encode(&mut buf)
         .map_err(|e| HostError::new(ErrorKind::Blob, format!("cannot build the blob: {e}")))?;
-    let (dep, beyond) = check(cal64)?;
+    let (dep, beyond) = check_with_terms(cal64, &terms64, &blob.calibration, &blob.terms)?;
     Ok((blob, buf[..n].to_vec(), (dep, beyond)))
 }
 
@@ -138,6 +161,31 @@ pub struct Inspection {
     /// The in-flight physics terms (`diagnose --out`), every one of them; None when the
     /// blob has none.
     pub physics: Option<PhysicsTerms>,
+    /// The discovered terms of the blob's term table (format 5), in table order; empty
+    /// when it has none.
+    pub terms: Vec<InspectTerm>,
+}
+
+/// One entry of a blob's table of discovered terms.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct InspectTerm {
+    /// The axis whose output it enters (`x`, `y`, `z`).
+    pub axis: &'static str,
+    /// The term in the vocabulary's canonical text.
+    pub term: crate::terms::Term,
+    /// Its coefficient (output units per the term's units), as stored.
+    pub coefficient: f32,
+}
+
+impl InspectTerm {
+    fn of(e: &TermEntry<f32>) -> Self {
+        let t = AxisTerm::of_entry(e);
+        InspectTerm {
+            axis: t.axis.name(),
+            term: t.term,
+            coefficient: e.coefficient,
+        }
+    }
 }
 
 /// Every in-flight term of a blob, as stored (time constants in seconds).
@@ -216,6 +264,25 @@ impl PhysicsTerms {
     }
 }
 
+/// The discovered terms' lines of `inspect`: each as the output it enters, its
+/// coefficient and its canonical text.
+fn terms_text(terms: &[InspectTerm]) -> String {
+    if terms.is_empty() {
+        return "discovered terms: none".to_string();
+    }
+    let mut s = format!(
+        "discovered terms ({}; U_axis += c * term, c in output units per the term's units: g^k, C of dT, C/min of dTdt; decays since power-on):",
+        terms.len()
+    );
+    for t in terms {
+        s.push_str(&format!(
+            "\n  {} += {:>10.4e} * {}",
+            t.axis, t.coefficient, t.term
+        ));
+    }
+    s
+}
+
 /// One table row: `dT^k` (poly) or a breakpoint (pwl).
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct InspectRow {
@@ -257,7 +324,7 @@ impl Inspection {
             ),
         };
         Inspection {
-            format_version: FORMAT_VERSION,
+            format_version: b.version(),
             bytes,
             serial: b.serial.to_string(),
             output_unit: b.output_unit.label(),
@@ -271,6 +338,7 @@ impl Inspection {
             columns: COEFF_NAMES,
             rows,
             physics: c.physics.as_ref().map(PhysicsTerms::of),
+            terms: b.terms.iter().map(InspectTerm::of).collect(),
         }
     }
 
@@ -325,6 +393,93 @@ impl Inspection {
             Some(p) => s.push_str(&p.text()),
             None => s.push_str("in-flight terms: none"),
         }
+        s.push('\n');
+        s.push_str(&terms_text(&self.terms));
         s.trim_end().to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::terms::Term;
+    use firmware_core::blob::example_blob;
+    use firmware_core::terms::Axis;
+
+    fn t(text: &str, axis: Axis, coefficient: f64) -> AxisTerm {
+        AxisTerm {
+            term: text.parse::<Term>().unwrap(),
+            axis,
+            coefficient,
+        }
+    }
+
+    /// Typed terms with coefficients -> a format-5 blob -> the same terms read back (the
+    /// coefficients rounded to f32), shown by `inspect` in canonical text.
+    #[test]
+    fn terms_are_written_and_read_back() {
+        let cal: Calibration<f64> = example_blob().calibration.convert();
+        let terms = [
+            t("a_y*a_x", Axis::Z, 1.5e-4),
+            t("dT*decay(power_on,1200s)", Axis::X, -3e-6),
+            t("a_x^3", Axis::X, 8e-5),
+        ];
+        let (blob, bytes, (dep, _)) =
+            build_blob_with_terms("U-1", &OutputUnit::parse("V"), &cal, &terms).unwrap();
+        assert_eq!(u16::from_le_bytes([bytes[4], bytes[5]]), 5);
+        assert!(dep <= crate::model::precision::F32_BOUND_G, "{dep:e}");
+        let back = Blob::decode(&bytes).unwrap();
+        assert_eq!(back, blob);
+        let read: Vec<AxisTerm> = back.terms.iter().map(AxisTerm::of_entry).collect();
+        for (r, w) in read.iter().zip(&terms) {
+            assert_eq!((&r.term, r.axis), (&w.term, w.axis));
+            assert_eq!(r.coefficient, f64::from(w.coefficient as f32));
+        }
+        let i = Inspection::of(&back, bytes.len());
+        assert_eq!(i.format_version, 5);
+        let text = i.text(Path::new("u.blob"));
+        assert!(
+            text.contains("discovered terms (3; U_axis += c * term"),
+            "{text}"
+        );
+        assert!(text.contains("\n  z +=  1.5000e-4 * a_x*a_y"), "{text}");
+        assert!(
+            text.contains("\n  x += -3.0000e-6 * dT*decay(power_on,20min)"),
+            "{text}"
+        );
+        assert!(text.contains("\n  x +=  8.0000e-5 * a_x^3"), "{text}");
+        let j = serde_json::to_value(&i).unwrap();
+        assert_eq!(j["terms"][0]["term"], "a_x*a_y");
+        assert_eq!(j["terms"][1]["axis"], "x");
+        // without terms: format 4, as before
+        let (_, plain, _) = build_blob("U-1", &OutputUnit::parse("V"), &cal).unwrap();
+        assert_eq!(plain[4], 4);
+        let i = Inspection::of(&Blob::decode(&plain).unwrap(), plain.len());
+        assert!(i
+            .text(Path::new("p.blob"))
+            .ends_with("discovered terms: none"));
+    }
+
+    /// What cannot be flashed is refused with the term named: a rig term, a table of
+    /// more than 8, a term twice on one axis.
+    #[test]
+    fn terms_that_cannot_be_flashed_are_refused_by_name() {
+        let cal: Calibration<f64> = example_blob().calibration.convert();
+        let err = |terms: &[AxisTerm]| {
+            build_blob_with_terms("U-1", &OutputUnit::parse("V"), &cal, terms)
+                .unwrap_err()
+                .to_string()
+        };
+        let rig = err(&[t("a_x*t", Axis::Y, 1e-4)]);
+        assert!(rig.contains("term `a_x*t` is a term of the rig"), "{rig}");
+        let twice = err(&[t("a_x*a_y", Axis::Y, 1e-4), t("a_y*a_x", Axis::Y, 2e-4)]);
+        assert!(twice.contains("term `a_x*a_y`: twice on axis y"), "{twice}");
+        let nine: Vec<AxisTerm> = [
+            "a_x", "a_y", "a_z", "dT", "dTdt", "a_x^2", "a_y^2", "a_z^2", "a_x*a_y",
+        ]
+        .iter()
+        .map(|s| t(s, Axis::X, 1e-5))
+        .collect();
+        assert!(err(&nine).contains("at most 8"));
     }
 }

@@ -11,7 +11,7 @@
 //! | layer | modules | what |
 //! |---|---|---|
 //! | 0 | `error`, `rng`, `output`, `progress` | foundations: errors, random numbers, atomic writes, JSON/CSV, progress of long work |
-//! | 1 | `data` | recordings, positions with their roles, stops and windows, coefficient tables |
+//! | 1 | `data`, `terms` | recordings, positions with their roles, stops and windows, coefficient tables; the vocabulary of discovered terms (parse, print, evaluate, a blob's term table) |
 //! | 2 | `model` | the engine: one least-squares solver, the temperature basis, the floor, the windows and their weights, the terms and their columns, the solve with held-out blocks, the judge, the flashed model, its cache and f32 check |
 //! | 3 | `fit`, `simulate` | identification, temperature models, the pipeline, the route (detection, the dynamic fit, the choice, the calibration), the predicted error; the digital twin |
 //! | 4 | `blob`, `verify`, `vectors`, `acceptance` | blobs built and read, formula (13) through firmware-core, firmware test vectors, pass/fail against a specification |
@@ -27,6 +27,7 @@ pub mod progress;
 pub mod rng;
 
 pub mod data;
+pub mod terms;
 
 pub mod model;
 

@@ -7,6 +7,7 @@ use crate::rng::Rng;
 use firmware_core::blob::Blob;
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
 use firmware_core::model::Coeffs;
+use firmware_core::terms::TermEntry;
 
 /// The methods in the order the firmware harness runs them.
 pub const METHODS: [(&str, Method); 3] = [
@@ -94,12 +95,13 @@ fn inputs(bytes: &[u8]) -> Vec<([f32; 3], f32, f32)> {
 /// code).
 pub fn expected(blob: &Blob, bytes: &[u8], prefix: &str) -> (Vec<String>, f64) {
     let cal64 = blob.calibration.convert::<f64>();
+    let terms64: Vec<TermEntry<f64>> = blob.terms.iter().map(TermEntry::convert).collect();
     let mut lines = Vec::new();
     let mut worst: f64 = 0.0;
     for (tag, m) in METHODS {
         let (Ok(mut c32), Ok(mut c64)) = (
-            Compensator::new(&blob.calibration, m, PERIOD_S),
-            Compensator::new(&cal64, m, f64::from(PERIOD_S)),
+            Compensator::with_terms(&blob.calibration, &blob.terms, m, PERIOD_S),
+            Compensator::with_terms(&cal64, &terms64, m, f64::from(PERIOD_S)),
         ) else {
             continue;
         };

@@ -58,7 +58,8 @@ pub fn verify(
     let n0 = invert(&c0.k)?;
     // every row is given its own time step; the period is only the constructor's
     let period = rec.median_step_s() as f32;
-    let mut comp = Compensator::new(cal, method, period.max(1e-6)).ok()?;
+    // the blob's discovered terms too: what the MCU compensates
+    let mut comp = Compensator::with_terms(cal, &blob.terms, method, period.max(1e-6)).ok()?;
     let mut acc: Vec<([f64; 3], usize, usize)> = vec![([0.0; 3], 0, 0); rec.dwells.len()];
     let mut dwell_of_row = vec![usize::MAX; rec.rows.len()];
     for (i, d) in rec.dwells.iter().enumerate() {

@@ -13,12 +13,13 @@ use std::path::{Path, PathBuf};
 const MAX_FN_LINES: usize = 120;
 
 /// The layers of lib.rs's table: a module may use modules of its own rank or below.
-const LAYERS: [(&str, u8); 25] = [
+const LAYERS: [(&str, u8); 26] = [
     ("error", 0),
     ("rng", 0),
     ("output", 0),
     ("progress", 0),
     ("data", 1),
+    ("terms", 1),
     ("model", 2),
     ("fit", 3),
     ("simulate", 3),

@@ -174,7 +174,7 @@ fn a_format_3_blob_is_refused_by_version() {
         let (code, _, err) = cli(&args);
         assert_eq!(code, 1, "{args:?}: {err}");
         assert!(
-            err.contains("unsupported blob format version 3 (this firmware reads version 4)"),
+            err.contains("unsupported blob format version 3 (this firmware reads versions 4 to 5)"),
             "{err}"
         );
     }

@@ -1,12 +1,19 @@
 //! The budgets `cargo xtask embedded` enforces (issue 13) and their verdicts, computed
 //! once: the failures of the task and the report's budget line both read them here.
-use crate::measure::Measured;
+use crate::measure::{Build, Measured};
 
 /// Method 1's floor: 9 multiplications, 6 additions, 3 subtractions per sample.
 pub const M1_FLOOR: u64 = 18;
 /// Method 1 with the physics terms between the machines' steps: its floor, the offsets
 /// (15) and the K2/asymmetry correction (30).
 pub const PM1_FLOOR: u64 = M1_FLOOR + 15 + 30;
+
+/// A full table of 8 discovered terms per sample: the 3 magnitudes of the force, then for
+/// each term 2 multiplications (its force part), 1 (times its weight) and 1 addition
+/// (into its axis's error).
+pub const TERMS_FLOOR: u64 = 3 + 8 * 4;
+/// Method 1 with the physics terms and a full table of discovered terms: its floor.
+pub const TM1_FLOOR: u64 = PM1_FLOOR + TERMS_FLOOR;
 
 /// One budget of a firmware build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -20,8 +27,10 @@ pub enum Budget {
     /// Flash of compensation + blob validation (the library components), built without
     /// `physics`.
     Flash,
-    /// The same with `physics`.
+    /// The same with `physics` (without `terms`).
     PhysicsFlash,
+    /// The same with `physics` and `terms`.
+    TermsFlash,
     /// Method 1's net instructions per sample: at most 2.5x its floor.
     Method1,
     /// The physics path's method 1 per sample, between the machines' steps.
@@ -32,6 +41,11 @@ pub enum Budget {
     /// The physics path's temperature update: the machines' step and the cached matrices
     /// of the diagnosed blob's table recomputed.
     PhysicsUpdate,
+    /// Method 1 per sample with the physics terms and a full table of discovered terms,
+    /// between the machines' steps.
+    TermsSample,
+    /// The machines' step with a full table of discovered terms (their state parts).
+    TermsStep,
     /// No soft-double routine linked.
     NoSoftDouble,
 }
@@ -59,16 +73,19 @@ impl Verdict {
 
 impl Budget {
     /// Every budget, in the report's order.
-    pub const ALL: [Budget; 10] = [
+    pub const ALL: [Budget; 13] = [
         Budget::DecodeStack,
         Budget::CompensateStack,
         Budget::State,
         Budget::Flash,
         Budget::PhysicsFlash,
+        Budget::TermsFlash,
         Budget::Method1,
         Budget::PhysicsSample,
         Budget::PhysicsStep,
         Budget::PhysicsUpdate,
+        Budget::TermsSample,
+        Budget::TermsStep,
         Budget::NoSoftDouble,
     ];
 
@@ -87,23 +104,28 @@ impl Budget {
             Budget::State => 256,
             Budget::Flash => 6 * 1024,
             Budget::PhysicsFlash => 13 * 512,
+            Budget::TermsFlash => TERMS_FLASH,
             Budget::Method1 => M1_FLOOR * 5 / 2,
             Budget::PhysicsSample => 230,
             Budget::PhysicsStep => 600,
             Budget::PhysicsUpdate => 3000,
+            Budget::TermsSample => TERMS_SAMPLE,
+            Budget::TermsStep => TERMS_STEP,
             Budget::NoSoftDouble => 0,
         }
     }
 
-    /// Whether the budget is for the build `m` (the physics budgets for the build with
-    /// `physics`, the plain flash budget for the one without).
+    /// Whether the budget is for the build `m`: each flash budget for its own build, the
+    /// physics path's instructions for both builds with `physics`, the discovered terms'
+    /// for the build with `terms`.
     pub fn applies(self, m: &Measured) -> bool {
         match self {
-            Budget::Flash => m.physics_refused,
-            Budget::PhysicsFlash
-            | Budget::PhysicsSample
-            | Budget::PhysicsStep
-            | Budget::PhysicsUpdate => !m.physics_refused,
+            Budget::Flash => m.build == Build::Core,
+            Budget::PhysicsFlash => m.build == Build::Physics,
+            Budget::TermsFlash | Budget::TermsSample | Budget::TermsStep => m.build.terms(),
+            Budget::PhysicsSample | Budget::PhysicsStep | Budget::PhysicsUpdate => {
+                m.build.physics()
+            }
             Budget::DecodeStack
             | Budget::CompensateStack
             | Budget::State
@@ -118,11 +140,13 @@ impl Budget {
             Budget::DecodeStack => m.stack_decode,
             Budget::CompensateStack => m.stack_compensate,
             Budget::State => m.state,
-            Budget::Flash | Budget::PhysicsFlash => Some(m.library_bytes()),
+            Budget::Flash | Budget::PhysicsFlash | Budget::TermsFlash => Some(m.library_bytes()),
             Budget::Method1 => m.net("sample_m1"),
             Budget::PhysicsSample => m.net("sample_pm1"),
             Budget::PhysicsStep => m.net("step_pm1"),
             Budget::PhysicsUpdate => m.net("update_pm1"),
+            Budget::TermsSample => m.net("sample_tm1"),
+            Budget::TermsStep => m.net("step_tm1"),
             Budget::NoSoftDouble => Some(m.soft_double.len() as u64),
         }
     }
@@ -144,10 +168,15 @@ impl Budget {
             Budget::State => "compensator state",
             Budget::Flash => "flash for compensation + blob validation",
             Budget::PhysicsFlash => "flash for compensation + blob validation with physics",
+            Budget::TermsFlash => {
+                "flash for compensation + blob validation with physics and discovered terms"
+            }
             Budget::Method1 => "method 1 per sample (2.5x the floor of 18)",
             Budget::PhysicsSample => "method 1 per sample with the physics terms",
             Budget::PhysicsStep => "the physics terms' step",
             Budget::PhysicsUpdate => "the physics path's temperature update",
+            Budget::TermsSample => "method 1 per sample with physics and 8 discovered terms",
+            Budget::TermsStep => "the machines' step with 8 discovered terms",
             Budget::NoSoftDouble => "no soft-double routines",
         }
     }
@@ -158,13 +187,16 @@ impl Budget {
             Budget::Method1
             | Budget::PhysicsSample
             | Budget::PhysicsStep
-            | Budget::PhysicsUpdate => "instructions",
+            | Budget::PhysicsUpdate
+            | Budget::TermsSample
+            | Budget::TermsStep => "instructions",
             Budget::NoSoftDouble => "routines",
             Budget::DecodeStack
             | Budget::CompensateStack
             | Budget::State
             | Budget::Flash
-            | Budget::PhysicsFlash => "bytes",
+            | Budget::PhysicsFlash
+            | Budget::TermsFlash => "bytes",
         }
     }
 
@@ -191,7 +223,7 @@ impl Budget {
                 format!("compensate stack {v} bytes (<= {limit}: {verdict})")
             }
             Budget::State => format!("compensator state {v} bytes (<= {limit}: {verdict})"),
-            Budget::Flash | Budget::PhysicsFlash => {
+            Budget::Flash | Budget::PhysicsFlash | Budget::TermsFlash => {
                 format!("flash {v} bytes (<= {limit}: {verdict})")
             }
             Budget::Method1 => format!(
@@ -206,6 +238,12 @@ impl Budget {
             Budget::PhysicsUpdate => format!(
                 "the physics path's temperature update {v} instructions (<= {limit}: {verdict})"
             ),
+            Budget::TermsSample => format!(
+                "method 1 with physics and 8 discovered terms {v} instructions per sample (<= {limit}: {verdict})"
+            ),
+            Budget::TermsStep => format!(
+                "the machines' step with 8 discovered terms {v} instructions (<= {limit}: {verdict})"
+            ),
             Budget::NoSoftDouble => format!(
                 "soft-double routines: {}",
                 if v == 0 {
@@ -217,6 +255,20 @@ impl Budget {
         }
     }
 }
+
+/// The flash of compensation + blob validation in the build with `terms`, bytes: 8.5 KiB,
+/// the physics build's and the discovered terms' 1.6 KiB (the table's validation where it
+/// lies, the factor tables, the state parts with their decays, the per-sample pass;
+/// 8382 measured at format 5's introduction).
+pub const TERMS_FLASH: u64 = 17 * 512;
+/// Method 1 per sample with the physics terms and a full table of 8 discovered terms:
+/// the physics path's 199 and about 38 per term (its word read where it lies, 2 + 1
+/// multiplications and the addition into its axis; 506 measured), with 10 % room.
+pub const TERMS_SAMPLE: u64 = 560;
+/// The machines' step with 8 discovered terms' state parts: the physics step's 520 and
+/// about 110 per term (its entry read, its state part, an f32 exponential for a decay;
+/// 1386 measured with two decays), with 10 % room.
+pub const TERMS_STEP: u64 = 1500;
 
 /// Each budget this build misses, named with its measured value.
 pub fn missed(m: &Measured, build: &str) -> Vec<(String, String)> {
@@ -243,8 +295,8 @@ mod tests {
 
     fn measured() -> Measured {
         Measured {
+            build: Build::Core,
             samples: 10,
-            physics_refused: true,
             departures: Vec::new(),
             sizes: Vec::new(),
             components: vec![("firmware-core compensate".into(), 6084)],
@@ -310,7 +362,7 @@ mod tests {
     #[test]
     fn the_physics_build_has_its_own_budgets() {
         let mut m = measured();
-        m.physics_refused = false;
+        m.build = Build::Physics;
         m.components[0].1 = 6600;
         m.icount
             .extend([("sample_pm1", 211), ("step_pm1", 484)].map(|(k, v)| (k.to_string(), v)));
@@ -332,5 +384,40 @@ mod tests {
         m.components[0].1 = 6657;
         assert_eq!(Budget::PhysicsFlash.verdict(&m), Verdict::Missed);
         assert!(!Budget::Flash.applies(&m));
+        assert!(!Budget::TermsSample.applies(&m));
+    }
+
+    /// The build with `terms` is held to its own flash limit, the physics path's budgets
+    /// and the discovered terms' per sample and per step; their figures missing are
+    /// misses.
+    #[test]
+    fn the_terms_build_has_its_own_budgets() {
+        let mut m = measured();
+        m.build = Build::Terms;
+        m.components[0].1 = 8300;
+        m.icount.extend(
+            [
+                ("sample_pm1", 219),
+                ("step_pm1", 537),
+                ("update_pm1", 2802),
+                ("sample_tm1", 526),
+            ]
+            .map(|(k, v)| (k.to_string(), v)),
+        );
+        let text: Vec<String> = missed(&m, "with physics and terms")
+            .into_iter()
+            .map(|(name, why)| format!("{name}: {why}"))
+            .collect();
+        assert_eq!(
+            text,
+            ["the machines' step with 8 discovered terms (with physics and terms): not measured"]
+        );
+        assert!(report(&m).contains("flash 8300 bytes (<= 8704: met)"));
+        assert!(report(&m).contains(
+            "method 1 with physics and 8 discovered terms 506 instructions per sample (<= 560: met)"
+        ));
+        m.icount.push(("step_tm1".into(), 1521));
+        assert_eq!(Budget::TermsStep.verdict(&m), Verdict::Missed);
+        assert!(!Budget::PhysicsFlash.applies(&m) && !Budget::Flash.applies(&m));
     }
 }

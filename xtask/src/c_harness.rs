@@ -28,8 +28,8 @@ pub fn run(sysroot: &Path, dir: &Path, v: &Vectors) -> Result<String, String> {
             stdout.lines().rev().take(5).collect::<Vec<_>>().join("\n")
         ));
     }
-    let samples =
-        crate::qemu::compare(&stdout, &v.expected_all()).map_err(|e| format!("C harness: {e}"))?;
+    let samples = crate::qemu::compare(&stdout, &v.expected(crate::measure::Build::Terms))
+        .map_err(|e| format!("C harness: {e}"))?;
     // the program itself checks the codes and exits non-zero on a wrong one
     if !stdout.lines().any(|l| l.starts_with("refusals ")) {
         return Err("C harness: no refusal check printed".into());
@@ -44,7 +44,7 @@ pub fn run(sysroot: &Path, dir: &Path, v: &Vectors) -> Result<String, String> {
         .map(|s| s.1)
         .sum();
     Ok(format!(
-        "C harness: {samples} compensated samples (3 methods; the PWL blob from `host-fit fit` and the physics blob from `host-fit diagnose --out`) through firmware_core.h (arm-none-eabi-gcc {version}, the firmware-core-ffi staticlib with `physics`) bit-identical to the host's f32 evaluation, as the Rust harness's; a truncated blob and one with a flipped version bit refused with FC_ERR_TRUNCATED and FC_ERR_CRC; the linked C program: {flash} bytes of .text + .rodata, test data included"
+        "C harness: {samples} compensated samples (3 methods; the PWL blob from `host-fit fit`, the physics blob from `host-fit diagnose --out` and the golden blob with 8 discovered terms) through firmware_core.h (arm-none-eabi-gcc {version}, the firmware-core-ffi staticlib with `physics` and `terms`) bit-identical to the host's f32 evaluation, as the Rust harness's; a truncated blob and one with a flipped version bit refused with FC_ERR_TRUNCATED and FC_ERR_CRC; the linked C program: {flash} bytes of .text + .rodata, test data included"
     ))
 }
 
@@ -84,6 +84,7 @@ fn data(v: &Vectors) -> Result<String, String> {
     for (name, path) in [
         ("fc_test_blob", &v.blob),
         ("fc_test_blob_phys", &v.physics_blob),
+        ("fc_test_blob_terms", &v.terms_blob),
         ("fc_test_inputs", &v.inputs),
     ] {
         let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;

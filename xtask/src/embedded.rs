@@ -1,42 +1,58 @@
 //! `cargo xtask embedded`: firmware-core on a Cortex-M4F. The host's test vectors, the
-//! firmware test built with and without `physics` and run under QEMU (bit for bit, then
-//! measured), the C harness, the report (target/embedded/summary.md) and the budgets.
-use crate::measure::{self, Measured};
+//! firmware test built with `physics` and `terms`, with `physics` only, and with neither,
+//! run under QEMU (bit for bit, then measured), the C harness, the report
+//! (target/embedded/summary.md) and the budgets.
+use crate::measure::{self, Build, Measured};
 use crate::qemu::{self, Counting};
 use crate::steps::{Outcome, Steps};
 use crate::toolchain::toolchain;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-/// The test vectors from host-fit: a PWL blob, a blob with physics terms, an input table,
-/// and the host's f32 results for each blob.
+/// The test vectors from host-fit: a PWL blob, a blob with physics terms, a blob with
+/// discovered terms, an input table, and the host's f32 results for each blob.
 pub struct Vectors {
     /// The PWL blob of `host-fit fit` on a simulated recording.
     pub blob: PathBuf,
     /// The blob of `host-fit diagnose --out` on a unit with in-flight effects.
     pub physics_blob: PathBuf,
+    /// The committed golden blob with a full table of discovered terms
+    /// (firmware-core/tests/data/example_blob_terms.hex: the paper unit, physics terms and
+    /// 8 discovered terms of every kind of factor).
+    pub terms_blob: PathBuf,
     /// The input table, edge cases included.
     pub inputs: PathBuf,
     /// `host-fit fw-vectors` of the PWL blob.
     pub expected: String,
     /// `host-fit fw-vectors` of the physics blob (tags `p...`).
     pub expected_physics: String,
+    /// `host-fit fw-vectors` of the terms blob (tags `t...`).
+    pub expected_terms: String,
 }
 
 impl Vectors {
-    /// What the build with `physics` must print: both blobs' results.
-    pub fn expected_all(&self) -> String {
-        format!("{}{}", self.expected, self.expected_physics)
+    /// What a build must print: the results of every blob it compensates.
+    pub fn expected(&self, build: Build) -> String {
+        match build {
+            Build::Terms => format!(
+                "{}{}{}",
+                self.expected, self.expected_physics, self.expected_terms
+            ),
+            Build::Physics => format!("{}{}", self.expected, self.expected_physics),
+            Build::Core => self.expected.clone(),
+        }
     }
 }
+
+/// The golden blob with discovered terms, committed as hex.
+const TERMS_BLOB_HEX: &str = "firmware-core/tests/data/example_blob_terms.hex";
 
 /// What the QEMU step hands the steps after it.
 struct Run {
     sysroot: PathBuf,
     dir: PathBuf,
     vectors: Vectors,
-    full: Measured,
-    core: Measured,
+    builds: Vec<Measured>,
 }
 
 /// The step names, as the table lists them.
@@ -57,14 +73,17 @@ pub fn embedded(steps: &mut Steps) {
     });
     let c_line =
         c.unwrap_or_else(|e| format!("C harness: FAILED ({})", e.lines().next().unwrap_or("")));
-    let md = crate::summary::report(&run.full, &run.core, &c_line);
+    let md = crate::summary::report(&run.builds, &c_line);
     let out = crate::root().join("target/embedded");
     let _ = std::fs::create_dir_all(&out);
     let _ = std::fs::write(out.join("summary.md"), &md);
     println!("{md}");
-    // every budget of both builds, all failures collected
-    let mut missed = crate::budgets::missed(&run.full, "with physics");
-    missed.extend(crate::budgets::missed(&run.core, "without physics"));
+    // every budget of every build, all failures collected
+    let missed: Vec<(String, String)> = run
+        .builds
+        .iter()
+        .flat_map(|m| crate::budgets::missed(m, m.build.label()))
+        .collect();
     if missed.is_empty() {
         steps.record(BUDGETS_STEP, Outcome::Pass, Duration::ZERO);
     }
@@ -78,7 +97,7 @@ pub fn embedded(steps: &mut Steps) {
     }
 }
 
-/// The tools, the vectors, and both builds run and measured.
+/// The tools, the vectors, and every build run and measured.
 fn under_qemu() -> Result<Run, String> {
     crate::setup::qemu()?;
     crate::setup::tools()?;
@@ -87,15 +106,31 @@ fn under_qemu() -> Result<Run, String> {
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
     let vectors = vectors(&dir)?;
     let plugin = qemu::plugin(&dir)?;
-    let full = variant(&sysroot, &vectors, &dir, &plugin, true)?;
-    let core = variant(&sysroot, &vectors, &dir, &plugin, false)?;
+    let builds = Build::ALL
+        .iter()
+        .map(|b| variant(&sysroot, &vectors, &dir, &plugin, *b))
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(Run {
         sysroot,
         dir,
         vectors,
-        full,
-        core,
+        builds,
     })
+}
+
+/// The bytes of a hex file (whitespace ignored).
+fn unhex(text: &str) -> Result<Vec<u8>, String> {
+    let digits: Vec<u8> = text.bytes().filter(|b| !b.is_ascii_whitespace()).collect();
+    digits
+        .chunks(2)
+        .map(|p| {
+            std::str::from_utf8(p)
+                .ok()
+                .and_then(|h| u8::from_str_radix(h, 16).ok())
+                .filter(|_| p.len() == 2)
+                .ok_or_else(|| format!("not hex: {:?}", String::from_utf8_lossy(p)))
+        })
+        .collect()
 }
 
 /// `host-fit ARGS` (release, quiet): its standard output.
@@ -156,12 +191,30 @@ fn vectors(dir: &Path) -> Result<Vectors, String> {
         "p",
     ])?
     .replace("f64-departure ", "f64-departure-physics ");
+    // discovered terms: the committed golden blob, its results from host-fit
+    let tblob = dir.join("terms.blob");
+    let hex_path = crate::root().join(TERMS_BLOB_HEX);
+    let hex =
+        std::fs::read_to_string(&hex_path).map_err(|e| format!("{}: {e}", hex_path.display()))?;
+    std::fs::write(&tblob, unhex(&hex)?).map_err(|e| e.to_string())?;
+    let expected_terms = host_fit(&[
+        "fw-vectors",
+        "--blob",
+        &s(&tblob),
+        "--inputs",
+        &s(&inputs),
+        "--tag-prefix",
+        "t",
+    ])?
+    .replace("f64-departure ", "f64-departure-terms ");
     Ok(Vectors {
         blob,
         physics_blob: pblob,
+        terms_blob: tblob,
         inputs,
         expected,
         expected_physics,
+        expected_terms,
     })
 }
 
@@ -172,14 +225,10 @@ fn variant(
     v: &Vectors,
     dir: &Path,
     plugin: &Path,
-    physics: bool,
+    build: Build,
 ) -> Result<Measured, String> {
-    let elf = qemu::build_harness(sysroot, v, dir, physics)?;
-    let expected = if physics {
-        v.expected_all()
-    } else {
-        v.expected.clone()
-    };
+    let elf = qemu::build_harness(sysroot, v, dir, build)?;
+    let expected = v.expected(build);
     let nm = measure::symbols(&elf)?;
     let log = dir.join("plugin.log");
     let _ = std::fs::remove_file(&log);
@@ -199,14 +248,18 @@ fn variant(
         ));
     }
     let samples = qemu::compare(&stdout, &expected)?;
-    let physics_refused = stdout.lines().any(|l| l == "physics refused");
-    if !physics && !physics_refused {
+    let refused = |what: &str| stdout.lines().any(|l| l == format!("{what} refused"));
+    if !build.physics() && !refused("physics") {
         return Err("built without physics, the physics blob was not refused".into());
+    }
+    if !build.terms() && !refused("terms") {
+        return Err("built without terms, the blob with discovered terms was not refused".into());
     }
     let mut departures = Vec::new();
     for (key, what) in [
         ("f64-departure ", "the PWL blob"),
         ("f64-departure-physics ", "the blob with physics terms"),
+        ("f64-departure-terms ", "the blob with discovered terms"),
     ] {
         departures.extend(
             expected
@@ -217,8 +270,8 @@ fn variant(
     }
     let (components, soft_double) = measure::components(&nm);
     Ok(Measured {
+        build,
         samples,
-        physics_refused,
         departures,
         sizes: measure::sections(
             &elf,

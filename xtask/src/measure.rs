@@ -4,12 +4,56 @@
 use std::path::Path;
 use std::process::Command;
 
+/// The three builds of the firmware test: firmware-core's features.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Build {
+    /// `physics` and `terms` (firmware-core's default): every blob compensated.
+    Terms,
+    /// `physics` without `terms`: the blob with discovered terms must be refused.
+    Physics,
+    /// Neither: the blobs with physics or discovered terms must be refused.
+    Core,
+}
+
+impl Build {
+    /// Every build, in the order they are run and reported.
+    pub const ALL: [Build; 3] = [Build::Terms, Build::Physics, Build::Core];
+
+    /// The harness's cargo features.
+    pub fn features(self) -> &'static str {
+        match self {
+            Build::Terms => "physics terms",
+            Build::Physics => "physics",
+            Build::Core => "",
+        }
+    }
+
+    /// As the report and a failure name it.
+    pub fn label(self) -> &'static str {
+        match self {
+            Build::Terms => "with physics and terms",
+            Build::Physics => "with physics, without terms",
+            Build::Core => "without physics",
+        }
+    }
+
+    /// Whether the build compensates the in-flight physics terms.
+    pub fn physics(self) -> bool {
+        matches!(self, Build::Terms | Build::Physics)
+    }
+
+    /// Whether the build compensates discovered terms.
+    pub fn terms(self) -> bool {
+        self == Build::Terms
+    }
+}
+
 /// The measurements of one build of the firmware test.
 pub struct Measured {
+    /// Which build.
+    pub build: Build,
     /// Compensated samples bit-identical to the host's.
     pub samples: usize,
-    /// Built without `physics`: the physics blob was refused, as it must be.
-    pub physics_refused: bool,
     /// The host's largest departure of the f32 results from the f64 evaluation of the
     /// same code (g), by blob.
     pub departures: Vec<(&'static str, String)>,
@@ -172,9 +216,10 @@ pub fn value(stdout: &str, key: &str) -> Option<u64> {
 
 /// Components counted as "compensation + blob decode" (the library); the rest is the
 /// test harness, its runtime and its data.
-const LIBRARY: [&str; 9] = [
+const LIBRARY: [&str; 10] = [
     "other (core, runtime)",
     "firmware-core compensate",
+    "firmware-core discovered terms",
     "firmware-core temperature tables",
     "firmware-core model (inverse)",
     "firmware-core blob validation (in place)",
@@ -196,8 +241,9 @@ const RUNTIME: [&str; 7] = [
 ];
 
 /// Symbol prefixes and the component they belong to, the first match winning.
-const PREFIXES: [(&str, &str); 11] = [
+const PREFIXES: [(&str, &str); 12] = [
     ("firmware_core::compensate", "firmware-core compensate"),
+    ("firmware_core::terms", "firmware-core discovered terms"),
     (
         "firmware_core::temperature",
         "firmware-core temperature tables",
@@ -285,8 +331,8 @@ mod tests {
     #[test]
     fn windows_are_net_of_their_overhead() {
         let m = Measured {
+            build: Build::Physics,
             samples: 0,
-            physics_refused: false,
             departures: Vec::new(),
             sizes: Vec::new(),
             components: vec![("libm".into(), 100), ("test harness".into(), 900)],

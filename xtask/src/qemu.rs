@@ -2,6 +2,7 @@
 //! line that runs an ELF under it (semihosting, optionally the instruction-count plugin),
 //! and the bit-for-bit comparison of the target's `vec` lines with the host's.
 use crate::embedded::Vectors;
+use crate::measure::Build;
 use crate::toolchain::{cross_cmd, TARGET};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -19,14 +20,14 @@ pub fn plugin(dir: &Path) -> Result<PathBuf, String> {
     Ok(plugin)
 }
 
-/// `firmware-core/qemu-test` built with or without the `physics` feature, the test
-/// vectors embedded; its ELF copied into `dir` (one target dir serves both builds, as
-/// build-std is shared, so each ELF is kept aside).
+/// `firmware-core/qemu-test` built with the features of `build`, the test vectors
+/// embedded; its ELF copied into `dir` (one target dir serves every build, as build-std
+/// is shared, so each ELF is kept aside).
 pub fn build_harness(
     sysroot: &Path,
     v: &Vectors,
     dir: &Path,
-    physics: bool,
+    build: Build,
 ) -> Result<PathBuf, String> {
     let crate_dir = crate::root().join("firmware-core/qemu-test");
     let target_dir = crate::root().join("target/qemu-test");
@@ -36,15 +37,16 @@ pub fn build_harness(
         .arg(&target_dir)
         .env("FW_TEST_BLOB", &v.blob)
         .env("FW_TEST_BLOB_PHYS", &v.physics_blob)
+        .env("FW_TEST_BLOB_TERMS", &v.terms_blob)
         .env("FW_TEST_INPUTS", &v.inputs);
-    if physics {
-        c.args(["--features", "physics"]);
+    if !build.features().is_empty() {
+        c.args(["--features", build.features()]);
     }
     crate::sh(&mut c)?;
-    let elf = dir.join(if physics {
-        "fw-qemu-test-physics.elf"
-    } else {
-        "fw-qemu-test-core.elf"
+    let elf = dir.join(match build {
+        Build::Terms => "fw-qemu-test-terms.elf",
+        Build::Physics => "fw-qemu-test-physics.elf",
+        Build::Core => "fw-qemu-test-core.elf",
     });
     std::fs::copy(target_dir.join(TARGET).join("release/fw-qemu-test"), &elf)
         .map_err(|e| format!("{}: {e}", elf.display()))?;

@@ -1,34 +1,43 @@
 //! The report of `cargo xtask embedded` (target/embedded/summary.md, printed too): per
 //! build, what was checked, the instruction counts against their floors, flash and RAM by
 //! section and component, and the budgets' verdicts.
-use crate::budgets::{Budget, M1_FLOOR, PM1_FLOOR};
-use crate::measure::Measured;
+use crate::budgets::{Budget, M1_FLOOR, PM1_FLOOR, TERMS_FLOOR, TM1_FLOOR};
+use crate::measure::{Build, Measured};
 
-/// The whole report: the build with `physics` (and the C harness's line, or why it
-/// failed) and the build without it.
-pub fn report(full: &Measured, core: &Measured, c_harness: &str) -> String {
-    format!(
+/// The whole report: every build (the first, with `physics` and `terms`, with the C
+/// harness's line, or why it failed).
+pub fn report(builds: &[Measured], c_harness: &str) -> String {
+    let mut s = String::from(
         "## firmware-core on Cortex-M4F (QEMU mps2-an386), `cargo xtask embedded`\n\n\
-         The harness is built and run twice: with the `physics` feature (the default; \
-         the blob from `host-fit diagnose` is compensated too) and without it \
-         (`default-features = false`, for units calibrated without in-flight terms).\n\n\
-         ### With the `physics` feature\n\n{}\n### Without the `physics` feature\n\n{}",
-        build(full, true, Some(c_harness)),
-        build(core, false, None)
-    )
+         The harness is built and run three times: with the `physics` and `terms` features \
+         (the default; the blob from `host-fit diagnose` and the golden blob with 8 \
+         discovered terms are compensated too), with `physics` only (the blob with \
+         discovered terms refused), and with neither (`default-features = false`, for \
+         units calibrated without in-flight terms).\n",
+    );
+    for m in builds {
+        let c = (m.build == Build::Terms).then_some(c_harness);
+        s.push_str(&format!(
+            "\n### {} {}\n\n{}",
+            m.build.label().get(..1).unwrap_or("").to_uppercase(),
+            m.build.label().get(1..).unwrap_or(""),
+            build(m, c)
+        ));
+    }
+    s
 }
 
 /// One build's section.
-fn build(m: &Measured, physics: bool, c_harness: Option<&str>) -> String {
+fn build(m: &Measured, c_harness: Option<&str>) -> String {
+    let physics = m.build.physics();
     let mut s = String::new();
-    for l in checked(m, physics)
-        .iter()
-        .map(String::as_str)
-        .chain(c_harness)
-    {
+    for l in checked(m).iter().map(String::as_str).chain(c_harness) {
         s.push_str(&format!("- {l}\n"));
     }
     s.push_str(&instructions(m, physics));
+    if m.build.terms() {
+        s.push_str(&terms_rows(m));
+    }
     s.push_str(&flash(m));
     s.push_str(&format!(
         "\nBudgets (`cargo xtask embedded` fails on a miss): {}.\n",
@@ -46,13 +55,16 @@ fn build(m: &Measured, physics: bool, c_harness: Option<&str>) -> String {
 }
 
 /// What the run checked and the stack and RAM it measured, one line each.
-fn checked(m: &Measured, physics: bool) -> Vec<String> {
+fn checked(m: &Measured) -> Vec<String> {
     let mut lines = vec![format!(
         "{} compensated samples (3 methods) bit-identical to the host's f32 evaluation",
         m.samples
     )];
-    if !physics && m.physics_refused {
+    if !m.build.physics() {
         lines.push("the blob with physics terms is refused (Error::PhysicsNotBuiltIn)".into());
+    }
+    if !m.build.terms() {
+        lines.push("the blob with discovered terms is refused (Error::TermsNotBuiltIn)".into());
     }
     for (what, max) in &m.departures {
         lines.push(format!(
@@ -157,6 +169,36 @@ fn instructions(m: &Measured, physics: bool) -> String {
     s
 }
 
+/// The discovered terms' rows of the instruction table (the golden blob: physics terms
+/// and a full table of 8 discovered terms).
+fn terms_rows(m: &Measured) -> String {
+    let net = |k: &str| m.net(k).unwrap_or(0);
+    let mut s = String::new();
+    for (k, name, floor) in [
+        (
+            "sample_tm1",
+            "method 1 per sample with the physics terms and 8 discovered terms",
+            TM1_FLOOR,
+        ),
+        (
+            "sample_tm2full",
+            "method 2 (full) per sample with the physics terms and 8 discovered terms",
+            39 + 15 + 30 + TERMS_FLOOR,
+        ),
+    ] {
+        s.push_str(&format!(
+            "| {name} | {} | {floor} (as with the physics terms, + the 8 terms' {TERMS_FLOOR}: 3 magnitudes, 2 mul for each term's force part, 1 mul and 1 add into its axis) | {:.1}x |\n",
+            net(k),
+            net(k) as f64 / floor as f64
+        ));
+    }
+    s.push_str(&format!(
+        "| terms: the machines' step with 8 discovered terms (their state parts: dT, dTdt, decay(power_on) weights), method 1 (+ one sample) | {} | | |\n",
+        net("step_tm1")
+    ));
+    s
+}
+
 /// Flash and RAM by section and by component, and the library's share.
 fn flash(m: &Measured) -> String {
     let mut s = String::from("\nFlash and RAM of the linked test binary (llvm-size -A):\n\n| section | bytes |\n|---|---|\n");
@@ -168,10 +210,10 @@ fn flash(m: &Measured) -> String {
         s.push_str(&format!("| {n} | {v} |\n"));
     }
     let lib = m.library_bytes();
-    let budget = if Budget::Flash.applies(m) {
-        Budget::Flash
-    } else {
-        Budget::PhysicsFlash
+    let budget = match m.build {
+        Build::Core => Budget::Flash,
+        Build::Physics => Budget::PhysicsFlash,
+        Build::Terms => Budget::TermsFlash,
     };
     s.push_str(&format!(
         "\nCompensation + blob decode (the library components above: validation in place, no copy; compiler_builtins and unclassified core code counted in, as the worst case): **{lib} bytes** ({:.1} KiB; target <= {} KiB: {}).\n",

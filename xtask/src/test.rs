@@ -53,6 +53,18 @@ pub fn test(s: &mut Steps) {
             "--release",
         ]),
     );
+    s.run(
+        "tests (firmware-core with physics, without the terms feature)",
+        cargo(&[
+            "test",
+            "-p",
+            "firmware-core",
+            "--no-default-features",
+            "--features",
+            "physics",
+            "--release",
+        ]),
+    );
     // the reports' browser test needs Chromium: it fails (not skips) without it
     s.prepare("install chromium", crate::setup::chromium);
     // the record store's tests need a real PostgreSQL server: one throwaway cluster

@@ -1,9 +1,10 @@
 //! firmware-core on the target: validate the embedded blobs in place, compensate the
 //! embedded input table with every method reading the tables from those bytes, print
 //! each result's f32 bits (compared bit for bit with the host by `cargo xtask
-//! embedded`), then count instructions and measure the stack. Built twice: with the
-//! `physics` feature (the physics blob compensated too) and without (that blob must be
-//! refused).
+//! embedded`), then count instructions and measure the stack. Built three times: with
+//! the `physics` and `terms` features (the physics blob and the blob with discovered terms
+//! compensated too), with `physics` only (the terms blob must be refused) and with neither
+//! (both must be refused).
 #![no_std]
 #![no_main]
 
@@ -17,6 +18,8 @@ use panic_semihosting as _;
 static BLOB: &[u8] = include_bytes!(env!("FW_TEST_BLOB"));
 /// A blob from `host-fit diagnose --out`: tables plus in-flight physics terms.
 static BLOB_PHYS: &[u8] = include_bytes!(env!("FW_TEST_BLOB_PHYS"));
+/// The golden blob with physics terms and 8 discovered terms.
+static BLOB_TERMS: &[u8] = include_bytes!(env!("FW_TEST_BLOB_TERMS"));
 static INPUTS: &[u8] = include_bytes!(env!("FW_TEST_INPUTS"));
 /// Synthetic tables for the update cost (build.rs): a cubic and 5 breakpoints.
 static BLOB_POLY3: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/update_poly3.blob"));
@@ -102,6 +105,7 @@ fn used(sp_at_call: usize) -> usize {
 
 #[inline(never)]
 fn decode_once(bytes: &'static [u8]) -> Option<BlobView<'static>> {
+    // the one call of BlobView::new, so its code is inlined here as in a firmware
     BlobView::new(black_box(bytes)).ok()
 }
 
@@ -126,11 +130,29 @@ fn main() -> ! {
     let stack_decode = used(sp);
 
     let phys = view(BLOB_PHYS, "physics");
-    #[cfg(feature = "physics")]
+    #[cfg(feature = "terms")]
+    let terms = view(BLOB_TERMS, "terms");
+    #[cfg(feature = "terms")]
+    let sets = [("", blob), ("p", phys), ("t", terms)];
+    #[cfg(not(feature = "terms"))]
+    {
+        // built without the terms: the terms blob (format 5) must be refused when opened,
+        // never half-applied (the refusal's kind, TermsNotBuiltIn, is held by
+        // firmware-core's tests without the feature: here one call of BlobView::new keeps
+        // it inlined as in a firmware, so the flash compares with the builds before)
+        match decode_once(BLOB_TERMS) {
+            None if BLOB_TERMS.get(4) == Some(&5) => hprintln!("terms refused"),
+            _ => {
+                hprintln!("error: a blob with discovered terms was accepted without the terms feature");
+                debug::exit(debug::EXIT_FAILURE);
+            }
+        }
+    }
+    #[cfg(all(feature = "physics", not(feature = "terms")))]
     let sets = [("", blob), ("p", phys)];
     #[cfg(not(feature = "physics"))]
     let sets = {
-        // built without the terms: the physics blob must be refused, not half-applied
+        // built without the physics terms: the physics blob must be refused too
         match Compensator::from_blob(phys, Method::CorrectConstants, PERIOD) {
             Err(firmware_core::Error::PhysicsNotBuiltIn) => hprintln!("physics refused"),
             _ => {
@@ -210,6 +232,29 @@ fn main() -> ! {
         hprintln!("measure update_pm1");
         fw_mark_start();
         black_box(c.compensate_dt(black_box(du), black_box(t + 5.0), black_box(0.2)));
+        fw_mark_stop();
+    }
+    #[cfg(feature = "terms")]
+    for (tag, m) in METHODS {
+        // the physics terms and a full table of 8 discovered terms, between the steps
+        let mut c = new(terms, m);
+        c.compensate(u, t);
+        let du = [u[0] + 1e-6, u[1], u[2]];
+        hprintln!("measure sample_t{}", tag);
+        fw_mark_start();
+        black_box(c.compensate(black_box(du), black_box(t)));
+        fw_mark_stop();
+    }
+    #[cfg(feature = "terms")]
+    {
+        // a step of the machines with the 8 terms' state parts renewed, the temperature
+        // unchanged (the cached matrices kept)
+        let mut c = new(terms, Method::CorrectConstants);
+        c.compensate(u, t);
+        let du = [u[0] + 1e-6, u[1], u[2]];
+        hprintln!("measure step_tm1");
+        fw_mark_start();
+        black_box(c.compensate_dt(black_box(du), black_box(t), black_box(0.2)));
         fw_mark_stop();
     }
     for (tag, bytes) in [("update_poly3", BLOB_POLY3), ("update_pwl5", BLOB_PWL5)] {

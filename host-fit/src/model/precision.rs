@@ -6,6 +6,7 @@ use crate::error::{ErrorKind, HostError, Result};
 use firmware_core::compensate::{Compensator, ErrorModel, Method};
 use firmware_core::model::Coeffs;
 use firmware_core::temperature::Calibration;
+use firmware_core::terms::TermEntry;
 
 /// Documented bound: the firmware's f32 path (f32 tables, f32 arithmetic) stays within
 /// this many g of the f64 evaluation of the unrounded model, for |a| <= 1 g, inside the
@@ -35,6 +36,17 @@ pub fn directions26() -> Vec<[f64; 3]> {
 /// directions, for method 1 and method 2 (full): inside the valid range, and in the
 /// 10 C beyond it.
 pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Result<(f64, f64)> {
+    f32_departure_with_terms(cal64, &[], cal32, &[])
+}
+
+/// [`f32_departure`] of a calibration with its discovered terms (each side's own: the
+/// f64 table and the f32 one the blob holds).
+pub fn f32_departure_with_terms(
+    cal64: &Calibration<f64>,
+    terms64: &[TermEntry<f64>],
+    cal32: &Calibration<f32>,
+    terms32: &[TermEntry<f32>],
+) -> Result<(f64, f64)> {
     let mut c64 = cal64.clone();
     c64.update_step_c = 0.0;
     let mut c32 = cal32.clone();
@@ -46,9 +58,9 @@ pub fn f32_departure(cal64: &Calibration<f64>, cal32: &Calibration<f32>) -> Resu
         Method::CorrectResult(ErrorModel::Full),
     ] {
         // one sample a second: the physics terms' machines follow the sweep alike in both
-        let mut m64 = Compensator::new(&c64, method, 1.0)
+        let mut m64 = Compensator::with_terms(&c64, terms64, method, 1.0)
             .map_err(|e| HostError::new(ErrorKind::Numerical, e.to_string()))?;
-        let mut m32 = Compensator::new(&c32, method, 1.0)
+        let mut m32 = Compensator::with_terms(&c32, terms32, method, 1.0)
             .map_err(|e| HostError::new(ErrorKind::Numerical, e.to_string()))?;
         let mut t = cal64.t_min_c - 10.0;
         while t <= cal64.t_max_c + 10.0 {
@@ -205,6 +217,33 @@ pub fn check(cal: &Calibration<f64>) -> Result<(f64, f64)> {
         return Err(HostError::new(ErrorKind::Numerical, format!(
             "the f32 firmware path departs from the f64 model by {dep:.3e} g, over the bound {F32_BOUND_G:.1e} g: {}",
             cause(cal).text(cal)
+        )));
+    }
+    Ok((dep, beyond))
+}
+
+/// [`check`] of a calibration with its discovered terms: the f32 blob's tables (`cal32`,
+/// `terms32`) against the f64 model (`cal64`, `terms64`). When the calibration alone is
+/// within the bound the terms are named as the cause.
+pub fn check_with_terms(
+    cal64: &Calibration<f64>,
+    terms64: &[TermEntry<f64>],
+    cal32: &Calibration<f32>,
+    terms32: &[TermEntry<f32>],
+) -> Result<(f64, f64)> {
+    if terms64.is_empty() {
+        return check(cal64);
+    }
+    let (dep, beyond) = f32_departure_with_terms(cal64, terms64, cal32, terms32)?;
+    if dep.is_nan() || dep > F32_BOUND_G {
+        let why = match departure(cal64) {
+            Ok((d, _)) if d.is_finite() && d <= F32_BOUND_G => {
+                "the discovered terms (their f32 coefficients or factors)".to_string()
+            }
+            _ => cause(cal64).text(cal64),
+        };
+        return Err(HostError::new(ErrorKind::Numerical, format!(
+            "the f32 firmware path departs from the f64 model by {dep:.3e} g, over the bound {F32_BOUND_G:.1e} g: {why}"
         )));
     }
     Ok((dep, beyond))

@@ -192,6 +192,9 @@ fn blind_classes_by_their_command_line_names() {
         "digital",
         "re-clamped",
         "mixtures",
+        "discovery-targets",
+        "discovery-blind-spots",
+        "discovery-controls",
     ]);
     // the report's names stay distinct
     let reported: std::collections::BTreeSet<&str> = all.iter().map(|c| c.name()).collect();

@@ -643,6 +643,7 @@ fn every_option() -> SimConfig {
 /// Every effect of [`every_option`] set (a literal without `..`, for the same reason).
 fn every_effect() -> Effects {
     use host_fit::simulate::{Bend, BiasStep, FixtureChange, Gradient, Periodic, Settle};
+    use host_fit::simulate::{Quadratic, Relaxation, Repeatability, Telegraph, TempWarmup, TurnOn};
     let p = |v: f64| {
         Some(PerAxis {
             value: [v, 0.0, 0.0],
@@ -708,6 +709,31 @@ fn every_effect() -> Effects {
             at_s: 100.0,
             value: [1e-4, 0.0, 0.0],
             tau_s: 60.0,
+        }),
+        quadratic: Some(Quadratic {
+            value: [[0.0, 0.0, 0.0, 1e-4, 0.0, 0.0]; 3],
+        }),
+        k2_temp: p(1e-6),
+        scale_rate: p(1e-4),
+        warmup_temp: Some(TempWarmup {
+            v_per_c: [1e-6, 0.0, 0.0],
+            tau_s: 900.0,
+        }),
+        turn_on_bias: Some(TurnOn {
+            value: vec![[1e-4, 0.0, 0.0]],
+        }),
+        move_settle: Some(Relaxation {
+            d_v: [1e-4, 0.0, 0.0],
+            tau_s: 25.0,
+        }),
+        stop_settle: Some(Relaxation {
+            d_v: [1e-4, 0.0, 0.0],
+            tau_s: 1200.0,
+        }),
+        tilter_repeatability: Some(Repeatability { sigma_rad: 1e-4 }),
+        telegraph: Some(Telegraph {
+            value: [1e-4, 0.0, 0.0],
+            mean_s: 600.0,
         }),
     }
 }

@@ -57,6 +57,42 @@ fn blind_suite_by_class() {
     let tp = outcomes.iter().find(|o| o.case.tp_only).unwrap();
     assert!(tp.found.is_empty() && !tp.ambiguous.is_empty(), "{text}");
     classes_on_own_profiles(&outcomes, &text);
+    discovery_classes(&outcomes, &text);
+}
+
+/// Whether the discovery targets are judged by their pass rule (their term named on
+/// their axis, reproduced, the residual at 1.5x the floor): off until the diagnosis
+/// searches the term library and `blind::run_with` fills `Outcome::discovered` from its
+/// `discovered` findings; switch it on then (`true`).
+const JUDGE_DISCOVERY_TARGETS: bool = false;
+
+/// The classes beyond the catalogue in the short suite, one case each (a cross-coupling
+/// a_i*a_j on 18 positions, a two-level bias beside a power cycle, a fixture error of an
+/// edge position): every class there, reported apart, every case diagnosed; the blind
+/// spot stays unexplained on its axis with no term and the control gets exactly its
+/// catalogue effect and no term (rules that hold with or without the term search); the
+/// target is never given a catalogue name, and with [`JUDGE_DISCOVERY_TARGETS`] it must
+/// be named as its term.
+fn discovery_classes(outcomes: &[host_fit::blind::Outcome], text: &str) {
+    for c in [Class::Expressed, Class::Unexpressed, Class::NoDiscovery] {
+        let of: Vec<_> = outcomes.iter().filter(|o| o.case.class() == c).collect();
+        assert_eq!(of.len(), 1, "{}: one case in the short suite", c.name());
+        assert!(
+            text.contains(&format!("\n{}: ", c.name())),
+            "{}\n{text}",
+            c.name()
+        );
+        for o in of {
+            assert!(o.verdict.is_some(), "{}: {}", o.case.name(), o.note);
+            let judged = c != Class::Expressed || JUDGE_DISCOVERY_TARGETS;
+            assert!(!judged || o.passed(), "{}\n{text}", o.case.name());
+            assert!(
+                o.named().is_empty() || c == Class::NoDiscovery,
+                "{}",
+                o.case.name()
+            );
+        }
+    }
 }
 
 /// The classes on test profiles of their own in the short suite (one seed, the cold-first

@@ -64,9 +64,38 @@ impl Case {
         let profile = self
             .form
             .and_then(|f| f.profile(self.seed))
-            .map_or(String::new(), |p| format!(" [{}]", p.name()));
+            .map(|p| p.name().to_string())
+            .or_else(|| self.form?.design(self.seed).map(|d| d.name()))
+            .map_or(String::new(), |p| format!(" [{p}]"));
         base + if self.tp_only { " (TP only)" } else { "" } + &profile
     }
+}
+
+/// The cases of these classes: every form on seeds 1-4 (`long`), or one of each class
+/// on seed 1 (a product term, a jumping bias beside a power cycle, a fixture error of a
+/// new position).
+pub fn discovery_cases(long: bool) -> Vec<Case> {
+    use crate::blind::beyond::{Expressed, Plain, Unexpressed};
+    let forms: Vec<Form> = if long {
+        Expressed::ALL
+            .map(Form::Expressed)
+            .into_iter()
+            .chain(Unexpressed::ALL.map(Form::Unexpressed))
+            .chain(Plain::ALL.map(Form::Plain))
+            .collect()
+    } else {
+        vec![
+            Form::Expressed(Expressed::CrossCoupling),
+            Form::Unexpressed(Unexpressed::Telegraph),
+            Form::Plain(Plain::FixtureProducts),
+        ]
+    };
+    let seeds: Vec<u64> = if long { (1..=4).collect() } else { vec![1] };
+    let mut v = Vec::new();
+    for &seed in &seeds {
+        v.extend(forms.iter().map(|f| Case::of_form(*f, seed)));
+    }
+    v
 }
 
 /// The short test profile: 20 -> -20 -> 10 -> 40 -> 10 C (the last stop reached by

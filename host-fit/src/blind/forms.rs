@@ -3,6 +3,8 @@
 //! clean recordings with the nuisances real data has; and the classes that run on test
 //! profiles of their own ([`crate::blind::kinds`]). Each class is its own enum, so every form is concealed by
 //! an exhaustive match: a form without physics cannot compile.
+use crate::blind::beyond::{Expressed, Plain, Unexpressed};
+use crate::blind::designs::Design;
 use crate::blind::draw::{axes3, main_axis};
 use crate::blind::kinds::{Digital, Mixture, Refixed, Slow};
 use crate::blind::profiles::Profile;
@@ -49,6 +51,17 @@ pub enum Class {
     /// Three catalogue effects at 0.3-1x their nominal sizes.
     #[strum(serialize = "mixtures")]
     Mixture,
+    /// Forms outside the catalogue that the term library expresses: named as their
+    /// `discovered` term on their axis.
+    #[strum(serialize = "discovery-targets")]
+    Expressed,
+    /// Forms the term library does not express: left unexplained, located.
+    #[strum(serialize = "discovery-blind-spots")]
+    Unexpressed,
+    /// Clean and catalogue-only units on the designs of the two classes above: nothing
+    /// discovered.
+    #[strum(serialize = "discovery-controls")]
+    NoDiscovery,
 }
 
 impl Class {
@@ -63,6 +76,9 @@ impl Class {
             Class::Digital => "digital outputs of a few counts per g",
             Class::FixtureChange => "fixtures re-clamped between two stops",
             Class::Mixture => "mixtures of three effects at 0.3-1x nominal",
+            Class::Expressed => "discovery targets: forms the term library expresses",
+            Class::Unexpressed => "discovery blind spots: forms it does not express",
+            Class::NoDiscovery => "discovery controls: clean and catalogue-only units",
         }
     }
 }
@@ -84,6 +100,12 @@ pub enum Form {
     Refixed(Refixed),
     /// Three catalogue effects at once.
     Mixture(Mixture),
+    /// A form the term library expresses.
+    Expressed(Expressed),
+    /// A form the term library does not express.
+    Unexpressed(Unexpressed),
+    /// A unit with nothing to discover.
+    Plain(Plain),
 }
 
 /// A catalogue effect in another form.
@@ -192,6 +214,9 @@ impl Form {
             Form::Digital(_) => Class::Digital,
             Form::Refixed(_) => Class::FixtureChange,
             Form::Mixture(_) => Class::Mixture,
+            Form::Expressed(_) => Class::Expressed,
+            Form::Unexpressed(_) => Class::Unexpressed,
+            Form::Plain(_) => Class::NoDiscovery,
         }
     }
 
@@ -199,9 +224,27 @@ impl Form {
     pub fn profile(self, seed: u64) -> Option<Profile> {
         match self {
             Form::Other(_) | Form::Outside(_) | Form::Nuisance(_) => None,
+            Form::Expressed(_) | Form::Unexpressed(_) | Form::Plain(_) => None,
             Form::Slow(_) | Form::Digital(_) | Form::Refixed(_) | Form::Mixture(_) => {
                 Some(Profile::of_seed(seed))
             }
+        }
+    }
+
+    /// The design it runs on, for the classes beyond the catalogue (None for the forms on
+    /// the suite's own profiles).
+    pub fn design(self, seed: u64) -> Option<Design> {
+        match self {
+            Form::Expressed(f) => Some(f.design(seed)),
+            Form::Unexpressed(f) => Some(f.design(seed)),
+            Form::Plain(f) => Some(f.design(seed)),
+            Form::Other(_)
+            | Form::Outside(_)
+            | Form::Nuisance(_)
+            | Form::Slow(_)
+            | Form::Digital(_)
+            | Form::Refixed(_)
+            | Form::Mixture(_) => None,
         }
     }
 
@@ -215,6 +258,9 @@ impl Form {
             Form::Digital(f) => f.name(),
             Form::Refixed(f) => f.name(),
             Form::Mixture(f) => f.name(),
+            Form::Expressed(f) => f.name(),
+            Form::Unexpressed(f) => f.name(),
+            Form::Plain(f) => f.name(),
         }
     }
 
@@ -225,7 +271,9 @@ impl Form {
             Form::Digital(f) => f.expect(),
             Form::Refixed(_) => &[EffectId::FixtureError],
             Form::Mixture(f) => f.expect(),
+            Form::Plain(f) => f.expect(),
             Form::Outside(_) | Form::Nuisance(_) | Form::Slow(_) => &[],
+            Form::Expressed(_) | Form::Unexpressed(_) => &[],
         }
     }
 
@@ -238,7 +286,10 @@ impl Form {
             | Form::Slow(_)
             | Form::Digital(_)
             | Form::Refixed(_)
-            | Form::Mixture(_) => None,
+            | Form::Mixture(_)
+            | Form::Expressed(_)
+            | Form::Unexpressed(_)
+            | Form::Plain(_) => None,
         }
     }
 
@@ -253,6 +304,9 @@ impl Form {
             Form::Digital(f) => f.apply(c, rng),
             Form::Refixed(f) => f.apply(c, rng),
             Form::Mixture(f) => f.apply(c, rng),
+            Form::Expressed(f) => f.apply(c, rng),
+            Form::Unexpressed(f) => f.apply(c, rng),
+            Form::Plain(f) => f.apply(c, rng),
         }
     }
 }
@@ -480,7 +534,8 @@ pub fn axes(c: &SimConfig) -> Vec<usize> {
         .or(e.periodic.map(|p| p.value))
         .or(e.scale_aging.map(|p| p.value))
         .or(e.bias_aging.map(|p| p.value))
-        .or(e.bias_settle.map(|p| p.value));
+        .or(e.bias_settle.map(|p| p.value))
+        .or(e.telegraph.map(|p| p.value));
     match v {
         Some(v) => (0..3).filter(|&i| v[i] != 0.0).collect(),
         None => vec![0, 1, 2],

@@ -4,22 +4,31 @@
 //! within 3 sigma; other physical forms of an effect must still be named, and nothing
 //! else; effects outside the catalogue must get no catalogue name, the residual located
 //! on the right axis; clean recordings with real-world nuisances must get no physics.
+//! Beyond the catalogue ([`beyond`]): forms the term library expresses must be named as
+//! their discovered term on their axis, forms it does not must stay unexplained, and
+//! nothing may be discovered on clean and catalogue-only units.
+pub mod beyond;
+#[cfg(test)]
+mod beyond_tests;
 pub mod cases;
 pub mod config;
+pub mod designs;
 pub mod draw;
+pub mod flight;
 pub mod forms;
 pub mod kinds;
 pub mod outcome;
 pub mod profiles;
 pub mod report;
+pub mod terms;
 
 pub use cases::{Case, EFFECTS};
 pub use config::configure;
 pub use forms::Class;
-pub use outcome::{FixtureClaim, Outcome};
+pub use outcome::{DiscoveredClaim, FixtureClaim, Outcome};
 pub use report::report;
 
-use crate::data::positions::Positions;
+use crate::blind::designs::positions_of;
 use crate::data::recording::Recording;
 use crate::diagnose::findings::Finding;
 use crate::diagnose::parameters::Quantity;
@@ -48,6 +57,7 @@ pub fn run_with(case: &Case, rules: Rules) -> Outcome {
         unexplained_axis: None,
         quality: Vec::new(),
         fixture_claims: Vec::new(),
+        discovered: Vec::new(),
         note,
     };
     let sim = match simulate(&cfg, |_| {}) {
@@ -57,7 +67,7 @@ pub fn run_with(case: &Case, rules: Rules) -> Outcome {
     let rec = match Recording::from_reader(
         Path::new("blind.csv"),
         sim.csv.as_bytes(),
-        Positions::default(),
+        positions_of(&cfg),
     ) {
         Ok(r) => r,
         Err(e) => return fail(format!("read: {e}")),
@@ -99,6 +109,9 @@ pub fn run_with(case: &Case, rules: Rules) -> Outcome {
         unexplained_axis: d.unexplained.first().map(|h| h.axis.clone()),
         quality: d.quality.iter().map(|q| q.kind).collect(),
         fixture_claims: d.findings.iter().filter_map(FixtureClaim::of).collect(),
+        // the search over the term library fills this from its `discovered` findings:
+        // `DiscoveredClaim { term, axes, reproduced }` of each (see its doc)
+        discovered: Vec::new(),
         note: String::new(),
     }
 }
@@ -111,7 +124,7 @@ pub fn diagnosis_text(case: &Case) -> String {
         let rec = Recording::from_reader(
             Path::new("blind.csv"),
             sim.csv.as_bytes(),
-            Positions::default(),
+            positions_of(&cfg),
         )?;
         let truth = serde_json::to_string(&cfg.effects).unwrap_or_default();
         Ok(format!(
@@ -174,7 +187,8 @@ fn params_within_3_sigma(cfg: &SimConfig, findings: &[Finding]) -> Option<bool> 
 
 /// The suite: per seed, a clean recording, each catalogue effect at several magnitudes,
 /// pairs, the TP-only ambiguity, and one case of every other form, outside effect and
-/// nuisance of [`forms`]. `long` adds seeds and smaller magnitudes.
+/// nuisance of [`forms`]; then the classes beyond the catalogue ([`cases::discovery_cases`]: one
+/// case of each in the short suite). `long` adds seeds and smaller magnitudes.
 pub fn suite(long: bool) -> Vec<Case> {
     let seeds: Vec<u64> = if long { (1..=4).collect() } else { vec![1] };
     let scales: Vec<f64> = if long {
@@ -211,5 +225,6 @@ pub fn suite(long: bool) -> Vec<Case> {
             v.push(Case::of_form(f, seed));
         }
     }
+    v.extend(cases::discovery_cases(long));
     v
 }

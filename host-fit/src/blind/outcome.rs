@@ -1,8 +1,10 @@
 //! The outcome of a blind case and the rule it passes by, per class.
+use crate::blind::beyond::{expected_terms, Expect};
 use crate::blind::cases::Case;
 use crate::blind::config::configure;
 use crate::blind::forms;
 use crate::blind::forms::Class;
+use crate::blind::terms::Term;
 use crate::diagnose::contract::Verdict;
 use crate::diagnose::findings::Finding;
 use crate::diagnose::parameters::Quantity;
@@ -32,6 +34,8 @@ pub struct Outcome {
     pub quality: Vec<NoteKind>,
     /// What each fixture_error finding says about where and from when.
     pub fixture_claims: Vec<FixtureClaim>,
+    /// The `discovered` findings: terms of the library the diagnosis named.
+    pub discovered: Vec<DiscoveredClaim>,
     /// Notes for the report.
     pub note: String,
 }
@@ -46,6 +50,46 @@ pub struct FixtureClaim {
     pub text: String,
     /// The stop the change is from (its `from_stop` parameter), if any.
     pub from_stop: Option<f64>,
+}
+
+/// A `discovered` finding as the blind suite judges it, filled from the diagnosis's
+/// finding (`"effect": "discovered"`, its `"term"` in the catalogue's canonical text,
+/// its `"axes"` and `"reproduced"`): `DiscoveredClaim { term: f.term.clone()?, axes:
+/// f.axes.clone(), reproduced: f.reproduced }`. The suite reads the term with its own
+/// parser ([`crate::blind::terms`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiscoveredClaim {
+    /// The term, as the vocabulary writes it (`a_x*a_y`, `decay(position,25s)`).
+    pub term: String,
+    /// The outputs it enters (`x`, `y`, `z`).
+    pub axes: Vec<String>,
+    /// It reproduced on both halves of the recording.
+    pub reproduced: bool,
+}
+
+impl DiscoveredClaim {
+    /// Its term on each of its axes (`None` for a term the vocabulary does not read or
+    /// an axis that is not x, y or z: never a right term).
+    pub fn pairs(&self) -> Vec<Option<(Term, usize)>> {
+        let term = Term::parse(&self.term).ok();
+        self.axes
+            .iter()
+            .map(|a| {
+                let i = ["x", "y", "z"].iter().position(|x| x == a)?;
+                Some((term.clone()?, i))
+            })
+            .collect()
+    }
+
+    /// It names `want`: the same term on that axis, reproduced.
+    pub fn names(&self, want: &Expect) -> bool {
+        self.reproduced
+            && self
+                .pairs()
+                .iter()
+                .flatten()
+                .any(|(t, i)| *i == want.axis && t.same(&want.term))
+    }
 }
 
 impl FixtureClaim {
@@ -75,17 +119,79 @@ impl Outcome {
         named
     }
 
-    /// The case passed, by its class's rule (see the module doc).
+    /// The case passed, by its class's rule (see the module doc). Nothing may be
+    /// discovered where the physics is the catalogue's or no term's; an effect outside
+    /// the catalogue that a term expresses (a cubic, an ageing scale, a linear drift)
+    /// passes left unexplained or named as its term.
     pub fn passed(&self) -> bool {
+        let none = self.discovered.is_empty();
         match self.case.class() {
-            Class::Catalogue | Class::OtherForm => self.exact,
-            Class::Outside => self.named().is_empty() && self.located(),
-            Class::Nuisance => self.named().is_empty() && self.noted(),
-            Class::SlowDisturbance => self.named().is_empty() && self.located(),
-            Class::Digital => self.verdict.is_some() && self.exact,
-            Class::FixtureChange => self.exact && self.right_stop(),
-            Class::Mixture => self.exact,
+            Class::Catalogue | Class::OtherForm => self.exact && none,
+            Class::Outside => self.named().is_empty() && self.unexplained_or_termed(),
+            Class::Nuisance => self.named().is_empty() && none && self.noted(),
+            Class::SlowDisturbance => self.named().is_empty() && self.unexplained_or_termed(),
+            Class::Digital => self.verdict.is_some() && self.exact && none,
+            Class::FixtureChange => self.exact && none && self.right_stop(),
+            Class::Mixture => self.exact && none,
+            Class::Expressed => self.term_right(),
+            Class::Unexpressed => self.named().is_empty() && none && self.unexplained_here(),
+            Class::NoDiscovery => self.exact && none,
         }
+    }
+
+    /// The terms the truth holds ([`expected_terms`] of the case's configuration).
+    pub fn expected_terms(&self) -> Vec<Expect> {
+        expected_terms(&configure(&self.case))
+    }
+
+    /// Every expected term named on its axis and reproduced, nothing else discovered or
+    /// named from the catalogue, and the residual brought to 1.5x the floor.
+    pub fn term_right(&self) -> bool {
+        let want = self.expected_terms();
+        !want.is_empty()
+            && self.terms_named() == want.len()
+            && self.wrong_terms().is_empty()
+            && self.exact
+            && self.final_over_noise <= 1.5
+    }
+
+    /// How many of the expected terms are named on their axes.
+    pub fn terms_named(&self) -> usize {
+        let want = self.expected_terms();
+        want.iter()
+            .filter(|w| self.discovered.iter().any(|c| c.names(w)))
+            .count()
+    }
+
+    /// The discovered terms (on an axis) that the truth does not hold, as written.
+    pub fn wrong_terms(&self) -> Vec<String> {
+        let want = self.expected_terms();
+        let mut v = Vec::new();
+        for c in &self.discovered {
+            for (p, a) in c.pairs().into_iter().zip(&c.axes) {
+                let right =
+                    p.is_some_and(|(t, i)| want.iter().any(|w| w.axis == i && w.term.same(&t)));
+                if !right {
+                    v.push(format!("{} on {a}", c.term));
+                }
+            }
+        }
+        v
+    }
+
+    /// Left unexplained and located on the right axis (something was seen: these forms
+    /// are 5-20x the floor).
+    pub fn unexplained_here(&self) -> bool {
+        self.verdict == Some(Verdict::Unexplained) && self.located()
+    }
+
+    /// Outside the catalogue: located and nothing discovered, or every term the truth
+    /// holds named and nothing else.
+    fn unexplained_or_termed(&self) -> bool {
+        let want = self.expected_terms();
+        let termed =
+            !want.is_empty() && self.terms_named() == want.len() && self.wrong_terms().is_empty();
+        (self.discovered.is_empty() && self.located()) || termed
     }
 
     /// A re-clamped fixture: a fixture_error finding names its position and the stop
@@ -169,6 +275,7 @@ mod tests {
             unexplained_axis: axis.map(str::to_string),
             quality: Vec::new(),
             fixture_claims: claims,
+            discovered: Vec::new(),
             note: String::new(),
         }
     }

@@ -3,11 +3,20 @@
 use crate::blind::cases::EFFECTS;
 use crate::blind::forms::Class;
 use crate::blind::outcome::Outcome;
+use crate::diagnose::contract::Verdict;
 use crate::diagnose::EffectId;
 
 /// Effect ids joined by `sep`.
 fn ids(v: &[EffectId], sep: &str) -> String {
     v.iter().map(|e| e.as_str()).collect::<Vec<_>>().join(sep)
+}
+
+/// The discovered terms of a case (` + term@axis ...`; empty when none).
+fn terms(o: &Outcome) -> String {
+    o.discovered
+        .iter()
+        .map(|c| format!(" + {}@{}", c.term, c.axes.join("")))
+        .collect()
 }
 
 /// One line per case: what was concealed and what was named.
@@ -26,12 +35,13 @@ fn case_lines(outcomes: &[Outcome]) -> String {
             o.case.scale,
             o.case.seed,
             format!(
-                "{} {amb}",
+                "{} {amb}{}",
                 if o.found.is_empty() {
                     "none".to_string()
                 } else {
                     ids(&o.found, ",")
-                }
+                },
+                terms(o)
             ),
             if o.passed() { "yes" } else { "NO" },
             match o.params_ok {
@@ -166,6 +176,9 @@ fn by_form(outcomes: &[Outcome]) -> String {
         Class::Digital,
         Class::FixtureChange,
         Class::Mixture,
+        Class::Expressed,
+        Class::Unexpressed,
+        Class::NoDiscovery,
     ] {
         let of: Vec<&Outcome> = outcomes
             .iter()
@@ -233,6 +246,7 @@ fn by_form(outcomes: &[Outcome]) -> String {
                         .count(),
                     cases.iter().filter(|o| o.right_stop()).count()
                 ),
+                Class::Expressed | Class::Unexpressed | Class::NoDiscovery => String::new(),
                 Class::Mixture => format!(
                     "{} exact, {} of the {} concealed named, {} wrong names",
                     cases.iter().filter(|o| o.exact).count(),
@@ -240,6 +254,19 @@ fn by_form(outcomes: &[Outcome]) -> String {
                     cases.iter().map(|o| o.case.effects.len()).sum::<usize>(),
                     cases.iter().map(|o| o.wrong_names().len()).sum::<usize>()
                 ),
+            };
+            let detail = match class {
+                Class::Expressed | Class::Unexpressed | Class::NoDiscovery => {
+                    discovery_detail(class, &cases, &named_list)
+                }
+                Class::Catalogue
+                | Class::OtherForm
+                | Class::Outside
+                | Class::Nuisance
+                | Class::SlowDisturbance
+                | Class::Digital
+                | Class::FixtureChange
+                | Class::Mixture => detail,
             };
             let name = f.map_or("", |f| f.name());
             s.push_str(&format!("  {name:<44} {ok}/{}  ({detail})\n", cases.len()));
@@ -276,12 +303,81 @@ fn class_summary(class: Class, of: &[&Outcome]) -> String {
             "; refused by the diagnosis: {}",
             of.iter().filter(|o| o.verdict.is_none()).count()
         ),
+        Class::Expressed => {
+            let mut forms = Vec::new();
+            for o in of {
+                if !forms.contains(&o.case.form) {
+                    forms.push(o.case.form);
+                }
+            }
+            let held = forms
+                .iter()
+                .filter(|f| {
+                    let cases: Vec<_> = of.iter().filter(|o| o.case.form == **f).collect();
+                    4 * cases.iter().filter(|o| o.passed()).count() >= 3 * cases.len()
+                })
+                .count();
+            format!(
+                "; forms named right in at least 3 of 4 cases: {held}/{}",
+                forms.len()
+            )
+        }
+        Class::Unexpressed | Class::NoDiscovery => format!(
+            "; cases with a discovered term: {}",
+            of.iter().filter(|o| !o.discovered.is_empty()).count()
+        ),
         Class::Catalogue
         | Class::OtherForm
         | Class::Outside
         | Class::Nuisance
         | Class::SlowDisturbance
         | Class::FixtureChange => String::new(),
+    }
+}
+
+/// A form's detail in the classes beyond the catalogue: seen at all, the right term,
+/// wrong terms, catalogue names and the residual (targets); seen, no term, no name,
+/// located (blind spots); no term, the catalogue's set (controls).
+fn discovery_detail(class: Class, cases: &[&&Outcome], named: &str) -> String {
+    let count = |f: &dyn Fn(&Outcome) -> bool| cases.iter().filter(|o| f(o)).count();
+    // above the floor before any finding: a term there to be found
+    let seen = |o: &Outcome| o.verdict.is_some_and(|v| v != Verdict::None);
+    let mut wrong: Vec<String> = cases.iter().flat_map(|o| o.wrong_terms()).collect();
+    wrong.sort();
+    wrong.dedup();
+    let wrong = if wrong.is_empty() {
+        "none".to_string()
+    } else {
+        wrong.join(", ")
+    };
+    match class {
+        Class::Expressed => format!(
+            "{} seen, {} with the right term and axis, {} at <= 1.5x the floor, {} with a catalogue name; wrong terms: {wrong}; named: {named}",
+            count(&seen),
+            count(&|o| o.terms_named() == o.expected_terms().len()),
+            count(&|o| o.final_over_noise <= 1.5),
+            count(&|o| !o.named().is_empty()),
+        ),
+        Class::Unexpressed => format!(
+            "{} seen, {} with no term, {} with no catalogue name, {} unexplained on the right axis; terms: {wrong}; named: {named}",
+            count(&seen),
+            count(&|o| o.discovered.is_empty()),
+            count(&|o| o.named().is_empty()),
+            count(&|o| o.unexplained_here()),
+        ),
+        Class::NoDiscovery
+        | Class::Catalogue
+        | Class::OtherForm
+        | Class::Outside
+        | Class::Nuisance
+        | Class::SlowDisturbance
+        | Class::Digital
+        | Class::FixtureChange
+        | Class::Mixture => format!(
+            "{} with no term, {} with exactly the catalogue's set; terms: {wrong}; named: {named}",
+            count(&|o| o.discovered.is_empty()),
+            count(&|o| o.exact),
+        ),
     }
 }
 

@@ -2,6 +2,9 @@
 //! documents every option); every section optional, unknown keys refused.
 use crate::data::output_unit::OutputUnit;
 use crate::error::{ErrorKind, HostError, Result};
+use crate::simulate::beyond_config::{
+    Quadratic, Relaxation, Repeatability, Telegraph, TempWarmup, TurnOn,
+};
 use serde::{Deserialize, Serialize};
 
 /// The whole simulation, as read from TOML (every section optional).
@@ -374,6 +377,30 @@ pub struct Effects {
     /// Outside the catalogue: the bias settles exponentially toward a new value from
     /// `at_s` on (a disturbance that starts mid-test, no power-on behind it).
     pub bias_settle: Option<Settle>,
+    /// Beyond the catalogue ([`crate::simulate::beyond`]): the IEEE Std 1293 second-order
+    /// terms of each output (cross-coupling Kip, Kio, Kpo and cross-axis squares Kpp, Koo).
+    pub quadratic: Option<Quadratic>,
+    /// Beyond the catalogue: K2 with a temperature coefficient, `U += c (T - T0) a^2`,
+    /// V/g^2 per C.
+    pub k2_temp: Option<PerAxis>,
+    /// Beyond the catalogue: the scale factor moves with the rate of temperature change,
+    /// `K_ii (1 + s dT/dt)`, relative per (C/min).
+    pub scale_rate: Option<PerAxis>,
+    /// Beyond the catalogue: a turn-on transient whose size grows with T - T0.
+    pub warmup_temp: Option<TempWarmup>,
+    /// Beyond the catalogue: turn-on to turn-on repeatability, the bias after each
+    /// power-off.
+    pub turn_on_bias: Option<TurnOn>,
+    /// Beyond the catalogue (the rig): the signal chain relaxes after each tilter move.
+    pub move_settle: Option<Relaxation>,
+    /// Beyond the catalogue (the rig): the signal chain relaxes after the chamber reaches
+    /// each new stop.
+    pub stop_settle: Option<Relaxation>,
+    /// Beyond the catalogue (the rig): the tilter stops a fresh small rotation off each
+    /// position.
+    pub tilter_repeatability: Option<Repeatability>,
+    /// Beyond the catalogue: the bias jumps between two levels (random telegraph noise).
+    pub telegraph: Option<Telegraph>,
 }
 
 /// An exponential approach of the bias that starts mid-test: `value (1 - exp(-(t -

@@ -4,7 +4,6 @@
 //! What a blob diagnosed from the production recording must compensate, on a temperature
 //! history it was not fitted on.
 use crate::error::{ErrorKind, HostError, Result};
-use crate::rng::Rng;
 use crate::simulate::config::{Flight, SimConfig};
 use crate::simulate::readings::{sample, within, Disturbance};
 use crate::simulate::thermal::Thermal;
@@ -87,6 +86,7 @@ fn check(f: &Flight) -> Result<()> {
 pub fn simulate(cfg: &SimConfig, f: &Flight, mut progress: impl FnMut(f64)) -> Result<Simulation> {
     check(f)?;
     let unit = TrueUnit::new(cfg)?;
+    crate::simulate::beyond::check(&cfg.effects)?;
     // the unit soaked at the cold start, in the hysteresis state that got it there; the
     // air and case follow the flight's own time constants
     let mut here = cfg.clone();
@@ -103,12 +103,7 @@ pub fn simulate(cfg: &SimConfig, f: &Flight, mut progress: impl FnMut(f64)) -> R
     let n = (total * f.rate_hz).round() as u64;
     let cycle = f.hold_s + f.move_s;
     let mut w = RecordingWriter::new(&here, &f.power_offs, f.rate_hz > 100.0)?;
-    let mut dist = Disturbance {
-        walk: [0.0; 3],
-        noise: [0.0; 3],
-        on_s: 0.0,
-        rng: Rng::new(cfg.seed ^ 0xF117),
-    };
+    let mut dist = Disturbance::new(cfg.seed ^ 0xF117, &cfg.effects);
     let mut last_report = 0.0;
     for k in 0..n {
         let t = k as f64 * dt;

@@ -2,14 +2,18 @@
 //! and unit, with every effect of physics-catalogue.md switchable; writes recordings in
 //! recording-format v1. Independent of the fitting code (it shares only the forward
 //! model `U = K a + U0` of firmware-core).
+pub mod beyond;
+pub mod beyond_config;
 pub mod config;
 pub mod flight;
 pub mod program;
 mod readings;
+mod rotation;
 mod thermal;
 pub mod unit;
 mod writer;
 
+pub use beyond_config::{Quadratic, Relaxation, Repeatability, Telegraph, TempWarmup, TurnOn};
 pub use config::{
     parse_config, Bend, BiasStep, Chamber, Curvature, Effects, Fixture, FixtureChange, Flight,
     Gradient, Interp, Leg, Logger, Output, PerAxis, Periodic, Schedule, Sensor, Settle, SimConfig,
@@ -19,6 +23,7 @@ pub use unit::{TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
 pub use writer::Simulation;
 
 use readings::{sample, within, Disturbance};
+use rotation::rotate;
 use thermal::Thermal;
 use writer::RecordingWriter;
 
@@ -38,30 +43,6 @@ struct Segment {
     set_from: f64,
     set_to: f64,
     phase: Phase,
-}
-
-fn rotate(a: [f64; 3], angles: [f64; 2]) -> [f64; 3] {
-    // Two axes perpendicular to `a`, then a small rotation about each.
-    let helper = if a[0].abs() < 0.9 {
-        [1.0, 0.0, 0.0]
-    } else {
-        [0.0, 1.0, 0.0]
-    };
-    let cross = |u: [f64; 3], v: [f64; 3]| {
-        [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ]
-    };
-    let norm = |v: [f64; 3]| {
-        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        v.map(|x| x / n)
-    };
-    let e1 = norm(cross(a, helper));
-    let e2 = cross(a, e1);
-    let v: [f64; 3] = std::array::from_fn(|i| a[i] + angles[0] * e2[i] - angles[1] * e1[i]);
-    norm(v)
 }
 
 /// The built-in positions plus the schedule's extra ones.
@@ -332,6 +313,27 @@ fn phase_vector(phase: Phase, f: f64, rest: usize, vector: &dyn Fn(usize) -> [f6
     }
 }
 
+/// What the start of segment `seg` (at `t`, after `prev`) is to the physics beyond the
+/// catalogue: the end of a move to another position (the tilter comes to rest), or a hold
+/// after a ramp (the chamber reached a new stop).
+fn segment_events(
+    dist: &mut Disturbance,
+    cfg: &SimConfig,
+    prev: Option<&Segment>,
+    seg: &Segment,
+    t: f64,
+) {
+    let Some(p) = prev else { return };
+    // a move split over several segments (a power-off on the way) arrives once
+    let moving = matches!(seg.phase, Phase::Move(..));
+    if matches!(p.phase, Phase::Move(a, b) if a != b) && !moving {
+        dist.beyond.arrived(&cfg.effects, t);
+    }
+    if p.set_from != p.set_to && seg.set_from == seg.set_to {
+        dist.beyond.stopped(t);
+    }
+}
+
 /// Run the simulation: the production test, or the flight when the configuration has
 /// one.
 pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simulation> {
@@ -339,6 +341,7 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
         return flight::simulate(cfg, f, progress);
     }
     let unit = TrueUnit::new(cfg)?;
+    beyond::check(&cfg.effects)?;
     let positions = positions(cfg)?;
     let sch = &cfg.schedule;
     if sch.rate_hz.is_nan()
@@ -393,14 +396,10 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
     let mut clock = Clock::new(cfg, sch.rate_hz)?;
     let mut w = RecordingWriter::new(cfg, &sch.power_offs, clock.jitter_s > 0.0)?;
     let mut th = Thermal::new(cfg);
-    let mut dist = Disturbance {
-        walk: [0.0; 3],
-        noise: [0.0; 3],
-        on_s: 0.0,
-        rng: Rng::new(cfg.seed),
-    };
+    let mut dist = Disturbance::new(cfg.seed, &cfg.effects);
     let (mut t, mut last_report, mut tick) = (0.0, 0.0, 0u64);
-    for seg in &segs {
+    for (s, seg) in segs.iter().enumerate() {
+        segment_events(&mut dist, cfg, s.checked_sub(1).map(|p| &segs[p]), seg, t);
         let n = (seg.duration_s * sch.rate_hz).round() as usize;
         let set_at = |f: f64| seg.set_from + (seg.set_to - seg.set_from) * f;
         for k in 0..n {
@@ -451,5 +450,20 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
         }
     }
     progress(1.0);
-    w.finish()
+    let mut sim = w.finish()?;
+    sim.positions_csv = extra_positions_csv(cfg);
+    Ok(sim)
+}
+
+/// The positions file a recording visiting `schedule.extra_positions` is read with (None
+/// without them): `simulate --positions-out` writes it.
+fn extra_positions_csv(cfg: &SimConfig) -> Option<String> {
+    let extra = &cfg.schedule.extra_positions;
+    (!extra.is_empty()).then(|| {
+        let mut s = String::from("name,fx,fy,fz\n");
+        for (n, v) in extra {
+            s.push_str(&format!("{n},{:.9},{:.9},{:.9}\n", v[0], v[1], v[2]));
+        }
+        s
+    })
 }

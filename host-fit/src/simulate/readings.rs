@@ -13,6 +13,24 @@ pub(super) struct Disturbance {
     pub(super) noise: [f64; 3],
     pub(super) on_s: f64,
     pub(super) rng: Rng,
+    /// Events and states of the physics beyond the catalogue ([`crate::simulate::beyond`]).
+    pub(super) beyond: crate::simulate::beyond::State,
+}
+
+impl Disturbance {
+    /// At the recording's start (powered on at `t = 0`, the tilter at rest), its random
+    /// numbers from `seed`.
+    pub(super) fn new(seed: u64, e: &crate::simulate::config::Effects) -> Disturbance {
+        let mut beyond = crate::simulate::beyond::State::new(seed);
+        beyond.rest(e);
+        Disturbance {
+            walk: [0.0; 3],
+            noise: [0.0; 3],
+            on_s: 0.0,
+            rng: Rng::new(seed),
+            beyond,
+        }
+    }
 }
 
 /// The voltmeter readings of the unit in orientation `a` at time `t`.
@@ -28,6 +46,12 @@ pub(super) fn readings(
     let e = &cfg.effects;
     let dt = 1.0 / cfg.schedule.rate_hz;
     let since_on = t - dist.on_s;
+    dist.beyond.advance(e, dist.on_s, t);
+    // the tilter's repeatability: this rest's own small rotation
+    let a = match dist.beyond.tilt() {
+        [0.0, 0.0] => a,
+        ang => crate::simulate::rotation::rotate(a, ang),
+    };
     let mut u = [0.0; 3];
     for i in 0..3 {
         let c = Coeffs::from_array(&unit.coeffs(th.elem[i]));
@@ -77,6 +101,9 @@ pub(super) fn readings(
         if let Some(g) = e.scale_aging {
             ui += c.k[i][i] * g.value[i] * t / 3600.0 * a[i];
         }
+        ui += dist
+            .beyond
+            .output(e, i, a, c.k[i][i], th.elem[i], cfg.t0_c, rate, t);
         ui += noise(cfg, &mut dist.noise[i], &mut dist.rng);
         if cfg.unit.spike_rate > 0.0 && dist.rng.uniform() < cfg.unit.spike_rate {
             ui += if dist.rng.uniform() < 0.5 { -1.0 } else { 1.0 } * cfg.unit.spike_v;

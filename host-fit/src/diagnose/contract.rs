@@ -99,6 +99,10 @@ pub struct Contract {
     /// After the effects accepted, each look again where the rest was located: the
     /// region, the effects tried there, the one found (null: nothing passed the rules).
     pub research: Vec<Research>,
+    /// The library search for discovered terms after the catalogue's, round by round:
+    /// the columns tried, the terms proposed (with the share of resamples choosing them),
+    /// the one found (empty: the rest was at the floor).
+    pub library: Vec<crate::diagnose::search::LibraryRound>,
     /// The final model.
     #[serde(rename = "final")]
     pub final_model: FinalFigures,
@@ -292,6 +296,7 @@ impl Diagnosis<'_> {
                 located: self.unexplained.iter().take(12).cloned().collect(),
             }),
             research: self.research.clone(),
+            library: self.library.clone(),
             final_model: FinalFigures {
                 temperature_model: f.spec.basis.describe(),
                 model: f
@@ -353,9 +358,12 @@ impl Contract {
             s.push_str(&format!("not identifiable: {n}\n"));
         }
         for x in &self.findings {
+            let name = match &x.term {
+                Some(t) => format!("{} {t}", x.effect),
+                None => x.effect.to_string(),
+            };
             s.push_str(&format!(
-                "finding: {} on axes {} ({}; dBIC {:.0}, {:.0}% of the excess, held-out gain {:.1} per parameter; {})\n",
-                x.effect,
+                "finding: {name} on axes {} ({}; dBIC {:.0}, {:.0}% of the excess, held-out gain {:.1} per parameter; {})\n",
                 serde_json::to_string(&x.axes).unwrap_or_default(),
                 x.form,
                 x.delta_bic,
@@ -369,11 +377,21 @@ impl Contract {
                 s.push_str(&format!("    {k} = {v:.4e} +- {u:.1e} {unit}\n"));
             }
             s.push_str(&format!("    {}\n", x.evidence));
+            if !x.equivalent.is_empty() {
+                s.push_str(&format!(
+                    "    named as the simplest; this design cannot tell it from {}\n",
+                    x.equivalent.join(", ")
+                ));
+            }
         }
         for x in &self.ambiguous {
+            let what = if x.terms.is_empty() {
+                serde_json::to_string(&x.candidates).unwrap_or_default()
+            } else {
+                format!("the discovered terms {}", x.terms.join(", "))
+            };
             s.push_str(&format!(
-                "ambiguous: {} cannot be told apart; needed: {}\n",
-                serde_json::to_string(&x.candidates).unwrap_or_default(),
+                "ambiguous: {what} cannot be told apart; needed: {}\n",
                 x.needed
             ));
         }
@@ -403,6 +421,30 @@ impl Contract {
             for x in r.region.iter().take(4) {
                 s.push_str(&hotspot_line(x, &self.output_unit));
             }
+        }
+        for r in &self.library {
+            let proposed: Vec<String> = r
+                .proposed
+                .iter()
+                .map(|p| {
+                    format!(
+                        "{} on {} ({:.0}% of resamples)",
+                        p.term,
+                        p.axis,
+                        100.0 * p.inclusion
+                    )
+                })
+                .collect();
+            s.push_str(&format!(
+                "library of discovered terms ({} columns; proposed: {}): {}\n",
+                r.tried,
+                if proposed.is_empty() {
+                    "none".to_string()
+                } else {
+                    proposed.join(", ")
+                },
+                r.found.as_deref().unwrap_or("nothing passed the rules")
+            ));
         }
         let fl = &self.flashed;
         if !fl.same_as_final {

@@ -5,6 +5,7 @@
 //! mean at a temperature (K and U0, bends included) is read back by [`static_at`].
 use crate::diagnose::data::Data;
 use crate::diagnose::effects::{Extra, Restart};
+use crate::diagnose::library;
 use crate::diagnose::params::{Param, Term};
 use crate::diagnose::regressors;
 use crate::fit::temperature::Basis;
@@ -250,6 +251,18 @@ impl Data<'_> {
                     self.fixture_columns(e, *p, *from, k, d);
                 }
             }
+            Extra::Discovered { term, axis } => {
+                let c = library::column(self, &library::Series::new(self), term);
+                let col = c.iter().enumerate().map(|(r, v)| (3 * r + axis, *v));
+                d.push_column(
+                    Param::Effect {
+                        term: Term::Discovered,
+                        axis: *axis,
+                        extra: e,
+                    },
+                    col.collect::<Vec<_>>(),
+                );
+            }
         }
     }
 
@@ -340,7 +353,8 @@ pub fn static_at(
                         | Term::Asymmetry
                         | Term::Warmup
                         | Term::Drift
-                        | Term::DriftScale => {}
+                        | Term::DriftScale
+                        | Term::Discovered => {}
                     }
                 }
             }

@@ -1,6 +1,7 @@
 //! The catalogue's effects as candidate extensions of the baseline model, each with the
 //! structural unknowns of its form (time constants, thresholds, initial states, restart
 //! events, where a bend sits), which the search profiles instead of assuming.
+use crate::diagnose::library::LibTerm;
 use serde::Serialize;
 
 /// When a warm-up clock restarts (besides the start of the recording).
@@ -62,6 +63,14 @@ pub enum Extra {
         /// Restart events.
         restart: Restart,
     },
+    /// `discovered`: a term of the library (not the catalogue's) entering one output
+    /// axis additively.
+    Discovered {
+        /// The term.
+        term: LibTerm,
+        /// The output axis.
+        axis: usize,
+    },
 }
 
 /// The catalogue's effects (physics-catalogue.md), by their ids; the JSON contract and
@@ -85,10 +94,14 @@ pub enum EffectId {
     FixtureError,
     /// The offsets settle after power-on.
     WarmupDrift,
+    /// Not a catalogue effect: a term of the library found in the data
+    /// (physics-catalogue.md, "Beyond the catalogue").
+    Discovered,
 }
 
 impl EffectId {
-    /// Every effect, in the order candidates are tried.
+    /// Every catalogue effect, in the order candidates are tried (a discovered term is
+    /// searched for after them).
     pub const ALL: [EffectId; 8] = [
         EffectId::TempCurvature,
         EffectId::ThermalLag,
@@ -111,6 +124,7 @@ impl EffectId {
             EffectId::ScaleAsymmetry => "scale_asymmetry",
             EffectId::FixtureError => "fixture_error",
             EffectId::WarmupDrift => "warmup_drift",
+            EffectId::Discovered => "discovered",
         }
     }
 
@@ -125,12 +139,16 @@ impl EffectId {
             EffectId::ScaleAsymmetry => "asym",
             EffectId::FixtureError => "fixt",
             EffectId::WarmupDrift => "warm",
+            EffectId::Discovered => "disc",
         }
     }
 
     /// The effect of catalogue id `s`.
     pub fn parse(s: &str) -> Option<EffectId> {
-        EffectId::ALL.into_iter().find(|e| e.as_str() == s)
+        EffectId::ALL
+            .into_iter()
+            .chain([EffectId::Discovered])
+            .find(|e| e.as_str() == s)
     }
 
     /// How many times the effect may be added (a second warm-up time constant, a second
@@ -138,6 +156,8 @@ impl EffectId {
     pub fn max_count(self) -> usize {
         match self {
             EffectId::TempCurvature | EffectId::WarmupDrift => 2,
+            // each on its axis; the library search limits them (Rules::discover_max_terms)
+            EffectId::Discovered => usize::MAX,
             EffectId::FixtureError => 3,
             EffectId::ThermalLag
             | EffectId::TempRate
@@ -166,6 +186,7 @@ impl Extra {
             Extra::Asymmetry => EffectId::ScaleAsymmetry,
             Extra::Warmup { .. } => EffectId::WarmupDrift,
             Extra::Fixture(..) => EffectId::FixtureError,
+            Extra::Discovered { .. } => EffectId::Discovered,
         }
     }
 
@@ -188,6 +209,8 @@ impl Extra {
             }
             Extra::Hysteresis { .. } => 2,
             Extra::Warmup { restart, .. } => 1 + usize::from(*restart != Restart::Start),
+            // the term chosen from the library, and its decay's time constant
+            Extra::Discovered { term, .. } => 1 + usize::from(term.tau_s().is_some()),
         }
     }
 
@@ -231,6 +254,15 @@ impl Extra {
             Extra::Fixture(_, Some(n)) => {
                 format!("two small rotations of one position from stop {n} on")
             }
+            Extra::Discovered { term, axis } => format!(
+                "{term} on the {} output{}",
+                firmware_core::model::AXES[*axis],
+                if term.of_unit() {
+                    ""
+                } else {
+                    " (of the rig or the test: corrects the calibration only)"
+                }
+            ),
             Extra::Warmup { tau_s, restart } => format!(
                 "settles with {tau_s:.0} s after {}",
                 match restart {

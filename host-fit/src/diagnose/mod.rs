@@ -19,12 +19,14 @@ pub mod baseline;
 pub mod contract;
 pub mod data;
 pub mod design;
+pub mod discover;
 pub mod dynamic;
 pub mod effects;
 pub mod findings;
 pub mod firmware;
 pub mod fit;
 pub mod floor;
+pub mod library;
 pub mod location;
 pub mod metrics;
 pub mod observations;
@@ -76,6 +78,8 @@ pub struct Diagnosis<'a> {
     /// The re-searches where the rest was located after the effects accepted: the
     /// region looked at and what was found there (empty: nothing was left to locate).
     pub research: Vec<search::Research>,
+    /// The library search for discovered terms after the catalogue's, round by round.
+    pub library: Vec<search::LibraryRound>,
     /// What cannot be identified from this recording.
     pub not_identifiable: Vec<String>,
     /// Notes on the data.
@@ -147,14 +151,29 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         .filter(|g| found.joint.spec.extras.iter().any(|e| g.contains(&e.id())))
         .collect();
     let research = found.research;
-    let (final_fit, findings) = findings_of(&data, found.joint, &ambiguous_groups);
-    let ambiguous = ambiguous_groups
+    let library = found.library;
+    for u in &found.unidentifiable {
+        not_identifiable.push(format!(
+            "discovered terms in {} (and its products): zero or one of the model's own columns at these positions; {} would identify them",
+            u.term, u.positions
+        ));
+    }
+    let term_sets = found.term_sets;
+    let (final_fit, findings) = findings_of(&data, found.joint, &ambiguous_groups, &term_sets);
+    let mut ambiguous: Vec<Ambiguity> = ambiguous_groups
         .iter()
         .map(|g| Ambiguity {
             candidates: g.clone(),
+            terms: Vec::new(),
             needed: findings::needed(g),
         })
         .collect();
+    ambiguous.extend(
+        term_sets
+            .iter()
+            .filter(|t| !t.named && final_fit.spec.extras.contains(&t.extra))
+            .filter_map(|t| findings::term_set(&t.extra, &t.others)),
+    );
     let unexplained = if metrics::normalized_rms(&data, &final_fit) > rules.at_floor_rms {
         let z = metrics::z(&data, &final_fit);
         locate(&data, &z, &final_fit.resid, rules.located_sigmas)
@@ -182,6 +201,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         hotspots,
         unexplained,
         research,
+        library,
         not_identifiable,
         quality,
         data,
@@ -282,7 +302,12 @@ fn scope(data: &Data, measured: bool, n_temps: usize, notes: &mut Vec<String>) -
 
 /// Findings of the final model (an effect that matters on no axis is dropped and the
 /// model refitted).
-fn findings_of(data: &Data, mut f: Fit, ambiguous: &[Vec<EffectId>]) -> (Fit, Vec<Finding>) {
+fn findings_of(
+    data: &Data,
+    mut f: Fit,
+    ambiguous: &[Vec<EffectId>],
+    term_sets: &[search::TermSet],
+) -> (Fit, Vec<Finding>) {
     'again: loop {
         let mut out = Vec::new();
         for e in 0..f.spec.extras.len() {
@@ -295,8 +320,18 @@ fn findings_of(data: &Data, mut f: Fit, ambiguous: &[Vec<EffectId>]) -> (Fit, Ve
                     f = reduced;
                     continue 'again;
                 }
-                Some(x) if !ambiguous.iter().any(|g| g.contains(&id)) => out.push(x),
-                Some(_) => {}
+                Some(x) => {
+                    let set = term_sets.iter().find(|t| t.extra == f.spec.extras[e]);
+                    match set {
+                        Some(t) if !t.named => {}
+                        Some(t) => out.push(Finding {
+                            equivalent: t.others.iter().map(ToString::to_string).collect(),
+                            ..x
+                        }),
+                        None if !ambiguous.iter().any(|g| g.contains(&id)) => out.push(x),
+                        None => {}
+                    }
+                }
             }
         }
         return (f, out);

@@ -30,6 +30,8 @@ pub enum Term {
     /// Not a catalogue effect: the scale factor drifting linearly in time, beside
     /// [`Term::Drift`] for a hysteresis of the scale factors.
     DriftScale,
+    /// A discovered term's coefficient (output units per the term's units).
+    Discovered,
 }
 
 impl Term {
@@ -46,6 +48,7 @@ impl Term {
             Term::BendScale => "bend_k",
             Term::Drift => "drift",
             Term::DriftScale => "drift_k",
+            Term::Discovered => "coefficient",
         }
     }
 }

@@ -305,6 +305,14 @@ pub fn determined(data: &Data, f: &Fit, e: usize, phi: f64) -> bool {
             };
             (at(l(k)), at(l(1.0 / k)), k.ln(), r.tau_determined_ln)
         }
+        Extra::Discovered { term, axis } if term.tau_s().is_some() => {
+            let tau = term.tau_s().unwrap_or(1.0);
+            let d = |t: f64| Extra::Discovered {
+                term: term.with_tau(t),
+                axis,
+            };
+            (at(d(tau * k)), at(d(tau / k)), k.ln(), r.tau_determined_ln)
+        }
         Extra::Bend { knot_c } => (
             at(Extra::Bend {
                 knot_c: knot_c + kc,
@@ -323,7 +331,8 @@ pub fn determined(data: &Data, f: &Fit, e: usize, phi: f64) -> bool {
         | Extra::Hysteresis { .. }
         | Extra::K2
         | Extra::Asymmetry
-        | Extra::Fixture(..) => return true,
+        | Extra::Fixture(..)
+        | Extra::Discovered { .. } => return true,
     };
     let curv = (up + down - 2.0 * f.chi2) / (h * h);
     curv > 0.0 && (2.0 * phi / curv).sqrt() <= limit

@@ -24,9 +24,11 @@
 //! profiled structure (time constant, bend) is determined by the data.
 use crate::diagnose::baseline::reorder;
 use crate::diagnose::data::Data;
+use crate::diagnose::discover::{discover, Proposal, Unidentifiable};
 use crate::diagnose::effects::{EffectId, Extra};
 use crate::diagnose::findings::reproduced;
 use crate::diagnose::fit::{Depth, Fit};
+use crate::diagnose::library::Candidate;
 use crate::diagnose::location::{locate, rows_of, Hotspot};
 use crate::diagnose::metrics::{adequate, dispersion, judge, normalized_rms, qbic, z, Judgement};
 use crate::diagnose::profile;
@@ -53,6 +55,50 @@ pub struct Outcome {
     pub ambiguous: Vec<Vec<EffectId>>,
     /// Every re-search, in order: where it looked and what it found.
     pub research: Vec<Research>,
+    /// The library search after the catalogue's, round by round (empty: the rest was at
+    /// the floor, or the data cannot judge time-series terms).
+    pub library: Vec<LibraryRound>,
+    /// Discovered terms in the model whose columns the design cannot tell from others'.
+    pub term_sets: Vec<TermSet>,
+    /// Library terms the design cannot identify, with the positions that would.
+    pub unidentifiable: Vec<Unidentifiable>,
+}
+
+/// A discovered term in the model and the library terms whose columns this design
+/// cannot tell from its own (after the model's columns are projected out).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TermSet {
+    /// The term in the model.
+    pub extra: Extra,
+    /// The others of its set.
+    pub others: Vec<Candidate>,
+    /// Whether it is named: it is the simplest of the set (fewer factors than every
+    /// other), so the finding names it and lists the others; else the set is reported
+    /// as ambiguous, none named.
+    pub named: bool,
+}
+
+/// One round of the library search: what the resampled selection proposed and which
+/// proposal (if any) passed every acceptance rule.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct LibraryRound {
+    /// Library columns tried.
+    pub tried: usize,
+    /// The terms proposed (`term on axis`, with the share of resamples choosing it).
+    pub proposed: Vec<ProposedTerm>,
+    /// The term that passed and joined the model (null: none passed).
+    pub found: Option<String>,
+}
+
+/// A term the resampled selection proposed.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct ProposedTerm {
+    /// The term in the catalogue's vocabulary.
+    pub term: String,
+    /// The output axis.
+    pub axis: &'static str,
+    /// Share of the bootstrap resamples of the time chunks that chose it.
+    pub inclusion: f64,
 }
 
 /// One re-search after the effects accepted so far: the located region it looked at,
@@ -84,7 +130,7 @@ pub fn run(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
     let mut dropped: Vec<EffectId> = Vec::new();
     // the effects a re-search found, with the located rows they were judged on: the
     // backward check judges them there again
-    let mut regions: Vec<(Extra, Vec<usize>)> = Vec::new();
+    let mut regions: Vec<Region> = Vec::new();
     loop {
         s.forward();
         s.current = checked(data, s.current.clone(), &regions);
@@ -113,11 +159,125 @@ pub fn run(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
         }
         research.push(r);
     }
+    let (library, term_sets, unidentifiable) = library_search(&mut s, &regions);
     Outcome {
         joint: s.current,
         ambiguous: s.ambiguous,
         research,
+        library,
+        term_sets,
+        unidentifiable,
     }
+}
+
+/// What the library search leaves: its rounds, the discovered terms found as sets, the
+/// terms the design cannot identify.
+type LibraryOutcome = (Vec<LibraryRound>, Vec<TermSet>, Vec<Unidentifiable>);
+
+/// A proposal and the library terms the design cannot tell from it: the simplest of
+/// them (fewest factors) is the one judged, the others go with it; `named` when it is
+/// the only one that simple (Occam: a set of equally simple terms is not a choice).
+fn simplest(p: &Proposal) -> (Proposal, Vec<Candidate>, bool) {
+    let mut all = vec![p.candidate.clone()];
+    all.extend(p.equivalents.iter().cloned());
+    let least = all.iter().map(|c| c.term.factors()).min().unwrap_or(0);
+    let simplest: Vec<usize> = (0..all.len())
+        .filter(|&i| all[i].term.factors() == least)
+        .collect();
+    let pick = simplest.first().copied().unwrap_or(0);
+    let chosen = all.remove(pick);
+    (
+        Proposal {
+            candidate: chosen,
+            equivalents: Vec::new(),
+            ..p.clone()
+        },
+        all,
+        simplest.len() == 1,
+    )
+}
+
+/// After the catalogue's search: while the rest stays above the floor, the library of
+/// discovered terms is searched ([`discover`]) and its proposals judged in turn by every
+/// acceptance rule a catalogue effect meets, and by reproduction on both halves; the
+/// first that passes joins the model (its decay's time constant profiled), the joint
+/// model is checked backward (an effect the term explains better is dropped) and the
+/// library is searched again, at most
+/// [`crate::diagnose::rules::Rules::discover_max_terms`] times. Time-series terms need
+/// the same data the catalogue's time-series effects need.
+fn library_search(s: &mut Forward, regions: &[Region]) -> LibraryOutcome {
+    let data = s.data;
+    let rules = &data.rules;
+    let mut rounds = Vec::new();
+    let mut sets = Vec::new();
+    let mut unidentifiable = Vec::new();
+    if !s.scope.dynamics && !s.scope.temperature {
+        return (rounds, sets, unidentifiable);
+    }
+    let mut rejected: Vec<Candidate> = Vec::new();
+    while rounds.len() < rules.discover_max_terms
+        && normalized_rms(data, &s.current) > rules.at_floor_rms
+    {
+        let order = match s.current.spec.basis {
+            crate::fit::temperature::Basis::Poly { order } => order,
+            crate::fit::temperature::Basis::Pwl { .. } => 1,
+        };
+        let found = discover(data, &s.current, order);
+        if unidentifiable.is_empty() {
+            unidentifiable = found.unidentifiable.clone();
+        }
+        let mut round = LibraryRound {
+            tried: found.tried,
+            proposed: found
+                .proposals
+                .iter()
+                .map(|p| ProposedTerm {
+                    term: p.candidate.term.to_string(),
+                    axis: firmware_core::model::AXES[p.candidate.axis],
+                    inclusion: p.inclusion,
+                })
+                .collect(),
+            found: None,
+        };
+        let mut step = None;
+        for p in found.proposals {
+            let (p, others, named) = simplest(&p);
+            if rejected.contains(&p.candidate) {
+                continue;
+            }
+            match s.judged_term(&p) {
+                Some(fit) => {
+                    step = Some((p, others, named, fit));
+                    break;
+                }
+                None => rejected.push(p.candidate.clone()),
+            }
+        }
+        let Some((p, others, named, fit)) = step else {
+            rounds.push(round);
+            break;
+        };
+        let Some(extra) = fit.spec.extras.last().cloned() else {
+            rounds.push(round);
+            break;
+        };
+        round.found = Some(format!("{}", extra.form()));
+        s.current = reorder(data, &fit, s.scope.max_order);
+        s.current = checked(data, s.current.clone(), regions);
+        if s.current.spec.extras.contains(&extra) && !others.is_empty() {
+            sets.push(TermSet {
+                extra,
+                others,
+                named,
+            });
+        } else if !s.current.spec.extras.contains(&extra) {
+            round.found = None;
+            rejected.push(p.candidate.clone());
+        }
+        rounds.push(round);
+    }
+    sets.retain(|t| s.current.spec.extras.contains(&t.extra));
+    (rounds, sets, unidentifiable)
 }
 
 /// The forward search's state between rounds.
@@ -141,6 +301,9 @@ struct Ranked {
 
 /// A re-search's step and the located rows it was judged on.
 type Relocated = (Step, Vec<usize>);
+
+/// An effect a re-search found, with the located rows it was judged on.
+type Region = (Extra, Vec<usize>);
 
 /// One round's decision: the effect accepted (fitted in full) and its rivals.
 struct Step {
@@ -415,6 +578,41 @@ impl Forward<'_, '_> {
         self.current = reorder(self.data, &fit, self.scope.max_order);
     }
 
+    /// A proposal of the library search at its profiled time constant, fitted in full,
+    /// when it passes every acceptance rule against the current model, reproduces on
+    /// both halves and explains the data where it acts.
+    fn judged_term(&self, p: &Proposal) -> Option<Fit> {
+        let data = self.data;
+        let spec = &self.current.spec;
+        let Candidate { term, axis } = p.candidate.clone();
+        let extra = |t: &crate::diagnose::library::LibTerm| Extra::Discovered {
+            term: t.clone(),
+            axis,
+        };
+        let term = match term.tau_s() {
+            Some(tau) => {
+                let make = |t: f64| {
+                    data.fit(
+                        &spec.with(extra(&term.with_tau(t))),
+                        Some(&self.current),
+                        Depth::Profile,
+                    )
+                };
+                let (t, _) = profile::time_constant(&make, profile::Grid::around(data, tau, 2, 5))?;
+                term.with_tau(t)
+            }
+            None => term,
+        };
+        let full = data.fit(&spec.with(extra(&term)), Some(&self.current), Depth::Full)?;
+        let e = full.spec.extras.len().checked_sub(1)?;
+        let j = judge(data, &self.current, &full, e);
+        let ok = j.accepted(data)
+            && reproduced(data, &full, &self.current)
+            && adequate(data, &full, &self.current);
+        log::debug!("  library {term} on {axis}: {j:?} accepted {ok}");
+        ok.then_some(full)
+    }
+
     /// Every effect has been used up.
     fn stop(&self) -> bool {
         self.used.len() >= EffectId::ALL.len()
@@ -456,7 +654,8 @@ fn beats_drift(data: &Data, current: &Fit, full: &Fit, e: usize) -> bool {
             | Extra::Rate { .. }
             | Extra::K2
             | Extra::Asymmetry
-            | Extra::Fixture(..),
+            | Extra::Fixture(..)
+            | Extra::Discovered { .. },
         )
         | None => return true,
     };

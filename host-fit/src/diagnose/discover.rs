@@ -280,8 +280,14 @@ pub fn discover(data: &Data, current: &Fit, order: usize) -> Discovery {
     let mut unidentifiable: Vec<Unidentifiable> = Vec::new();
     let mut tried = 0usize;
     for cand in library::library(data, order) {
+        // decays that settle within the recording (longer ones are drifts, `t`)
+        let limit = crate::diagnose::profile::settling_limit_s(data);
         let taus: Vec<Option<f64>> = match cand.term.tau_s() {
-            Some(_) => DECAY_GRID_S.iter().map(|t| Some(*t)).collect(),
+            Some(_) => DECAY_GRID_S
+                .iter()
+                .filter(|t| **t < limit)
+                .map(|t| Some(*t))
+                .collect(),
             None => vec![None],
         };
         let mut best: Option<Alone> = None;

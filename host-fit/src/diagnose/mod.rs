@@ -144,7 +144,15 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
     let scope = scope(&data, measured, n_temps, &mut not_identifiable);
     let z = metrics::z(&data, &baseline);
     let hotspots = locate(&data, &z, &baseline.resid, rules.located_sigmas);
-    let found = search::run(&data, &baseline, &scope);
+    let mut found = search::run(&data, &baseline, &scope);
+    let refined = profile::refine_jointly(&data, &found.joint);
+    // the sets of discovered terms follow their terms to the refined time constants
+    for t in &mut found.term_sets {
+        if let Some(i) = found.joint.spec.extras.iter().position(|e| *e == t.extra) {
+            t.extra = refined.spec.extras[i].clone();
+        }
+    }
+    found.joint = refined;
     let ambiguous_groups: Vec<Vec<EffectId>> = found
         .ambiguous
         .into_iter()

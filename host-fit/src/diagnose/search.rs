@@ -30,7 +30,9 @@ use crate::diagnose::findings::reproduced;
 use crate::diagnose::fit::{Depth, Fit};
 use crate::diagnose::library::Candidate;
 use crate::diagnose::location::{locate, rows_of, Hotspot};
-use crate::diagnose::metrics::{adequate, dispersion, judge, normalized_rms, qbic, z, Judgement};
+use crate::diagnose::metrics::{
+    adequate, adequate_term, dispersion, judge, normalized_rms, qbic, z, Judgement,
+};
 use crate::diagnose::profile;
 use serde::Serialize;
 
@@ -159,6 +161,9 @@ pub fn run(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
         }
         research.push(r);
     }
+    // the catalogue's time constants estimated jointly before the library looks at the
+    // rest: a lag profiled before the rate beside it leaves a rest of its own making
+    s.current = profile::refine_jointly(data, &s.current);
     let (library, term_sets, unidentifiable) = library_search(&mut s, &regions);
     Outcome {
         joint: s.current,
@@ -421,11 +426,15 @@ impl Forward<'_, '_> {
             ));
         }
         if scope.dynamics && self.open(EffectId::ThermalLag) {
-            out.extend(choose_form(
-                data,
-                current,
-                profile::lag(data, spec, current),
-            ));
+            let forms = profile::lag(data, spec, current);
+            let one_pole = forms.first().cloned();
+            let pick = choose_form(data, current, forms);
+            out.extend(pick.map(|p| match one_pole {
+                Some(one) if self.open(EffectId::TempRate) => {
+                    lag_against_rate(data, current, one, p)
+                }
+                _ => p,
+            }));
         }
         if scope.dynamics && self.open(EffectId::TempRate) {
             out.extend(profile::rate(data, spec, current));
@@ -598,7 +607,16 @@ impl Forward<'_, '_> {
                         Depth::Profile,
                     )
                 };
-                let (t, _) = profile::time_constant(&make, profile::Grid::around(data, tau, 2, 5))?;
+                let grid = profile::Grid {
+                    max_s: profile::settling_limit_s(data),
+                    ..profile::Grid::around(data, tau, 2, 5)
+                };
+                let (t, _) = profile::time_constant(&make, grid)?;
+                // a decay that does not settle within the recording is a drift: `t`
+                // (or its product) says that with one parameter less
+                if t >= grid.max_s / data.rules.grid_ratio {
+                    return None;
+                }
                 term.with_tau(t)
             }
             None => term,
@@ -608,7 +626,7 @@ impl Forward<'_, '_> {
         let j = judge(data, &self.current, &full, e);
         let ok = j.accepted(data)
             && reproduced(data, &full, &self.current)
-            && adequate(data, &full, &self.current);
+            && adequate_term(data, &full, &self.current, axis);
         log::debug!("  library {term} on {axis}: {j:?} accepted {ok}");
         ok.then_some(full)
     }
@@ -673,6 +691,39 @@ fn beats_drift(data: &Data, current: &Fit, full: &Fit, e: usize) -> bool {
         current.spec.extras
     );
     gain > data.rules.q_margin
+}
+
+/// The lag form `richer` (a time constant per axis, or two poles) when it beats the
+/// one-pole lag `one` with a temperature-rate term beside it (its estimator profiled) by
+/// more than the margin in quasi-BIC, else `one`: on a chamber's ramps a rate term's
+/// offset in dT/dt looks like the difference of per-axis lags where the offsets'
+/// temperature slopes dominate, and the two part in flight (a lag acts through every
+/// coefficient's slope, at every attitude; a rate term on the offsets only), so the rate
+/// is the catalogue's own reading and the richer lag must earn its place against it. The
+/// rate itself is then judged as any effect, in the next round.
+fn lag_against_rate(data: &Data, current: &Fit, one: Fit, richer: Fit) -> Fit {
+    if richer.spec == one.spec {
+        return richer;
+    }
+    let with_rate = profile::rate(data, &one.spec, &one)
+        .and_then(|f| data.fit(&f.spec, Some(current), Depth::Full));
+    let Some(rival) = with_rate else {
+        return richer;
+    };
+    let Some(rich) = data.fit(&richer.spec, Some(current), Depth::Full) else {
+        return richer;
+    };
+    let phi = dispersion(data, &rich).max(dispersion(data, &rival));
+    let gain = qbic(data, &rival, phi) - qbic(data, &rich, phi);
+    log::debug!(
+        "  {:?} against one pole and a rate: gain {gain:.1}",
+        richer.spec.extras.last()
+    );
+    if gain > data.rules.q_margin {
+        richer
+    } else {
+        one
+    }
 }
 
 /// Of several forms of one effect on top of `current`, the simplest, unless a richer one

@@ -261,8 +261,9 @@ struct Alone {
 }
 
 /// The sparse search on `current`'s residual (see the module doc); `order` is the
-/// baseline's temperature order (what the baseline already expresses).
-pub fn discover(data: &Data, current: &Fit, order: usize) -> Discovery {
+/// baseline's temperature order (what the baseline already expresses), `reach` what the
+/// recording can judge.
+pub fn discover(data: &Data, current: &Fit, order: usize, reach: library::Reach) -> Discovery {
     let rules = &data.rules;
     let model = Model::of(data, current);
     let chunks = model.n.len();
@@ -279,7 +280,7 @@ pub fn discover(data: &Data, current: &Fit, order: usize) -> Discovery {
     let mut alone: Vec<Alone> = Vec::new();
     let mut unidentifiable: Vec<Unidentifiable> = Vec::new();
     let mut tried = 0usize;
-    for cand in library::library(data, order) {
+    for cand in library::library(data, order, reach) {
         // decays that settle within the recording (longer ones are drifts, `t`)
         let limit = crate::diagnose::profile::settling_limit_s(data);
         let taus: Vec<Option<f64>> = match cand.term.tau_s() {
@@ -325,7 +326,7 @@ pub fn discover(data: &Data, current: &Fit, order: usize) -> Discovery {
             let force = cand.term.to_string();
             if !unidentifiable.iter().any(|u| u.term == force) {
                 unidentifiable.push(Unidentifiable {
-                    positions: cand.term.identifying_positions(),
+                    positions: cand.term.identifying_positions().to_string(),
                     term: force,
                 });
             }

@@ -412,7 +412,7 @@ pub fn term_set(e: &Extra, others: &[crate::diagnose::library::Candidate]) -> Op
     };
     let mut terms = vec![format!("{term} on {}", AXES[*axis])];
     terms.extend(others.iter().map(ToString::to_string));
-    let mut needed: Vec<String> = vec![term.identifying_positions()];
+    let mut needed: Vec<&str> = vec![term.identifying_positions()];
     for o in others {
         let n = o.term.identifying_positions();
         if !needed.contains(&n) {

@@ -184,30 +184,17 @@ impl LibTerm {
     }
 
     /// The positions that would identify the force part where the recording's do not,
-    /// in words.
-    pub fn identifying_positions(&self) -> String {
-        let axes: Vec<&str> = (0..3)
+    /// in words (the same words for every term of one kind, so a report can group them).
+    pub fn identifying_positions(&self) -> &'static str {
+        let axes = (0..3)
             .filter(|&j| self.powers[j] > 0 || self.abs == Some(j))
-            .map(|j| AXES[j])
-            .collect();
+            .count();
         let odd = self.powers.iter().any(|p| *p >= 3);
-        match axes.len() {
-            0 => "a recording that varies it independently of the model's terms".into(),
-            1 if odd => format!(
-                "positions with a_{} between -1 and +1 g (tilted, e.g. PP1..PP6), where a_{0}^3 differs from a_{0}",
-                axes[0]
-            ),
-            1 => format!(
-                "positions with a_{} between 0 and 1 g (tilted, e.g. PP1..PP6)",
-                axes[0]
-            ),
-            _ => format!(
-                "positions with {} all nonzero (tilted between those axes, e.g. the 45-degree edge or corner positions of an 18- or 24-position design)",
-                axes.iter()
-                    .map(|a| format!("a_{a}"))
-                    .collect::<Vec<_>>()
-                    .join(" and ")
-            ),
+        match axes {
+            0 => "a recording that varies it apart from the model's own terms",
+            1 if odd => "positions with that component between -1 and +1 g, where its cube differs from itself (tilted, e.g. PP1..PP6)",
+            1 => "positions with that component between 0 and 1 g (tilted, e.g. PP1..PP6)",
+            _ => "positions with those components all nonzero (tilted between those axes: the 45-degree edge or corner positions of an 18- or 24-position design)",
         }
     }
 }
@@ -248,6 +235,29 @@ impl fmt::Display for Candidate {
 /// The decays' time constants tried before refinement, s: from 10 s by a factor 2.5 to
 /// about 2.7 h (the settling of a tilter move to a stop's soak).
 pub const DECAY_GRID_S: [f64; 8] = [10.0, 25.0, 62.5, 156.0, 390.0, 977.0, 2441.0, 6104.0];
+
+/// What a recording can judge of the time-varying factors: the specific force's terms
+/// need only the positions, `dT` more than one temperature, the time and the events a
+/// measured floor (a time series whose noise is known), `dTdt` a temperature that moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Reach {
+    /// More than one temperature.
+    pub temperature: bool,
+    /// The floor is measured: time and event terms can be judged.
+    pub time: bool,
+    /// The temperature moves (and the floor is measured): rate terms.
+    pub rate: bool,
+}
+
+impl Reach {
+    fn reaches(&self, f: &Timed) -> bool {
+        match f {
+            Timed::DT => self.temperature,
+            Timed::Rate => self.rate,
+            Timed::Hours | Timed::Decay(..) | Timed::Step(_) => self.time,
+        }
+    }
+}
 
 /// The force parts of the library: degree 2 and 3 monomials of the components and their
 /// magnitudes, and (with a time-varying factor) the components themselves.
@@ -322,7 +332,7 @@ fn catalogue_expresses(term: &LibTerm, axis: usize, order: usize) -> bool {
 /// The library for `data`: every term of at most three factors no catalogue effect
 /// expresses (given the baseline's temperature order `order`), on every axis, its
 /// decays at the first point of [`DECAY_GRID_S`] (the search tries the grid).
-pub fn library(data: &Data, order: usize) -> Vec<Candidate> {
+pub fn library(data: &Data, order: usize, scope: Reach) -> Vec<Candidate> {
     let power_cycled = !data.rec.power_off.is_empty();
     let mut terms: Vec<LibTerm> = Vec::new();
     for (powers, abs) in force_parts(false) {
@@ -355,6 +365,7 @@ pub fn library(data: &Data, order: usize) -> Vec<Candidate> {
     for t in &mut terms {
         t.timed.sort_by_key(Timed::rank);
     }
+    terms.retain(|t| t.timed.iter().all(|f| scope.reaches(f)));
     let mut out = Vec::new();
     for term in terms {
         for axis in 0..3 {

@@ -160,10 +160,18 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         .collect();
     let research = found.research;
     let library = found.library;
+    // one line per kind of position that would identify them
+    let mut kinds: Vec<(&str, Vec<&str>)> = Vec::new();
     for u in &found.unidentifiable {
+        match kinds.iter_mut().find(|(p, _)| *p == u.positions) {
+            Some((_, terms)) => terms.push(&u.term),
+            None => kinds.push((&u.positions, vec![&u.term])),
+        }
+    }
+    for (positions, terms) in kinds {
         not_identifiable.push(format!(
-            "discovered terms in {} (and its products): zero or one of the model's own columns at these positions; {} would identify them",
-            u.term, u.positions
+            "discovered terms {} (and their products): zero, or one of the model's own columns, at these positions; {positions} would identify them",
+            terms.join(", ")
         ));
     }
     let term_sets = found.term_sets;
@@ -293,6 +301,7 @@ fn scope(data: &Data, measured: bool, n_temps: usize, notes: &mut Vec<String>) -
         dynamics: measured && moving && n_temps > 1,
         reversals,
         max_order: baseline::max_order(data),
+        measured,
     };
     if !s.dynamics {
         notes.push("thermal_lag, temp_rate, warmup_drift, hysteresis: need a time series through temperature changes with a measurable floor".into());

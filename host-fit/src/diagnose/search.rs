@@ -46,6 +46,8 @@ pub struct Scope {
     pub reversals: bool,
     /// Highest polynomial order of the baseline the temperatures support.
     pub max_order: usize,
+    /// The floor is measured (time series can be judged).
+    pub measured: bool,
 }
 
 /// Where the search ended.
@@ -216,9 +218,11 @@ fn library_search(s: &mut Forward, regions: &[Region]) -> LibraryOutcome {
     let mut rounds = Vec::new();
     let mut sets = Vec::new();
     let mut unidentifiable = Vec::new();
-    if !s.scope.dynamics && !s.scope.temperature {
-        return (rounds, sets, unidentifiable);
-    }
+    let reach = crate::diagnose::library::Reach {
+        temperature: s.scope.temperature,
+        time: s.scope.measured,
+        rate: s.scope.dynamics,
+    };
     let mut rejected: Vec<Candidate> = Vec::new();
     while rounds.len() < rules.discover_max_terms
         && normalized_rms(data, &s.current) > rules.at_floor_rms
@@ -227,7 +231,7 @@ fn library_search(s: &mut Forward, regions: &[Region]) -> LibraryOutcome {
             crate::fit::temperature::Basis::Poly { order } => order,
             crate::fit::temperature::Basis::Pwl { .. } => 1,
         };
-        let found = discover(data, &s.current, order);
+        let found = discover(data, &s.current, order, reach);
         if unidentifiable.is_empty() {
             unidentifiable = found.unidentifiable.clone();
         }

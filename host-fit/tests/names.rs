@@ -93,6 +93,11 @@ fn unit_status() {
 }
 
 #[test]
+fn what_a_discovered_term_corrects() {
+    round_trip::<host_fit::diagnose::findings::Corrects>(&["unit", "calibration"]);
+}
+
+#[test]
 fn test_record_outcomes() {
     // the OpenHTF-like test record's spellings
     use host_fit::store::test_record::{MeasurementOutcome, Outcome};
@@ -129,6 +134,7 @@ fn diagnosis_contract() {
         "scale_asymmetry",
         "fixture_error",
         "warmup_drift",
+        "discovered",
     ]);
     round_trip::<host_fit::diagnose::contract::Verdict>(&[
         "none",

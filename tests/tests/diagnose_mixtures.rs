@@ -41,6 +41,8 @@ fn mixture(large: EffectId, small: &[(EffectId, f64)], seed: u64) -> SimConfig {
             EffectId::ScaleAsymmetry => e.scale_asymmetry = f.scale_asymmetry,
             EffectId::FixtureError => e.fixture_error = f.fixture_error,
             EffectId::WarmupDrift => e.warmup_drift = f.warmup_drift,
+            // a mixture of the catalogue's effects: no discovered term is drawn
+            EffectId::Discovered => {}
         }
     }
     c

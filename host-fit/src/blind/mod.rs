@@ -167,6 +167,8 @@ fn truth_of(cfg: &SimConfig, effect: EffectId) -> Option<Vec<(Quantity, f64)>> {
         // a curvature's and a fixture's true parameters are not the diagnosis's (a sine
         // against breakpoints, two angles against the fixture's own frame)
         EffectId::TempCurvature | EffectId::FixtureError => None,
+        // a discovered term's truth is the class's own (crate::blind::forms)
+        EffectId::Discovered => None,
     }
 }
 

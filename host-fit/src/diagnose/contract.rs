@@ -101,6 +101,10 @@ pub struct Contract {
     /// After the effects accepted, each look again where the rest was located: the
     /// region, the effects tried there, the one found (null: nothing passed the rules).
     pub research: Vec<Research>,
+    /// The library search for discovered terms after the catalogue's, round by round:
+    /// the columns tried, the terms proposed (with the share of resamples choosing them),
+    /// the one found (empty: the rest was at the floor).
+    pub library: Vec<crate::diagnose::search::LibraryRound>,
     /// The final model.
     #[serde(rename = "final")]
     pub final_model: FinalFigures,
@@ -294,6 +298,7 @@ impl Diagnosis<'_> {
                 located: self.unexplained.iter().take(12).cloned().collect(),
             }),
             research: self.research.clone(),
+            library: self.library.clone(),
             final_model: FinalFigures {
                 temperature_model: f.spec.basis.describe(),
                 model: f
@@ -351,38 +356,22 @@ impl Contract {
         for x in self.located.iter().take(8) {
             s.push_str(&hotspot_line(x, self.output_unit.as_str()));
         }
-        for n in &self.not_identifiable {
-            s.push_str(&format!("not identifiable: {n}\n"));
-        }
+        s.extend(
+            self.not_identifiable
+                .iter()
+                .map(|n| format!("not identifiable: {n}\n")),
+        );
         for x in &self.findings {
-            s.push_str(&format!(
-                "finding: {} on axes {} ({}; dBIC {:.0}, {:.0}% of the excess, held-out gain {:.1} per parameter; {})\n",
-                x.effect,
-                serde_json::to_string(&x.axes).unwrap_or_default(),
-                x.form,
-                x.delta_bic,
-                100.0 * x.share,
-                x.heldout_gain,
-                if x.reproduced { "reproduced on both halves" } else { "NOT reproduced on both halves" }
-            ));
-            for (k, p) in x.parameters.by_name() {
-                let unit = x.parameters.unit_text(p);
-                // a parameter the search fixes (a threshold, an estimator's constant) has
-                // no uncertainty: said, not printed as NaN
-                let line = if p.sigma.is_finite() {
-                    format!("    {k} = {:.4e} +- {:.1e} {unit}", p.value, p.sigma)
-                } else {
-                    format!("    {k} = {:.4e} {unit} (fixed, not fitted)", p.value)
-                };
-                s.push_str(line.trim_end());
-                s.push('\n');
-            }
-            s.push_str(&format!("    {}\n", x.evidence));
+            s.push_str(&finding_lines(x));
         }
         for x in &self.ambiguous {
+            let what = if x.terms.is_empty() {
+                serde_json::to_string(&x.candidates).unwrap_or_default()
+            } else {
+                format!("the discovered terms {}", x.terms.join(", "))
+            };
             s.push_str(&format!(
-                "ambiguous: {} cannot be told apart; needed: {}\n",
-                serde_json::to_string(&x.candidates).unwrap_or_default(),
+                "ambiguous: {what} cannot be told apart; needed: {}\n",
                 x.needed
             ));
         }
@@ -412,6 +401,9 @@ impl Contract {
             for x in r.region.iter().take(4) {
                 s.push_str(&hotspot_line(x, self.output_unit.as_str()));
             }
+        }
+        for r in &self.library {
+            s.push_str(&library_line(r));
         }
         let fl = &self.flashed;
         if !fl.same_as_final {
@@ -449,4 +441,70 @@ fn hotspot_line(x: &Hotspot, unit: &str) -> String {
         x.mean,
         x.count
     )
+}
+
+/// One round of the library search as a line of the text output.
+fn library_line(r: &crate::diagnose::search::LibraryRound) -> String {
+    let proposed: Vec<String> = r
+        .proposed
+        .iter()
+        .map(|p| {
+            format!(
+                "{} on {} ({:.0}% of resamples)",
+                p.term,
+                p.axis,
+                100.0 * p.inclusion
+            )
+        })
+        .collect();
+    format!(
+        "library of discovered terms ({} columns; proposed: {}): {}\n",
+        r.tried,
+        if proposed.is_empty() {
+            "none".to_string()
+        } else {
+            proposed.join(", ")
+        },
+        r.found.as_deref().unwrap_or("nothing passed the rules")
+    )
+}
+
+/// A finding as lines of the text output: what, where and how well, its parameters
+/// (the ones fixed by the search said so), the evidence, the terms it cannot be told
+/// from.
+fn finding_lines(x: &Finding) -> String {
+    let mut s = String::new();
+    let name = match &x.term {
+        Some(t) => format!("{} {t}", x.effect),
+        None => x.effect.to_string(),
+    };
+    s.push_str(&format!(
+        "finding: {name} on axes {} ({}; dBIC {:.0}, {:.0}% of the excess, held-out gain {:.1} per parameter; {})\n",
+        serde_json::to_string(&x.axes).unwrap_or_default(),
+        x.form,
+        x.delta_bic,
+        100.0 * x.share,
+        x.heldout_gain,
+        if x.reproduced { "reproduced on both halves" } else { "NOT reproduced on both halves" }
+    ));
+    for (k, p) in x.parameters.by_name() {
+        let unit = x.parameters.unit_text(p);
+        // a parameter the search fixes (a threshold, an estimator's constant) has
+        // no uncertainty: said, not printed as NaN
+        let line = if p.sigma.is_finite() {
+            format!("    {k} = {:.4e} +- {:.1e} {unit}", p.value, p.sigma)
+        } else {
+            format!("    {k} = {:.4e} {unit} (fixed, not fitted)", p.value)
+        };
+        s.push_str(line.trim_end());
+        s.push('\n');
+    }
+    s.push_str(&format!("    {}\n", x.evidence));
+    if !x.equivalent.is_empty() {
+        s.push_str(&format!(
+            "    named as the simplest; this design cannot tell it from {}\n",
+            x.equivalent.join(", ")
+        ));
+    }
+    s
 }

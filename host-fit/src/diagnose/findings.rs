@@ -45,13 +45,53 @@ pub struct Finding {
     /// The position, for fixture_error.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position: Option<String>,
+    /// The term in the catalogue's vocabulary, for a discovered term (`a_x*a_y`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub term: Option<String>,
+    /// What a discovered term corrects: the unit in flight (the blob compensates it), or
+    /// only the calibration (a term of the rig or of the test's time).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub corrects: Option<Corrects>,
+    /// For a discovered term: the library terms this design cannot tell from it (`term
+    /// on axis`); it is named as the simplest of them (fewest factors).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub equivalent: Vec<String>,
+}
+
+/// What a discovered term corrects.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    Serialize,
+    Deserialize,
+    PartialEq,
+    Eq,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
+pub enum Corrects {
+    /// A state of the unit (force, temperature, its rate, time since power-on): the
+    /// blob carries it and the firmware compensates it in flight.
+    Unit,
+    /// The rig or the test (time, a tilter's moves, a stop, turn-on to turn-on): the
+    /// coefficients are fitted with it, referred to the recording's start, and it is
+    /// reported, not flashed.
+    Calibration,
 }
 
 /// Two or more candidates the data cannot separate.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Ambiguity {
-    /// Catalogue ids.
+    /// Catalogue ids (`discovered` for a set of discovered terms).
     pub candidates: Vec<EffectId>,
+    /// For a set of discovered terms: each as `term on axis`, the one in the model first.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub terms: Vec<String>,
     /// The measurement that separates them.
     pub needed: String,
 }
@@ -202,6 +242,20 @@ fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<Par
         )],
         Extra::Curvature(b) => vec![p(Quantity::Breakpoints, b.len() as f64, 0.0)],
         Extra::Fixture(_, Some(n)) => vec![p(Quantity::FromStop, n as f64, f64::NAN)],
+        Extra::Discovered { term, axis } => match term.tau_s() {
+            Some(tau) => vec![p(
+                Quantity::Tau {
+                    pole: 1,
+                    axis: None,
+                },
+                tau,
+                sigma(tau, &|t| Extra::Discovered {
+                    term: term.with_tau(t),
+                    axis,
+                }),
+            )],
+            None => Vec::new(),
+        },
         Extra::K2 | Extra::Asymmetry | Extra::Fixture(_, None) => Vec::new(),
     }
 }
@@ -235,6 +289,11 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
             .into_iter()
             .chain(structural_parameters(data, full, e, phi))
             .collect(),
+        term_unit: if let Extra::Discovered { term, .. } = extra {
+            Some(term.coefficient_unit(data.rec.output_unit.as_str()))
+        } else {
+            None
+        },
     };
     let j = judge(data, reduced, full, e);
     Some(Finding {
@@ -251,6 +310,21 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
         evidence: evidence(data, full, reduced, extra),
         position: if let Extra::Fixture(p, _) = extra {
             Some(data.rec.positions.name(*p).to_string())
+        } else {
+            None
+        },
+        term: if let Extra::Discovered { term, .. } = extra {
+            Some(term.to_string())
+        } else {
+            None
+        },
+        equivalent: Vec::new(),
+        corrects: if let Extra::Discovered { term, .. } = extra {
+            Some(if term.of_unit() {
+                Corrects::Unit
+            } else {
+                Corrects::Calibration
+            })
         } else {
             None
         },
@@ -316,6 +390,7 @@ fn evidence(data: &Data, full: &Fit, reduced: &Fit, extra: &Extra) -> String {
         Extra::Fixture(_, Some(_)) => "one position agrees with the others up to a stop and disagrees from it on, at every temperature after (re-clamped or slipped between two stops)",
         Extra::Warmup { .. } => "the offset residual decays with time since power-on (or a restart), independent of temperature",
         Extra::Curvature(_) | Extra::Bend { .. } => "the coefficients bend between the temperatures more than the best polynomial the data support",
+        Extra::Discovered { .. } => "no catalogue effect expresses it; a term of the library explains it on data it was not fitted on, chosen in most resamples of the time chunks",
     };
     format!(
         "Shows most on {}; {why} ({}).",
@@ -326,6 +401,29 @@ fn evidence(data: &Data, full: &Fit, reduced: &Fit, extra: &Extra) -> String {
         },
         extra.form()
     )
+}
+
+/// The ambiguity of discovered term `e` (in the model) with the `others` the design
+/// cannot tell from it, and the positions that would separate them (None: `e` is not a
+/// discovered term).
+pub fn term_set(e: &Extra, others: &[crate::model::library::Candidate]) -> Option<Ambiguity> {
+    let Extra::Discovered { term, axis } = e else {
+        return None;
+    };
+    let mut terms = vec![format!("{term} on {}", AXES[*axis])];
+    terms.extend(others.iter().map(ToString::to_string));
+    let mut needed: Vec<&str> = vec![term.identifying_positions()];
+    for o in others {
+        let n = o.term.identifying_positions();
+        if !needed.contains(&n) {
+            needed.push(n);
+        }
+    }
+    Some(Ambiguity {
+        candidates: vec![EffectId::Discovered],
+        terms,
+        needed: format!("data where these terms differ: {}", needed.join("; ")),
+    })
 }
 
 /// The measurement that would separate the candidates of an ambiguous group (the first

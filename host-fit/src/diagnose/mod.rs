@@ -16,6 +16,7 @@
 //! [`crate::model::flashed`]'s. With a logger at debug level (`HOSTFIT_DEBUG=1` for the
 //! command), every candidate's judgement is logged.
 pub mod contract;
+pub mod discover;
 pub mod findings;
 pub mod location;
 pub mod parameters;
@@ -64,6 +65,8 @@ pub struct Diagnosis<'a> {
     /// The re-searches where the rest was located after the effects accepted: the
     /// region looked at and what was found there (empty: nothing was left to locate).
     pub research: Vec<search::Research>,
+    /// The library search for discovered terms after the catalogue's, round by round.
+    pub library: Vec<search::LibraryRound>,
     /// What cannot be identified from this recording.
     pub not_identifiable: Vec<String>,
     /// Notes on the data.
@@ -111,21 +114,52 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
     let scope = scope(&data, measured, n_temps, &mut not_identifiable);
     let z = metrics::z(&data, &baseline);
     let hotspots = locate(&data, &z, &baseline.resid, rules.located_sigmas);
-    let found = search::run(&data, &baseline, &scope);
+    let mut found = search::run(&data, &baseline, &scope);
+    let refined = crate::model::profile::refine_jointly(&data, &found.joint);
+    // the sets of discovered terms follow their terms to the refined time constants
+    for t in &mut found.term_sets {
+        if let Some(i) = found.joint.spec.extras.iter().position(|e| *e == t.extra) {
+            t.extra = refined.spec.extras[i].clone();
+        }
+    }
+    found.joint = refined;
     let ambiguous_groups: Vec<Vec<EffectId>> = found
         .ambiguous
         .into_iter()
         .filter(|g| found.joint.spec.extras.iter().any(|e| g.contains(&e.id())))
         .collect();
     let research = found.research;
-    let (final_fit, findings) = findings_of(&data, found.joint, &ambiguous_groups);
-    let ambiguous = ambiguous_groups
+    let library = found.library;
+    // one line per kind of position that would identify them
+    let mut kinds: Vec<(&str, Vec<&str>)> = Vec::new();
+    for u in &found.unidentifiable {
+        match kinds.iter_mut().find(|(p, _)| *p == u.positions) {
+            Some((_, terms)) => terms.push(&u.term),
+            None => kinds.push((&u.positions, vec![&u.term])),
+        }
+    }
+    for (positions, terms) in kinds {
+        not_identifiable.push(format!(
+            "discovered terms {} (and their products): zero, or one of the model's own columns, at these positions; {positions} would identify them",
+            terms.join(", ")
+        ));
+    }
+    let term_sets = found.term_sets;
+    let (final_fit, findings) = findings_of(&data, found.joint, &ambiguous_groups, &term_sets);
+    let mut ambiguous: Vec<Ambiguity> = ambiguous_groups
         .iter()
         .map(|g| Ambiguity {
             candidates: g.clone(),
+            terms: Vec::new(),
             needed: findings::needed(g),
         })
         .collect();
+    ambiguous.extend(
+        term_sets
+            .iter()
+            .filter(|t| !t.named && final_fit.spec.extras.contains(&t.extra))
+            .filter_map(|t| findings::term_set(&t.extra, &t.others)),
+    );
     let unexplained = if metrics::normalized_rms(&data, &final_fit) > rules.at_floor_rms {
         let z = metrics::z(&data, &final_fit);
         locate(&data, &z, &final_fit.resid, rules.located_sigmas)
@@ -153,6 +187,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         hotspots,
         unexplained,
         research,
+        library,
         not_identifiable,
         quality,
         data,
@@ -170,6 +205,7 @@ fn scope(data: &Data, measured: bool, n_temps: usize, notes: &mut Vec<String>) -
         dynamics: measured && moving && n_temps > 1,
         reversals,
         max_order: baseline::max_order(data),
+        measured,
     };
     if !s.dynamics {
         notes.push("thermal_lag, temp_rate, warmup_drift, hysteresis: need a time series through temperature changes with a measurable floor".into());
@@ -187,7 +223,12 @@ fn scope(data: &Data, measured: bool, n_temps: usize, notes: &mut Vec<String>) -
 
 /// Findings of the final model (an effect that matters on no axis is dropped and the
 /// model refitted).
-fn findings_of(data: &Data, mut f: Fit, ambiguous: &[Vec<EffectId>]) -> (Fit, Vec<Finding>) {
+fn findings_of(
+    data: &Data,
+    mut f: Fit,
+    ambiguous: &[Vec<EffectId>],
+    term_sets: &[search::TermSet],
+) -> (Fit, Vec<Finding>) {
     'again: loop {
         let mut out = Vec::new();
         for e in 0..f.spec.extras.len() {
@@ -200,8 +241,18 @@ fn findings_of(data: &Data, mut f: Fit, ambiguous: &[Vec<EffectId>]) -> (Fit, Ve
                     f = reduced;
                     continue 'again;
                 }
-                Some(x) if !ambiguous.iter().any(|g| g.contains(&id)) => out.push(x),
-                Some(_) => {}
+                Some(x) => {
+                    let set = term_sets.iter().find(|t| t.extra == f.spec.extras[e]);
+                    match set {
+                        Some(t) if !t.named => {}
+                        Some(t) => out.push(Finding {
+                            equivalent: t.others.iter().map(ToString::to_string).collect(),
+                            ..x
+                        }),
+                        None if !ambiguous.iter().any(|g| g.contains(&id)) => out.push(x),
+                        None => {}
+                    }
+                }
             }
         }
         return (f, out);

@@ -160,6 +160,10 @@ pub struct Parameters {
     pub output_unit: String,
     /// The parameters, in their order of the model.
     pub list: Vec<Parameter>,
+    /// The unit of a discovered term's coefficient (the output unit per the term's
+    /// factors, as [`crate::model::library::LibTerm::coefficient_unit`] writes it): the
+    /// term, not [`Term::Discovered`], knows its factors.
+    pub term_unit: Option<String>,
 }
 
 impl Parameters {
@@ -181,7 +185,16 @@ impl Parameters {
 
     /// A parameter's unit in words.
     pub fn unit_text(&self, p: &Parameter) -> String {
-        p.quantity.unit().text(&self.output_unit)
+        match (p.quantity, &self.term_unit) {
+            (
+                Quantity::Term {
+                    term: Term::Discovered,
+                    ..
+                },
+                Some(u),
+            ) => u.clone(),
+            _ => p.quantity.unit().text(&self.output_unit),
+        }
     }
 }
 
@@ -216,11 +229,23 @@ impl<'de> Deserialize<'de> for Parameters {
         let m = Maps::deserialize(d)?;
         let mut list = Vec::new();
         let mut output_unit: Option<String> = None;
+        let mut term_unit: Option<String> = None;
         for (name, value) in &m.parameters {
             let quantity: Quantity = name.parse().map_err(D::Error::custom)?;
             let unit = quantity.unit();
             let text = m.units.get(name).map(String::as_str).unwrap_or("");
+            let discovered = matches!(
+                quantity,
+                Quantity::Term {
+                    term: Term::Discovered,
+                    ..
+                }
+            );
+            if discovered {
+                term_unit = Some(text.to_string());
+            }
             match (unit.output_unit_of(text), &output_unit) {
+                _ if discovered => {}
                 (Some(ou), None) => output_unit = Some(ou.to_string()),
                 (Some(ou), Some(known)) if ou == known => {}
                 (None, _) if unit.text("") == text => {}
@@ -245,6 +270,7 @@ impl<'de> Deserialize<'de> for Parameters {
         Ok(Parameters {
             output_unit: output_unit.unwrap_or_default(),
             list,
+            term_unit,
         })
     }
 }
@@ -295,6 +321,7 @@ mod tests {
     fn parameters_serialise_into_the_contracts_maps_and_back() {
         let p = Parameters {
             output_unit: "mV".into(),
+            term_unit: Some("mV/g^3".into()),
             list: vec![
                 Parameter {
                     quantity: Quantity::Term {
@@ -303,6 +330,15 @@ mod tests {
                     },
                     value: 0.02,
                     sigma: 1e-4,
+                },
+                // a discovered term's coefficient, in its own unit
+                Parameter {
+                    quantity: Quantity::Term {
+                        term: Term::Discovered,
+                        axis: 1,
+                    },
+                    value: 3e-4,
+                    sigma: 2e-6,
                 },
                 Parameter {
                     quantity: Quantity::RateTau,
@@ -320,13 +356,14 @@ mod tests {
         assert_eq!(
             j,
             serde_json::json!({
-                "parameters": {"from_stop": 3.0, "r_x": 0.02, "rate_tau_s": 10.0},
-                "uncertainties": {"from_stop": null, "r_x": 1e-4, "rate_tau_s": null},
-                "units": {"from_stop": "", "r_x": "mV per C/s", "rate_tau_s": "s"},
+                "parameters": {"coefficient_y": 3e-4, "from_stop": 3.0, "r_x": 0.02, "rate_tau_s": 10.0},
+                "uncertainties": {"coefficient_y": 2e-6, "from_stop": null, "r_x": 1e-4, "rate_tau_s": null},
+                "units": {"coefficient_y": "mV/g^3", "from_stop": "", "r_x": "mV per C/s", "rate_tau_s": "s"},
             })
         );
         let back: Parameters = serde_json::from_value(j).unwrap();
         assert_eq!(back.output_unit, "mV");
+        assert_eq!(back.term_unit.as_deref(), Some("mV/g^3"));
         for (a, b) in back.list.iter().zip(p.by_name()) {
             assert_eq!(a.quantity, b.1.quantity);
             assert_eq!(a.value, b.1.value);

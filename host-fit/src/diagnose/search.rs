@@ -29,12 +29,16 @@
 //! its parameters is at least `z_significant` scaled sigmas from zero; the held-out time
 //! chunks improve by more than `heldout_gain` per parameter (in floor units); its
 //! profiled structure (time constant, bend) is determined by the data.
+use crate::diagnose::discover::{discover, Proposal, Unidentifiable};
 use crate::diagnose::findings::reproduced;
 use crate::diagnose::location::{locate, rows_of, Hotspot};
 use crate::model::baseline::reorder;
 use crate::model::data::Data;
 use crate::model::effects::{EffectId, Extra};
-use crate::model::metrics::{adequate, dispersion, judge, normalized_rms, qbic, z, Judgement};
+use crate::model::library::{Candidate, LibTerm, Reach};
+use crate::model::metrics::{
+    adequate, adequate_term, dispersion, judge, normalized_rms, qbic, z, Judgement,
+};
 use crate::model::profile;
 use crate::model::solve::{Depth, Fit};
 use serde::Serialize;
@@ -49,6 +53,8 @@ pub struct Scope {
     pub reversals: bool,
     /// Highest polynomial order of the baseline the temperatures support.
     pub max_order: usize,
+    /// The floor is measured (time series can be judged).
+    pub measured: bool,
 }
 
 /// Where the search ended.
@@ -62,6 +68,50 @@ pub struct Outcome {
     pub research: Vec<Research>,
     /// Why it ended.
     pub ended: Termination,
+    /// The library search after the catalogue's, round by round (empty: the rest was at
+    /// the floor, or the data cannot judge time-series terms).
+    pub library: Vec<LibraryRound>,
+    /// Discovered terms in the model whose columns the design cannot tell from others'.
+    pub term_sets: Vec<TermSet>,
+    /// Library terms the design cannot identify, with the positions that would.
+    pub unidentifiable: Vec<Unidentifiable>,
+}
+
+/// A discovered term in the model and the library terms whose columns this design
+/// cannot tell from its own (after the model's columns are projected out).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TermSet {
+    /// The term in the model.
+    pub extra: Extra,
+    /// The others of its set.
+    pub others: Vec<Candidate>,
+    /// Whether it is named: it is the simplest of the set (fewer factors than every
+    /// other), so the finding names it and lists the others; else the set is reported
+    /// as ambiguous, none named.
+    pub named: bool,
+}
+
+/// One round of the library search: what the resampled selection proposed and which
+/// proposal (if any) passed every acceptance rule.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct LibraryRound {
+    /// Library columns tried.
+    pub tried: usize,
+    /// The terms proposed (`term on axis`, with the share of resamples choosing it).
+    pub proposed: Vec<ProposedTerm>,
+    /// The term that passed and joined the model (null: none passed).
+    pub found: Option<String>,
+}
+
+/// A term the resampled selection proposed.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct ProposedTerm {
+    /// The term in the catalogue's vocabulary.
+    pub term: String,
+    /// The output axis.
+    pub axis: &'static str,
+    /// Share of the bootstrap resamples of the time chunks that chose it.
+    pub inclusion: f64,
 }
 
 /// One re-search after the effects accepted so far: the located region it looked at,
@@ -111,11 +161,55 @@ pub fn run(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
         state = search.next(state);
     };
     log::debug!("  search ended: {ended:?}");
+    // the catalogue's time constants estimated jointly before the library looks at the
+    // rest: a lag profiled before the rate beside it leaves a rest of its own making
+    state.current = profile::refine_jointly(data, &state.current);
+    let library = search.library(&mut state);
     Outcome {
         joint: state.current,
         ambiguous: state.ambiguous,
         research: state.research,
         ended,
+        library: library.rounds,
+        term_sets: library.sets,
+        unidentifiable: library.unidentifiable,
+    }
+}
+
+/// What the library search leaves: its rounds, the discovered terms found as sets, the
+/// terms the design cannot identify.
+struct LibraryOutcome {
+    rounds: Vec<LibraryRound>,
+    sets: Vec<TermSet>,
+    unidentifiable: Vec<Unidentifiable>,
+}
+
+/// The simplest of a proposal and the library terms the design cannot tell from it
+/// (fewest factors): it is the one judged, the others go with it; `named` when it is the
+/// only one that simple (Occam: a set of equally simple terms is not a choice).
+struct Simplest {
+    proposal: Proposal,
+    others: Vec<Candidate>,
+    named: bool,
+}
+
+fn simplest(p: &Proposal) -> Simplest {
+    let mut all = vec![p.candidate.clone()];
+    all.extend(p.equivalents.iter().cloned());
+    let least = all.iter().map(|c| c.term.factors()).min().unwrap_or(0);
+    let simplest: Vec<usize> = (0..all.len())
+        .filter(|&i| all[i].term.factors() == least)
+        .collect();
+    let pick = simplest.first().copied().unwrap_or(0);
+    let chosen = all.remove(pick);
+    Simplest {
+        proposal: Proposal {
+            candidate: chosen,
+            equivalents: Vec::new(),
+            ..p.clone()
+        },
+        others: all,
+        named: simplest.len() == 1,
     }
 }
 
@@ -517,11 +611,13 @@ impl Proposer for Catalogue {
             ));
         }
         if scope.dynamics && open(EffectId::ThermalLag) {
-            out.extend(choose_form(
-                data,
-                current,
-                profile::lag(data, spec, current),
-            ));
+            let forms = profile::lag(data, spec, current);
+            let one_pole = forms.first().cloned();
+            let pick = choose_form(data, current, forms);
+            out.extend(pick.map(|p| match one_pole {
+                Some(one) if open(EffectId::TempRate) => lag_against_rate(data, current, one, p),
+                _ => p,
+            }));
         }
         if scope.dynamics && open(EffectId::TempRate) {
             out.extend(profile::rate(data, spec, current));
@@ -617,7 +713,8 @@ fn beats_drift(data: &Data, current: &Fit, full: &Fit, e: usize) -> bool {
             | Extra::Rate { .. }
             | Extra::K2
             | Extra::Asymmetry
-            | Extra::Fixture(..),
+            | Extra::Fixture(..)
+            | Extra::Discovered { .. },
         )
         | None => return true,
     };
@@ -635,6 +732,39 @@ fn beats_drift(data: &Data, current: &Fit, full: &Fit, e: usize) -> bool {
         current.spec.extras
     );
     gain > data.rules.q_margin
+}
+
+/// The lag form `richer` (a time constant per axis, or two poles) when it beats the
+/// one-pole lag `one` with a temperature-rate term beside it (its estimator profiled) by
+/// more than the margin in quasi-BIC, else `one`: on a chamber's ramps a rate term's
+/// offset in dT/dt looks like the difference of per-axis lags where the offsets'
+/// temperature slopes dominate, and the two part in flight (a lag acts through every
+/// coefficient's slope, at every attitude; a rate term on the offsets only), so the rate
+/// is the catalogue's own reading and the richer lag must earn its place against it. The
+/// rate itself is then judged as any effect, in the next round.
+fn lag_against_rate(data: &Data, current: &Fit, one: Fit, richer: Fit) -> Fit {
+    if richer.spec == one.spec {
+        return richer;
+    }
+    let with_rate = profile::rate(data, &one.spec, &one)
+        .and_then(|f| data.fit(&f.spec, Some(current), Depth::Full));
+    let Some(rival) = with_rate else {
+        return richer;
+    };
+    let Some(rich) = data.fit(&richer.spec, Some(current), Depth::Full) else {
+        return richer;
+    };
+    let phi = dispersion(data, &rich).max(dispersion(data, &rival));
+    let gain = qbic(data, &rival, phi) - qbic(data, &rich, phi);
+    log::debug!(
+        "  {:?} against one pole and a rate: gain {gain:.1}",
+        richer.spec.extras.last()
+    );
+    if gain > data.rules.q_margin {
+        richer
+    } else {
+        one
+    }
 }
 
 /// Of several forms of one effect on top of `current`, the simplest, unless a richer one
@@ -725,5 +855,141 @@ pub fn keep_adequate(data: &Data, mut current: Fit) -> Fit {
             }
         }
         return current;
+    }
+}
+
+/// The library search (see [`Search::library`]).
+impl Search<'_, '_> {
+    /// After the catalogue's search: while the rest stays above the floor, the library of
+    /// discovered terms is searched ([`discover`]) and its proposals judged in turn by
+    /// every acceptance rule a catalogue effect meets, and by reproduction on both
+    /// halves; the first that passes joins the model (its decay's time constant
+    /// profiled), the joint model is checked backward (an effect the term explains better
+    /// is dropped) and the library is searched again, at most
+    /// [`crate::model::rules::Rules::discover_max_terms`] times. Time-series terms need
+    /// the same data the catalogue's time-series effects need.
+    fn library(&self, state: &mut State) -> LibraryOutcome {
+        let data = self.data;
+        let rules = &data.rules;
+        let mut out = LibraryOutcome {
+            rounds: Vec::new(),
+            sets: Vec::new(),
+            unidentifiable: Vec::new(),
+        };
+        let reach = Reach {
+            temperature: self.scope.temperature,
+            time: self.scope.measured,
+            rate: self.scope.dynamics,
+        };
+        let mut rejected: Vec<Candidate> = Vec::new();
+        while out.rounds.len() < rules.discover_max_terms
+            && normalized_rms(data, &state.current) > rules.at_floor_rms
+        {
+            let order = match state.current.spec.basis {
+                crate::model::basis::Basis::Poly { order } => order,
+                crate::model::basis::Basis::Pwl { .. } => 1,
+            };
+            let found = discover(data, &state.current, order, reach);
+            if out.unidentifiable.is_empty() {
+                out.unidentifiable = found.unidentifiable.clone();
+            }
+            let mut round = LibraryRound {
+                tried: found.tried,
+                proposed: found
+                    .proposals
+                    .iter()
+                    .map(|p| ProposedTerm {
+                        term: p.candidate.term.to_string(),
+                        axis: firmware_core::model::AXES[p.candidate.axis],
+                        inclusion: p.inclusion,
+                    })
+                    .collect(),
+                found: None,
+            };
+            let mut step = None;
+            for p in found.proposals {
+                let pick = simplest(&p);
+                if rejected.contains(&pick.proposal.candidate) {
+                    continue;
+                }
+                match self.judged_term(&state.current, &pick.proposal) {
+                    Some(fit) => {
+                        step = Some((pick, fit));
+                        break;
+                    }
+                    None => rejected.push(pick.proposal.candidate.clone()),
+                }
+            }
+            let Some((pick, fit)) = step else {
+                out.rounds.push(round);
+                break;
+            };
+            let Some(extra) = fit.spec.extras.last().cloned() else {
+                out.rounds.push(round);
+                break;
+            };
+            round.found = Some(format!("{}", extra.form()));
+            state.current = reorder(data, &fit, self.scope.max_order);
+            state.current = checked(data, state.current.clone(), &state.regions);
+            let kept = state.current.spec.extras.contains(&extra);
+            if kept && !pick.others.is_empty() {
+                out.sets.push(TermSet {
+                    extra,
+                    others: pick.others,
+                    named: pick.named,
+                });
+            } else if !kept {
+                round.found = None;
+                rejected.push(pick.proposal.candidate.clone());
+            }
+            out.rounds.push(round);
+        }
+        out.sets
+            .retain(|t| state.current.spec.extras.contains(&t.extra));
+        out
+    }
+
+    /// A proposal of the library search at its profiled time constant, fitted in full,
+    /// when it passes every acceptance rule against `current`, reproduces on both halves
+    /// and explains the data where it acts.
+    fn judged_term(&self, current: &Fit, p: &Proposal) -> Option<Fit> {
+        let data = self.data;
+        let spec = &current.spec;
+        let Candidate { term, axis } = p.candidate.clone();
+        let extra = |t: &LibTerm| Extra::Discovered {
+            term: t.clone(),
+            axis,
+        };
+        let term = match term.tau_s() {
+            Some(tau) => {
+                let make = |t: f64| {
+                    data.fit(
+                        &spec.with(extra(&term.with_tau(t))),
+                        Some(current),
+                        Depth::Profile,
+                    )
+                };
+                let grid = profile::Grid {
+                    max_s: profile::settling_limit_s(data),
+                    ..profile::Grid::around(data, tau, 2, 5)
+                };
+                let (t, _) = profile::time_constant(&make, grid)?;
+                // a decay that does not settle within the recording is a drift: `t`
+                // (or its product) says that with one parameter less
+                if t >= grid.max_s / data.rules.grid_ratio {
+                    return None;
+                }
+                term.with_tau(t)
+            }
+            None => term,
+        };
+        let full = data.fit(&spec.with(extra(&term)), Some(current), Depth::Full)?;
+        let e = full.spec.extras.len().checked_sub(1)?;
+        let j = judge(data, current, &full, e);
+        let ok = j.accepted(data)
+            && reproduced(data, &full, current)
+            && adequate_term(data, &full, current, axis);
+        log::debug!("  library {term} on {axis}: {j:?} accepted {ok}");
+        ok.then_some(full)
     }
 }

@@ -6,6 +6,7 @@
 use crate::model::basis::Basis;
 use crate::model::data::Data;
 use crate::model::effects::{Extra, Restart};
+use crate::model::library;
 use crate::model::params::{Param, Term};
 use crate::model::regressors;
 use nalgebra::DVector;
@@ -250,6 +251,18 @@ impl Data<'_> {
                     self.fixture_columns(e, *p, *from, k, d);
                 }
             }
+            Extra::Discovered { term, axis } => {
+                let c = library::column(self, &library::Series::new(self), term);
+                let col = c.iter().enumerate().map(|(r, v)| (3 * r + axis, *v));
+                d.push_column(
+                    Param::Effect {
+                        term: Term::Discovered,
+                        axis: *axis,
+                        extra: e,
+                    },
+                    col.collect::<Vec<_>>(),
+                );
+            }
         }
     }
 
@@ -340,7 +353,8 @@ pub fn static_at(
                         | Term::Asymmetry
                         | Term::Warmup
                         | Term::Drift
-                        | Term::DriftScale => {}
+                        | Term::DriftScale
+                        | Term::Discovered => {}
                     }
                 }
             }

@@ -1,6 +1,7 @@
 //! The catalogue's effects as candidate extensions of the baseline model, each with the
 //! structural unknowns of its form (time constants, thresholds, initial states, restart
 //! events, where a bend sits), which the search profiles instead of assuming.
+use crate::model::library::LibTerm;
 use serde::{Deserialize, Serialize};
 
 /// When a warm-up clock restarts (besides the start of the recording).
@@ -62,6 +63,14 @@ pub enum Extra {
         /// Restart events.
         restart: Restart,
     },
+    /// `discovered`: a term of the library (not the catalogue's) entering one output
+    /// axis additively.
+    Discovered {
+        /// The term.
+        term: LibTerm,
+        /// The output axis.
+        axis: usize,
+    },
 }
 
 /// The catalogue's effects (physics-catalogue.md), by their ids; the JSON contract and
@@ -101,10 +110,14 @@ pub enum EffectId {
     FixtureError,
     /// The offsets settle after power-on.
     WarmupDrift,
+    /// Not a catalogue effect: a term of the library found in the data
+    /// (physics-catalogue.md, "Beyond the catalogue").
+    Discovered,
 }
 
 impl EffectId {
-    /// Every effect, in the order candidates are tried.
+    /// Every catalogue effect, in the order candidates are tried (a discovered term is
+    /// searched for after them).
     pub const ALL: [EffectId; 8] = [
         EffectId::TempCurvature,
         EffectId::ThermalLag,
@@ -132,6 +145,7 @@ impl EffectId {
             EffectId::ScaleAsymmetry => "asym",
             EffectId::FixtureError => "fixt",
             EffectId::WarmupDrift => "warm",
+            EffectId::Discovered => "disc",
         }
     }
 
@@ -145,6 +159,8 @@ impl EffectId {
     pub fn max_count(self) -> usize {
         match self {
             EffectId::TempCurvature | EffectId::WarmupDrift => 2,
+            // each on its axis; the library search limits them (Rules::discover_max_terms)
+            EffectId::Discovered => usize::MAX,
             EffectId::FixtureError => 3,
             EffectId::ThermalLag
             | EffectId::TempRate
@@ -167,6 +183,7 @@ impl Extra {
             Extra::Asymmetry => EffectId::ScaleAsymmetry,
             Extra::Warmup { .. } => EffectId::WarmupDrift,
             Extra::Fixture(..) => EffectId::FixtureError,
+            Extra::Discovered { .. } => EffectId::Discovered,
         }
     }
 
@@ -189,6 +206,8 @@ impl Extra {
             }
             Extra::Hysteresis { .. } => 2,
             Extra::Warmup { restart, .. } => 1 + usize::from(*restart != Restart::Start),
+            // the term chosen from the library, and its decay's time constant
+            Extra::Discovered { term, .. } => 1 + usize::from(term.tau_s().is_some()),
         }
     }
 
@@ -232,6 +251,15 @@ impl Extra {
             Extra::Fixture(_, Some(n)) => {
                 format!("two small rotations of one position from stop {n} on")
             }
+            Extra::Discovered { term, axis } => format!(
+                "{term} on the {} output{}",
+                firmware_core::model::AXES[*axis],
+                if term.of_unit() {
+                    ""
+                } else {
+                    " (of the rig or the test: corrects the calibration only)"
+                }
+            ),
             Extra::Warmup { tau_s, restart } => format!(
                 "settles with {tau_s:.0} s after {}",
                 match restart {

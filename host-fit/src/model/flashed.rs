@@ -88,7 +88,10 @@ impl Flashed {
         for (e, x) in self.fit.spec.extras.iter().enumerate() {
             any |= !matches!(
                 x,
-                Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(..)
+                Extra::Curvature(_)
+                    | Extra::Bend { .. }
+                    | Extra::Fixture(..)
+                    | Extra::Discovered { .. }
             );
             match x {
                 Extra::Lag { taus } => {
@@ -125,7 +128,12 @@ impl Flashed {
                     ph.warmup = self.fit.term(e, Term::Warmup);
                     ph.warmup_tau_s = *tau_s;
                 }
-                Extra::Curvature(_) | Extra::Bend { .. } | Extra::Fixture(..) => {}
+                // rig terms correct the calibration only; the unit's terms are in the
+                // blob's term table (Flashed::terms), not the physics block
+                Extra::Curvature(_)
+                | Extra::Bend { .. }
+                | Extra::Fixture(..)
+                | Extra::Discovered { .. } => {}
             }
         }
         Ok(any.then_some(ph))
@@ -233,7 +241,8 @@ fn firmware_forms(data: &Data, f: &Fit) -> Fit {
             | Extra::K2
             | Extra::Asymmetry
             | Extra::Fixture(..)
-            | Extra::Warmup { .. } => {}
+            | Extra::Warmup { .. }
+            | Extra::Discovered { .. } => {}
         }
     }
     if !changed {

@@ -118,6 +118,14 @@ impl Normal {
         Some(DVector::from_fn(p, |i, _| y[i] / d[i]))
     }
 
+    /// The factorised matrix, to solve `(A^T W A) x = v` for many right-hand sides `v`
+    /// (the right-hand side of these equations is not used); `None` when singular
+    /// ([`RANK_TOL`]).
+    pub fn factorised(&self) -> Option<Factorised> {
+        let (l, d) = self.factor()?;
+        Some(Factorised { l, d })
+    }
+
     /// The Cholesky factor of the equilibrated matrix and the equilibration, after the
     /// rank test.
     fn factor(&self) -> Option<(nalgebra::Cholesky<f64, nalgebra::Dyn>, Vec<f64>)> {
@@ -136,6 +144,21 @@ impl Normal {
             return None;
         }
         Some((l, d))
+    }
+}
+
+/// `A^T W A` factorised once (see [`Normal::factorised`]).
+pub struct Factorised {
+    l: nalgebra::Cholesky<f64, nalgebra::Dyn>,
+    d: Vec<f64>,
+}
+
+impl Factorised {
+    /// `(A^T W A)^-1 v`.
+    pub fn solve(&self, v: &DVector<f64>) -> DVector<f64> {
+        let p = self.d.len();
+        let y = self.l.solve(&DVector::from_fn(p, |i, _| v[i] / self.d[i]));
+        DVector::from_fn(p, |i, _| y[i] / self.d[i])
     }
 }
 

@@ -266,3 +266,32 @@ pub fn adequate(data: &Data, full: &Fit, reduced: &Fit) -> bool {
         _ => false,
     }
 }
+
+/// Whether the discovered term `full` has and `reduced` lacks explains its region as well
+/// as the model explains the rest: the residual RMS (floor units) where the term acts
+/// (its contribution above [`Rules::acts_sigmas`]) is at the floor, or at most the RMS of
+/// the rows of the same axis where it does not act (of the other axes where it acts on
+/// every row of its own). A library term is the last resort: one that only dents a
+/// misfit (a linear drift through a sudden step) fits a shape the data do not have,
+/// where a catalogue effect's imperfect form may still be the right name.
+pub fn adequate_term(data: &Data, full: &Fit, reduced: &Fit, axis: usize) -> bool {
+    let c = contribution(data, full, reduced);
+    let r = &data.rules;
+    let z2 = |row: usize| data.w[row] * full.resid[row / 3][row % 3].powi(2);
+    let rms = |rows: &[usize]| {
+        (!rows.is_empty())
+            .then(|| (rows.iter().map(|&k| z2(k)).sum::<f64>() / rows.len() as f64).sqrt())
+    };
+    let acts: Vec<usize> = (0..c.len())
+        .filter(|&k| c[k].abs() > r.acts_sigmas)
+        .collect();
+    let Some(inside) = rms(&acts) else {
+        return false;
+    };
+    let same: Vec<usize> = (0..c.len())
+        .filter(|&k| k % 3 == axis && c[k].abs() <= r.acts_sigmas)
+        .collect();
+    let others: Vec<usize> = (0..c.len()).filter(|&k| k % 3 != axis).collect();
+    let outside = rms(&same).or_else(|| rms(&others)).unwrap_or(0.0);
+    inside <= r.at_floor_rms.max(outside)
+}

@@ -21,6 +21,7 @@ pub mod design;
 pub mod effects;
 pub mod flashed;
 pub mod floor;
+pub mod library;
 pub mod lsq;
 pub mod metrics;
 pub mod observations;

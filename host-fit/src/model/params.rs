@@ -31,11 +31,13 @@ pub enum Term {
     /// Not a catalogue effect: the scale factor drifting linearly in time, beside
     /// [`Term::Drift`] for a hysteresis of the scale factors.
     DriftScale,
+    /// A discovered term's coefficient (output units per the term's units).
+    Discovered,
 }
 
 impl Term {
     /// Every term.
-    pub const ALL: [Term; 10] = [
+    pub const ALL: [Term; 11] = [
         Term::Rate,
         Term::Hysteresis,
         Term::HysteresisScale,
@@ -46,6 +48,7 @@ impl Term {
         Term::BendScale,
         Term::Drift,
         Term::DriftScale,
+        Term::Discovered,
     ];
 
     /// The unit of its coefficient: the output unit per the units of what it multiplies.
@@ -59,6 +62,9 @@ impl Term {
             Term::K2 => Unit::Output(vec![(Factor::G, 2)]),
             Term::BendOffset => Unit::output_per(&[Factor::C]),
             Term::BendScale => Unit::output_per(&[Factor::G, Factor::C]),
+            // per the term's own factors: the finding's parameters carry it
+            // (`Parameters::term_unit`)
+            Term::Discovered => Unit::output(),
         }
     }
 
@@ -80,6 +86,7 @@ impl Term {
             Term::BendScale => "bend_k",
             Term::Drift => "drift",
             Term::DriftScale => "drift_k",
+            Term::Discovered => "coefficient",
         }
     }
 }

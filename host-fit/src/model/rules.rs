@@ -153,6 +153,29 @@ pub struct Rules {
     /// effects in a realistic mixture, with room for one the checks drop.
     pub research_rounds: usize,
 
+    // --- the library of discovered terms (after the catalogue) ---
+    /// A library column counts as identified when at least this share of its (weighted)
+    /// norm is left after the model's columns are projected out: below, the design
+    /// cannot tell it from the model (a_x*a_y at six one-axis positions is zero).
+    pub identifiable_share: f64,
+    /// Two library columns whose projected correlation is at least this are one column
+    /// to this design (a_x^2 and |a_x| at one-axis positions): a set, not a choice.
+    pub equivalent_correlation: f64,
+    /// The best this many library columns (by the chi-square each removes alone) go on
+    /// to the resampled selection: far more than a residual's few real terms.
+    pub discover_screened: usize,
+    /// Bootstrap resamples of the time chunks for the selection's stability.
+    pub discover_bags: usize,
+    /// A term must be chosen in at least this share of the resamples (stability
+    /// selection's usual 0.6-0.9): a term that comes and goes with the chunks drawn is
+    /// not one the data determine.
+    pub discover_inclusion: f64,
+    /// At most this many terms per resample's selection, and per recording: a residual
+    /// that needs more is not explained by a short sum of terms.
+    pub discover_max_terms: usize,
+    /// The resamples' seed: the same recording gives the same diagnosis.
+    pub discover_seed: u64,
+
     // --- locating ---
     /// A group is located when its RMS is above this many floor sigmas ...
     pub located_sigmas: f64,
@@ -220,6 +243,13 @@ impl Default for Rules {
             reproduced_amplitude: (0.5, 1.5),
             research_groups: 4,
             research_rounds: 4,
+            identifiable_share: 1e-4,
+            equivalent_correlation: 0.995,
+            discover_screened: 24,
+            discover_bags: 24,
+            discover_inclusion: 0.6,
+            discover_max_terms: 4,
+            discover_seed: 0x5EED_D15C,
             located_sigmas: 2.0,
             located_share: 0.01,
             colour_note: 2.0,

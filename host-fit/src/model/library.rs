@@ -1,0 +1,596 @@
+//! The library of discovered terms (physics-catalogue.md, "Beyond the catalogue"): the
+//! short products of what a recording measures (the specific force's components, the
+//! temperature, its rate, the time, the events) that no catalogue effect expresses, each
+//! a column of the diagnosis's design on one output axis, computed on the recording's own
+//! rows and clock and averaged into its windows as every other column is.
+use crate::model::data::Data;
+use crate::model::regressors;
+use firmware_core::model::AXES;
+use std::fmt;
+
+/// An event a `decay` or a `step` counts from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Event {
+    /// The recording's start and the end of every stated power-off.
+    PowerOn,
+    /// A new temperature stop begins (its first static dwell).
+    Stop,
+    /// The unit was turned to another position (a dwell begins).
+    Position,
+}
+
+impl Event {
+    /// The vocabulary's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Event::PowerOn => "power_on",
+            Event::Stop => "stop",
+            Event::Position => "position",
+        }
+    }
+}
+
+/// The part of a term that varies in time (everything but the specific force), at most
+/// two factors of it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Timed {
+    /// `dT`: temp_c - T0, C.
+    DT,
+    /// `dTdt`: the rate of temp_c, C/min (the firmware's estimate).
+    Rate,
+    /// `t`: hours since the recording's first row.
+    Hours,
+    /// `decay(EVENT,TAU)`, TAU in seconds.
+    Decay(Event, f64),
+    /// `step(EVENT)`.
+    Step(Event),
+}
+
+impl Timed {
+    /// The canonical order of factors: dT, dTdt, t, then events.
+    fn rank(&self) -> u8 {
+        match self {
+            Timed::DT => 0,
+            Timed::Rate => 1,
+            Timed::Hours => 2,
+            Timed::Decay(..) => 3,
+            Timed::Step(_) => 4,
+        }
+    }
+
+    /// Whether the unit itself carries it (compensable on the MCU): the temperature, its
+    /// rate and the decay since power-on; the time and the rig's events only correct the
+    /// calibration.
+    fn of_unit(&self) -> bool {
+        matches!(
+            self,
+            Timed::DT | Timed::Rate | Timed::Decay(Event::PowerOn, _)
+        )
+    }
+
+    /// The unit of the factor, for the coefficient's unit.
+    fn unit(&self) -> &'static str {
+        match self {
+            Timed::DT => "C",
+            Timed::Rate => "(C/min)",
+            Timed::Hours => "h",
+            Timed::Decay(..) | Timed::Step(_) => "",
+        }
+    }
+}
+
+impl fmt::Display for Timed {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Timed::DT => f.write_str("dT"),
+            Timed::Rate => f.write_str("dTdt"),
+            Timed::Hours => f.write_str("t"),
+            Timed::Decay(e, tau) => write!(f, "decay({},{})", e.name(), tau_text(*tau)),
+            Timed::Step(e) => write!(f, "step({})", e.name()),
+        }
+    }
+}
+
+/// A time constant as the vocabulary writes it: whole minutes from 10 min on, else
+/// seconds.
+fn tau_text(tau_s: f64) -> String {
+    if tau_s >= 600.0 {
+        format!("{:.0}min", tau_s / 60.0)
+    } else {
+        format!("{:.0}s", tau_s)
+    }
+}
+
+/// A discovered term: a product of at most three factors entering one output axis
+/// additively. The force part is `a_x^p0 * a_y^p1 * a_z^p2` (or `abs(a_j)`), the rest
+/// at most two time-varying factors.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LibTerm {
+    /// Powers of a_x, a_y, a_z.
+    pub powers: [u8; 3],
+    /// `abs(a_j)` instead of powers (then `powers` is zero).
+    pub abs: Option<usize>,
+    /// The time-varying factors, in canonical order.
+    pub timed: Vec<Timed>,
+}
+
+impl LibTerm {
+    /// Factors counted with their powers.
+    pub fn factors(&self) -> usize {
+        self.powers.iter().map(|p| *p as usize).sum::<usize>()
+            + usize::from(self.abs.is_some())
+            + self.timed.len()
+    }
+
+    /// The decay's time constant (s), when it has one: a structural unknown, profiled.
+    pub fn tau_s(&self) -> Option<f64> {
+        self.timed.iter().find_map(|t| match t {
+            Timed::Decay(_, tau) => Some(*tau),
+            Timed::DT | Timed::Rate | Timed::Hours | Timed::Step(_) => None,
+        })
+    }
+
+    /// The same term with the decay's time constant `tau_s`.
+    pub fn with_tau(&self, tau_s: f64) -> LibTerm {
+        let mut t = self.clone();
+        for f in &mut t.timed {
+            if let Timed::Decay(e, _) = f {
+                *f = Timed::Decay(*e, tau_s);
+            }
+        }
+        t
+    }
+
+    /// The same term with any decay's time constant left out: what identifies a family.
+    pub fn family(&self) -> String {
+        self.with_tau(0.0).to_string()
+    }
+
+    /// Whether the unit carries it (the MCU compensates it): every factor a state of the
+    /// unit. Terms in time or the rig's events only correct the calibration, like a
+    /// fixture error.
+    pub fn of_unit(&self) -> bool {
+        self.timed.iter().all(Timed::of_unit)
+    }
+
+    /// The coefficient's unit, the recording's output unit being `ou`.
+    pub fn coefficient_unit(&self, ou: &str) -> String {
+        let mut parts: Vec<String> = Vec::new();
+        let g: u8 = self.powers.iter().sum::<u8>() + u8::from(self.abs.is_some());
+        match g {
+            0 => {}
+            1 => parts.push("g".into()),
+            n => parts.push(format!("g^{n}")),
+        }
+        for t in &self.timed {
+            let u = t.unit();
+            if !u.is_empty() {
+                parts.push(u.to_string());
+            }
+        }
+        match parts.len() {
+            0 => ou.to_string(),
+            1 => format!("{ou}/{}", parts[0]),
+            _ => format!("{ou}/({})", parts.join("*")),
+        }
+    }
+
+    /// The force part at specific force `a` (g).
+    pub fn force(&self, a: [f64; 3]) -> f64 {
+        match self.abs {
+            Some(j) => a[j].abs(),
+            None => (0..3).map(|j| a[j].powi(self.powers[j] as i32)).product(),
+        }
+    }
+
+    /// The positions that would identify the force part where the recording's do not,
+    /// in words (the same words for every term of one kind, so a report can group them).
+    pub fn identifying_positions(&self) -> &'static str {
+        let axes = (0..3)
+            .filter(|&j| self.powers[j] > 0 || self.abs == Some(j))
+            .count();
+        let odd = self.powers.iter().any(|p| *p >= 3);
+        match axes {
+            0 => "a recording that varies it apart from the model's own terms",
+            1 if odd => "positions with that component between -1 and +1 g, where its cube differs from itself (tilted, e.g. PP1..PP6)",
+            1 => "positions with that component between 0 and 1 g (tilted, e.g. PP1..PP6)",
+            _ => "positions with those components all nonzero (tilted between those axes: the 45-degree edge or corner positions of an 18- or 24-position design)",
+        }
+    }
+}
+
+impl fmt::Display for LibTerm {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mut parts: Vec<String> = Vec::new();
+        if let Some(j) = self.abs {
+            parts.push(format!("abs(a_{})", AXES[j]));
+        }
+        for j in 0..3 {
+            match self.powers[j] {
+                0 => {}
+                1 => parts.push(format!("a_{}", AXES[j])),
+                p => parts.push(format!("a_{}^{p}", AXES[j])),
+            }
+        }
+        parts.extend(self.timed.iter().map(ToString::to_string));
+        f.write_str(&parts.join("*"))
+    }
+}
+
+/// A candidate of the library: a term on one output axis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    /// The term.
+    pub term: LibTerm,
+    /// The output axis it enters.
+    pub axis: usize,
+}
+
+impl fmt::Display for Candidate {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} on {}", self.term, AXES[self.axis])
+    }
+}
+
+/// The decays' time constants tried before refinement, s: from 10 s by a factor 2.5 to
+/// about 2.7 h (the settling of a tilter move to a stop's soak).
+pub const DECAY_GRID_S: [f64; 8] = [10.0, 25.0, 62.5, 156.0, 390.0, 977.0, 2441.0, 6104.0];
+
+/// What a recording can judge of the time-varying factors: the specific force's terms
+/// need only the positions, `dT` more than one temperature, the time and the events a
+/// measured floor (a time series whose noise is known), `dTdt` a temperature that moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Reach {
+    /// More than one temperature.
+    pub temperature: bool,
+    /// The floor is measured: time and event terms can be judged.
+    pub time: bool,
+    /// The temperature moves (and the floor is measured): rate terms.
+    pub rate: bool,
+}
+
+impl Reach {
+    fn reaches(&self, f: &Timed) -> bool {
+        match f {
+            Timed::DT => self.temperature,
+            Timed::Rate => self.rate,
+            Timed::Hours | Timed::Decay(..) | Timed::Step(_) => self.time,
+        }
+    }
+}
+
+/// The force parts of the library: degree 2 and 3 monomials of the components and their
+/// magnitudes, and (with a time-varying factor) the components themselves.
+fn force_parts(with_timed: bool) -> Vec<([u8; 3], Option<usize>)> {
+    let mut out = Vec::new();
+    for p0 in 0..=3u8 {
+        for p1 in 0..=3u8 {
+            for p2 in 0..=3u8 {
+                let d = p0 + p1 + p2;
+                let keep = if with_timed {
+                    (1..=2).contains(&d)
+                } else {
+                    (2..=3).contains(&d)
+                };
+                if keep {
+                    out.push(([p0, p1, p2], None));
+                }
+            }
+        }
+    }
+    out.extend((0..3).map(|j| ([0, 0, 0], Some(j))));
+    out
+}
+
+/// The time-varying parts: one factor, or dT times another.
+fn timed_parts(power_cycled: bool) -> Vec<Vec<Timed>> {
+    let tau = DECAY_GRID_S[0];
+    let mut one = vec![
+        Timed::DT,
+        Timed::Rate,
+        Timed::Hours,
+        Timed::Decay(Event::PowerOn, tau),
+        Timed::Decay(Event::Stop, tau),
+        Timed::Decay(Event::Position, tau),
+    ];
+    if power_cycled {
+        one.push(Timed::Step(Event::PowerOn));
+    }
+    let mut out: Vec<Vec<Timed>> = one.iter().map(|t| vec![*t]).collect();
+    out.extend(
+        one.iter()
+            .filter(|t| !matches!(t, Timed::DT))
+            .map(|t| vec![Timed::DT, *t]),
+    );
+    out
+}
+
+/// Whether a catalogue effect or the baseline already expresses `term` on `axis`: the
+/// baseline's offset and K row with their temperature polynomial (up to `order`),
+/// `temp_rate` (dTdt alone), `warmup_drift` (decay since power-on alone),
+/// `nonlinearity_k2` and `scale_asymmetry` (a_i^2 and |a_i| on axis i).
+fn catalogue_expresses(term: &LibTerm, axis: usize, order: usize) -> bool {
+    let degree: u8 = term.powers.iter().sum();
+    let only_dt = term.timed.iter().all(|t| matches!(t, Timed::DT));
+    let dt_power = term.timed.len();
+    if term.abs.is_none() && degree <= 1 && only_dt && dt_power <= order {
+        return true;
+    }
+    if term.abs.is_none() && degree == 0 {
+        return matches!(
+            term.timed.as_slice(),
+            [Timed::Rate] | [Timed::Decay(Event::PowerOn, _)]
+        );
+    }
+    if term.timed.is_empty() {
+        let own_square = degree == 2 && term.powers[axis] == 2;
+        return own_square || term.abs == Some(axis);
+    }
+    false
+}
+
+/// The library for `data`: every term of at most three factors no catalogue effect
+/// expresses (given the baseline's temperature order `order`), on every axis, its
+/// decays at the first point of [`DECAY_GRID_S`] (the search tries the grid).
+pub fn library(data: &Data, order: usize, scope: Reach) -> Vec<Candidate> {
+    let power_cycled = !data.rec.power_off.is_empty();
+    let mut terms: Vec<LibTerm> = Vec::new();
+    for (powers, abs) in force_parts(false) {
+        terms.push(LibTerm {
+            powers,
+            abs,
+            timed: Vec::new(),
+        });
+    }
+    let timed = timed_parts(power_cycled);
+    for t in &timed {
+        terms.push(LibTerm {
+            powers: [0; 3],
+            abs: None,
+            timed: t.clone(),
+        });
+    }
+    for (powers, abs) in force_parts(true) {
+        for t in &timed {
+            let term = LibTerm {
+                powers,
+                abs,
+                timed: t.clone(),
+            };
+            if term.factors() <= 3 {
+                terms.push(term);
+            }
+        }
+    }
+    for t in &mut terms {
+        t.timed.sort_by_key(Timed::rank);
+    }
+    terms.retain(|t| t.timed.iter().all(|f| scope.reaches(f)));
+    let mut out = Vec::new();
+    for term in terms {
+        for axis in 0..3 {
+            if !catalogue_expresses(&term, axis, order) {
+                out.push(Candidate {
+                    term: term.clone(),
+                    axis,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The events of a recording and its clock, for the time-varying factors (each factor
+/// computed per row when a term needs it).
+pub struct Series {
+    /// Per event, the event times in order (s).
+    events: [Vec<f64>; 3],
+    /// `t_s` per row.
+    t: Vec<f64>,
+}
+
+/// The rate estimator's time constant for `dTdt` terms, s: the firmware's own rate
+/// estimate for locating (a minute smooths the sensor's steps and follows a ramp).
+pub const RATE_TAU_S: f64 = 60.0;
+
+impl Series {
+    /// The events and clock of `data`'s recording.
+    pub fn new(data: &Data) -> Series {
+        let rec = data.rec;
+        let t: Vec<f64> = rec.rows.iter().map(|r| r.t_s).collect();
+        let t_first = t.first().copied().unwrap_or(0.0);
+        let mut power: Vec<f64> = vec![t_first];
+        power.extend(rec.power_off.iter().map(|s| s[1]));
+        power.sort_by(f64::total_cmp);
+        let position: Vec<f64> = rec
+            .dwells
+            .iter()
+            .filter_map(|d| rec.rows.get(d.start).map(|r| r.t_s))
+            .collect();
+        Series {
+            events: [power, data.stop_starts.clone(), position],
+            t,
+        }
+    }
+
+    fn events(&self, e: Event) -> &[f64] {
+        match e {
+            Event::PowerOn => &self.events[0],
+            Event::Stop => &self.events[1],
+            Event::Position => &self.events[2],
+        }
+    }
+
+    /// A time-varying factor per row.
+    fn factor(&self, data: &Data, f: &Timed) -> Vec<f64> {
+        match *f {
+            Timed::DT => data.rec.rows.iter().map(|r| r.temp_c - data.t0).collect(),
+            Timed::Rate => regressors::rates(data.rec, RATE_TAU_S)
+                .into_iter()
+                .map(|v| v * 60.0)
+                .collect(),
+            Timed::Hours => {
+                let t0 = self.t.first().copied().unwrap_or(0.0);
+                self.t.iter().map(|x| (x - t0) / 3600.0).collect()
+            }
+            // since power-on on the firmware's own clock, as the MCU will run it
+            Timed::Decay(Event::PowerOn, tau) => regressors::warmup(data.rec, tau, &[]),
+            Timed::Decay(e, tau) => {
+                let ev = self.events(e);
+                let mut k = 0usize;
+                self.t
+                    .iter()
+                    .map(|&t| {
+                        while k < ev.len() && ev[k] <= t {
+                            k += 1;
+                        }
+                        match k.checked_sub(1).and_then(|i| ev.get(i)) {
+                            Some(&at) => (-(t - at) / tau).exp(),
+                            None => 0.0,
+                        }
+                    })
+                    .collect()
+            }
+            Timed::Step(e) => {
+                // from the first event after the recording's start on
+                let ev = self.events(e);
+                let first = ev.get(usize::from(e == Event::PowerOn)).copied();
+                self.t
+                    .iter()
+                    .map(|&t| f64::from(first.is_some_and(|at| t >= at)))
+                    .collect()
+            }
+        }
+    }
+
+    /// The window means of a term's time-varying part (1 when it has none).
+    pub fn timed_means(&self, data: &Data, timed: &[Timed]) -> Vec<f64> {
+        if timed.is_empty() {
+            return vec![1.0; data.obs.len()];
+        }
+        let mut prod = self.factor(data, &timed[0]);
+        for f in &timed[1..] {
+            for (p, v) in prod.iter_mut().zip(self.factor(data, f)) {
+                *p *= v;
+            }
+        }
+        data.means(&prod)
+    }
+}
+
+/// The column of a term on its axis: one value per window (the force part at the
+/// window's position times the window mean of the time-varying part).
+pub fn column(data: &Data, series: &Series, term: &LibTerm) -> Vec<f64> {
+    let m = series.timed_means(data, &term.timed);
+    data.obs
+        .iter()
+        .zip(m)
+        .map(|(o, v)| term.force(o.a) * v)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn term(powers: [u8; 3], abs: Option<usize>, timed: Vec<Timed>) -> LibTerm {
+        LibTerm { powers, abs, timed }
+    }
+
+    #[test]
+    fn terms_are_written_in_the_catalogue_vocabulary() {
+        let cases = [
+            (term([1, 1, 0], None, vec![]), "a_x*a_y"),
+            (term([3, 0, 0], None, vec![]), "a_x^3"),
+            (term([0, 0, 2], None, vec![Timed::DT]), "a_z^2*dT"),
+            (term([1, 0, 0], None, vec![Timed::Hours]), "a_x*t"),
+            (term([0; 3], None, vec![Timed::Hours]), "t"),
+            (
+                term([0; 3], None, vec![Timed::Decay(Event::Position, 25.0)]),
+                "decay(position,25s)",
+            ),
+            (
+                term([0; 3], None, vec![Timed::Step(Event::PowerOn)]),
+                "step(power_on)",
+            ),
+            (
+                term(
+                    [0; 3],
+                    None,
+                    vec![Timed::DT, Timed::Decay(Event::PowerOn, 1200.0)],
+                ),
+                "dT*decay(power_on,20min)",
+            ),
+            (term([0; 3], Some(1), vec![Timed::Rate]), "abs(a_y)*dTdt"),
+        ];
+        for (t, want) in cases {
+            assert_eq!(t.to_string(), want);
+        }
+    }
+
+    #[test]
+    fn units_follow_the_factors() {
+        let t = term([2, 0, 0], None, vec![Timed::DT]);
+        assert_eq!(t.coefficient_unit("V"), "V/(g^2*C)");
+        let t = term([1, 0, 0], None, vec![Timed::Rate]);
+        assert_eq!(t.coefficient_unit("V"), "V/(g*(C/min))");
+        let t = term([0; 3], None, vec![Timed::Step(Event::PowerOn)]);
+        assert_eq!(t.coefficient_unit("mV"), "mV");
+        let t = term([1, 1, 0], None, vec![]);
+        assert_eq!(t.coefficient_unit("V"), "V/g^2");
+    }
+
+    #[test]
+    fn the_catalogue_keeps_its_own_terms() {
+        // K2 and the asymmetry on their own axis, the baseline's temperature terms, the
+        // rate and the warm-up alone are the catalogue's
+        assert!(catalogue_expresses(&term([2, 0, 0], None, vec![]), 0, 3));
+        assert!(!catalogue_expresses(&term([2, 0, 0], None, vec![]), 1, 3));
+        assert!(catalogue_expresses(&term([0; 3], Some(2), vec![]), 2, 3));
+        assert!(!catalogue_expresses(&term([0; 3], Some(2), vec![]), 0, 3));
+        assert!(catalogue_expresses(
+            &term([1, 0, 0], None, vec![Timed::DT]),
+            1,
+            1
+        ));
+        assert!(!catalogue_expresses(
+            &term([1, 0, 0], None, vec![Timed::DT, Timed::DT]),
+            1,
+            1
+        ));
+        assert!(catalogue_expresses(
+            &term([0; 3], None, vec![Timed::Rate]),
+            0,
+            3
+        ));
+        assert!(catalogue_expresses(
+            &term([0; 3], None, vec![Timed::Decay(Event::PowerOn, 60.0)]),
+            0,
+            3
+        ));
+        assert!(!catalogue_expresses(
+            &term([0; 3], None, vec![Timed::Decay(Event::Stop, 60.0)]),
+            0,
+            3
+        ));
+        assert!(!catalogue_expresses(
+            &term([1, 0, 0], None, vec![Timed::Rate]),
+            0,
+            3
+        ));
+    }
+
+    #[test]
+    fn only_the_units_own_state_is_compensated_on_the_mcu() {
+        assert!(term([1, 1, 0], None, vec![]).of_unit());
+        assert!(term(
+            [0; 3],
+            None,
+            vec![Timed::DT, Timed::Decay(Event::PowerOn, 60.0)]
+        )
+        .of_unit());
+        assert!(!term([1, 0, 0], None, vec![Timed::Hours]).of_unit());
+        assert!(!term([0; 3], None, vec![Timed::Decay(Event::Position, 25.0)]).of_unit());
+        assert!(!term([0; 3], None, vec![Timed::Step(Event::PowerOn)]).of_unit());
+    }
+}

@@ -61,10 +61,10 @@ fn blind_suite_by_class() {
 }
 
 /// Whether the discovery targets are judged by their pass rule (their term named on
-/// their axis, reproduced, the residual at 1.5x the floor): off until the diagnosis
-/// searches the term library and `blind::run_with` fills `Outcome::discovered` from its
-/// `discovered` findings; switch it on then (`true`).
-const JUDGE_DISCOVERY_TARGETS: bool = false;
+/// their axis, reproduced, the residual at 1.5x the floor): the diagnosis searches the
+/// term library and `blind::run_with` fills `Outcome::discovered` from its `discovered`
+/// findings.
+const JUDGE_DISCOVERY_TARGETS: bool = true;
 
 /// The classes beyond the catalogue in the short suite, one case each (a cross-coupling
 /// a_i*a_j on 18 positions, a two-level bias beside a power cycle, a fixture error of an

@@ -76,8 +76,20 @@ pub fn run_with(case: &Case, rules: Rules) -> Outcome {
         Ok(d) => d,
         Err(e) => return fail(format!("diagnose: {e}")),
     };
-    let found: Vec<EffectId> = d.findings.iter().map(|f| f.effect).collect();
-    let ambiguous: Vec<Vec<EffectId>> = d.ambiguous.iter().map(|a| a.candidates.clone()).collect();
+    // the catalogue's names; a discovered term is judged as a claim of its own
+    let found: Vec<EffectId> = d
+        .findings
+        .iter()
+        .map(|f| f.effect)
+        .filter(|e| *e != EffectId::Discovered)
+        .collect();
+    // a set of discovered terms the design cannot tell apart names no catalogue effect
+    let ambiguous: Vec<Vec<EffectId>> = d
+        .ambiguous
+        .iter()
+        .filter(|a| a.terms.is_empty())
+        .map(|a| a.candidates.clone())
+        .collect();
     let mut named: Vec<EffectId> = found.clone();
     for a in &ambiguous {
         named.extend(a.iter().copied());
@@ -109,9 +121,18 @@ pub fn run_with(case: &Case, rules: Rules) -> Outcome {
         unexplained_axis: d.unexplained.first().map(|h| h.axis.clone()),
         quality: d.quality.iter().map(|q| q.kind).collect(),
         fixture_claims: d.findings.iter().filter_map(FixtureClaim::of).collect(),
-        // the search over the term library fills this from its `discovered` findings:
-        // `DiscoveredClaim { term, axes, reproduced }` of each (see its doc)
-        discovered: Vec::new(),
+        discovered: d
+            .findings
+            .iter()
+            .filter(|f| f.effect == EffectId::Discovered)
+            .filter_map(|f| {
+                Some(DiscoveredClaim {
+                    term: f.term.clone()?,
+                    axes: f.axes.clone(),
+                    reproduced: f.reproduced,
+                })
+            })
+            .collect(),
         note: String::new(),
     }
 }

@@ -7,7 +7,7 @@
 //! record store every unit's run is recorded (an error too), in chunks of
 //! [`RECORD_CHUNK`] units, one transaction each.
 use crate::acceptance::{judge, Acceptance, Spec, Verdict};
-use crate::blob::{build_blob, singular_k};
+use crate::blob::{build_blob_with_terms, singular_k};
 use crate::data::positions::{Positions, Role};
 use crate::data::recording::Recording;
 use crate::diagnose::contract::Contract;
@@ -121,6 +121,14 @@ struct UnitJson<'a> {
     diagnosis: Option<Contract>,
 }
 
+/// A unit's model for its blob: the calibration, the diagnosis when the batch diagnoses,
+/// and the discovered terms of the unit's state the blob's term table carries.
+struct UnitModel {
+    cal: firmware_core::temperature::Calibration<f64>,
+    diagnosis: Option<Contract>,
+    terms: Vec<crate::terms::AxisTerm>,
+}
+
 /// The blob's model of one unit (and its diagnosis when the batch diagnoses); fills the
 /// unit's model and uncertainty, the route's notes and the static route's selection.
 fn unit_model(
@@ -129,10 +137,7 @@ fn unit_model(
     r: &mut UnitResult,
     notes: &mut Vec<String>,
     selection: &mut Option<Selection>,
-) -> Result<(
-    firmware_core::temperature::Calibration<f64>,
-    Option<Contract>,
-)> {
+) -> Result<UnitModel> {
     let req = ModelRequest {
         kind: o.model,
         order: None,
@@ -154,7 +159,11 @@ fn unit_model(
             format!("diagnosed ({})", names.join("+"))
         };
         r.at_t0_sigma = d.coefficient_sigma(rec.t0_c);
-        (d.calibration(rec.t0_c)?, Some(d.contract()))
+        UnitModel {
+            cal: d.calibration(rec.t0_c)?,
+            diagnosis: Some(d.contract()),
+            terms: d.terms()?,
+        }
     } else {
         let routed = fit_on(rec, None, &req, notes)?;
         r.model = match &routed {
@@ -165,7 +174,11 @@ fn unit_model(
             Routed::Dynamic { .. } => format!("{} (dynamic route)", routed.describe()),
         };
         r.at_t0_sigma = routed.coefficient_sigma(rec.t0_c);
-        (routed.calibration(rec, Flash::default())?.cal, None)
+        UnitModel {
+            cal: routed.calibration(rec, Flash::default())?.cal,
+            diagnosis: None,
+            terms: Vec::new(),
+        }
     })
 }
 
@@ -198,9 +211,14 @@ fn fit_unit(
     }
     let mut notes = Vec::new();
     let mut selection = None;
-    let (cal, diagnosis) = unit_model(&rec, o, r, &mut notes, &mut selection)?;
+    let UnitModel {
+        cal,
+        diagnosis,
+        terms,
+    } = unit_model(&rec, o, r, &mut notes, &mut selection)?;
     r.at_t0 = Some(cal.at_t0());
-    let (blob, mut bytes, dep) = build_blob(&r.unit, &rec.output_unit, &cal)?;
+    let (blob, mut bytes, (dep, _)) =
+        build_blob_with_terms(&r.unit, &rec.output_unit, &cal, &terms)?;
     if let Some(t) = &o.store {
         let mut rc = t.record(Recorded::Batch, &r.unit, path)?;
         rc.input_sha256 = Some(sha);

@@ -2,7 +2,7 @@
 use super::args::{BlindArgs, DiagnoseArgs, ReportArgs};
 use super::common::{load_for_blob, load_to_fit, oriented, w};
 use crate::analysis::{analyse, table};
-use crate::blob::build_blob;
+use crate::blob::build_blob_with_terms;
 use crate::data::recording::Recording;
 use crate::diagnose::contract::BlobNote;
 use crate::error::{ErrorKind, HostError, Result};
@@ -28,11 +28,16 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
     let mut c = d.contract();
     let name = a.serial.as_deref().unwrap_or(rec.serial());
     let built = match &a.out {
-        Some(_) => Some(build_blob(
-            name,
-            &rec.output_unit,
-            &d.calibration(rec.t0_c)?,
-        )?),
+        // the discovered terms of the unit's state go in the blob's term table
+        Some(_) => Some(
+            build_blob_with_terms(
+                name,
+                &rec.output_unit,
+                &d.calibration(rec.t0_c)?,
+                &d.terms()?,
+            )
+            .map(|(blob, bytes, (dep, _))| (blob, bytes, dep))?,
+        ),
         None => None,
     };
     let run = super::records::Run {
@@ -48,6 +53,7 @@ pub(super) fn diagnose(a: DiagnoseArgs, out: &mut dyn Write, err: &mut dyn Write
             path: b.display().to_string(),
             bytes: bytes.len(),
             physics: blob.calibration.physics.is_some(),
+            discovered_terms: blob.terms.len(),
             f32_departure_g: dep,
         });
     }

@@ -219,6 +219,8 @@ pub struct BlobNote {
     pub bytes: usize,
     /// Whether it carries in-flight physics terms.
     pub physics: bool,
+    /// The discovered terms of the unit's state in its term table (format 5 when any).
+    pub discovered_terms: usize,
     /// Largest f32-vs-f64 departure, g.
     pub f32_departure_g: f64,
 }

@@ -89,6 +89,12 @@ impl Diagnosis<'_> {
         self.flashed.calibration(t0, None).map(|(cal, _)| cal)
     }
 
+    /// The discovered terms of the unit's state the blob carries in its term table (see
+    /// [`Flashed::terms`]).
+    pub fn terms(&self) -> Result<Vec<crate::terms::AxisTerm>> {
+        self.flashed.terms()
+    }
+
     /// The 1-sigma of the flashed model's 12 coefficients at temperature `t` (see
     /// [`metrics::coefficient_sigma`]).
     pub fn coefficient_sigma(&self, t: f64) -> [f64; 12] {

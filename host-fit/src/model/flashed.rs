@@ -14,8 +14,10 @@ use crate::model::effects::Extra;
 use crate::model::params::{Param, Term};
 use crate::model::profile::{time_constant, Grid};
 use crate::model::solve::{Depth, Fit};
+use crate::terms::AxisTerm;
 use firmware_core::model::{K_INDEX, U0_INDEX};
 use firmware_core::temperature::{Calibration, Physics, TempModel};
+use firmware_core::terms::Axis;
 
 /// The model the blob carries.
 #[derive(Debug, Clone)]
@@ -71,6 +73,38 @@ impl Flashed {
         let cache = Cache::choose(&cal, floor_mg, given);
         cal.update_step_c = cache.step_c;
         Ok((cal, cache))
+    }
+
+    /// The discovered terms of the unit's state in the model (force factors, `dT`,
+    /// `dTdt`, `decay(power_on,TAU)`), as a blob's term table carries them with their
+    /// fitted coefficients; the terms of the rig or the recording's time correct the
+    /// calibration only and are left out (they are reported, never flashed).
+    pub fn terms(&self) -> Result<Vec<AxisTerm>> {
+        let mut out = Vec::new();
+        for (e, x) in self.fit.spec.extras.iter().enumerate() {
+            let Extra::Discovered { term, axis } = x else {
+                continue;
+            };
+            if !term.of_unit() {
+                continue;
+            }
+            let text = term.to_string();
+            let parsed: crate::terms::Term = text.parse().map_err(|err| {
+                HostError::new(
+                    ErrorKind::Internal,
+                    format!("the discovered term `{text}` is not in the blob's vocabulary: {err}"),
+                )
+            })?;
+            let Some(&fw_axis) = Axis::ALL.get(*axis) else {
+                continue;
+            };
+            out.push(AxisTerm {
+                term: parsed,
+                axis: fw_axis,
+                coefficient: self.fit.term(e, Term::Discovered)[*axis],
+            });
+        }
+        Ok(out)
     }
 
     /// The in-flight terms in the firmware's form, every time constant in seconds (the

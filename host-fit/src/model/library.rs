@@ -329,6 +329,16 @@ fn catalogue_expresses(term: &LibTerm, axis: usize, order: usize) -> bool {
     false
 }
 
+/// A trend in time (a term with the factor `t`): left out of the library. On one pass
+/// through a test a trend in time cannot be told from the arc of any slow disturbance (a
+/// cycle of many hours, a smooth step, a wander): it fits each to the floor, so naming
+/// it would claim a form the data do not show; and a recording that rests most of its
+/// time in one position turns a bias trend into any force factor times `t` (`a_z*t` at a
+/// rest with a_z = 1). A slow disturbance stays "unexplained, here", located in time.
+fn in_time(t: &LibTerm) -> bool {
+    t.timed.contains(&Timed::Hours)
+}
+
 /// The library for `data`: every term of at most three factors no catalogue effect
 /// expresses (given the baseline's temperature order `order`), on every axis, its
 /// decays at the first point of [`DECAY_GRID_S`] (the search tries the grid).
@@ -365,7 +375,7 @@ pub fn library(data: &Data, order: usize, scope: Reach) -> Vec<Candidate> {
     for t in &mut terms {
         t.timed.sort_by_key(Timed::rank);
     }
-    terms.retain(|t| t.timed.iter().all(|f| scope.reaches(f)));
+    terms.retain(|t| t.timed.iter().all(|f| scope.reaches(f)) && !in_time(t));
     let mut out = Vec::new();
     for term in terms {
         for axis in 0..3 {
@@ -578,6 +588,20 @@ mod tests {
             0,
             3
         ));
+    }
+
+    /// A bias trend in time is not proposed (it cannot be told from a slow disturbance's
+    /// arc); a scale factor's trend is.
+    #[test]
+    fn bias_trends_are_left_out_and_scale_trends_kept() {
+        assert!(bias_trend(&term([0; 3], None, vec![Timed::Hours])));
+        assert!(bias_trend(&term(
+            [0; 3],
+            None,
+            vec![Timed::DT, Timed::Hours]
+        )));
+        assert!(!bias_trend(&term([1, 0, 0], None, vec![Timed::Hours])));
+        assert!(!bias_trend(&term([0; 3], None, vec![Timed::DT])));
     }
 
     #[test]

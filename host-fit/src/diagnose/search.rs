@@ -928,7 +928,7 @@ impl Search<'_, '_> {
                 out.rounds.push(round);
                 break;
             };
-            round.found = Some(format!("{}", extra.form()));
+            round.found = Some(extra.form().to_string());
             state.current = reorder(data, &fit, self.scope.max_order);
             state.current = checked(data, state.current.clone(), &state.regions);
             let kept = state.current.spec.extras.contains(&extra);

@@ -590,18 +590,19 @@ mod tests {
         ));
     }
 
-    /// A bias trend in time is not proposed (it cannot be told from a slow disturbance's
-    /// arc); a scale factor's trend is.
+    /// A trend in time is not proposed (it cannot be told from a slow disturbance's
+    /// arc); the unit's states and the rig's events are.
     #[test]
-    fn bias_trends_are_left_out_and_scale_trends_kept() {
-        assert!(bias_trend(&term([0; 3], None, vec![Timed::Hours])));
-        assert!(bias_trend(&term(
-            [0; 3],
+    fn trends_in_time_are_left_out() {
+        assert!(in_time(&term([0; 3], None, vec![Timed::Hours])));
+        assert!(in_time(&term([0; 3], None, vec![Timed::DT, Timed::Hours])));
+        assert!(in_time(&term([1, 0, 0], None, vec![Timed::Hours])));
+        assert!(!in_time(&term([0; 3], None, vec![Timed::DT])));
+        assert!(!in_time(&term(
+            [1, 0, 0],
             None,
-            vec![Timed::DT, Timed::Hours]
+            vec![Timed::Decay(Event::Position, 25.0)]
         )));
-        assert!(!bias_trend(&term([1, 0, 0], None, vec![Timed::Hours])));
-        assert!(!bias_trend(&term([0; 3], None, vec![Timed::DT])));
     }
 
     #[test]

@@ -345,10 +345,13 @@ pub fn determined(data: &Data, f: &Fit, e: usize, phi: f64) -> bool {
     curv > 0.0 && (2.0 * phi / curv).sqrt() <= limit
 }
 
+/// An extra with another value of its time constant.
+type WithTau<'a> = Box<dyn Fn(f64) -> Extra + 'a>;
+
 /// The continuous time constant of extra `x` (one-pole lag, rate estimator, warm-up, a
 /// discovered term's decay) and the extra with another value of it; None for a form
 /// without one.
-fn time_constant_of(x: &Extra) -> Option<(f64, Box<dyn Fn(f64) -> Extra + '_>)> {
+fn time_constant_of(x: &Extra) -> Option<(f64, WithTau<'_>)> {
     match x {
         Extra::Lag { taus } if taus.iter().all(|t| *t == taus[0] && t[1] == 0.0) => Some((
             taus[0][0],

@@ -205,7 +205,7 @@ impl Record {
         b.text("time_utc", Some(&self.time_utc));
         b.text("host_fit_version", Some(&self.version));
         b.text("host_fit_commit", Some(&self.commit));
-        b.text("command", Some(&self.command.name()));
+        b.text("command", Some(self.command.name()));
         b.text("options", Some(&self.options.to_string()));
         b.text("lot", self.lot.as_deref());
         b.text("input", Some(&self.input));

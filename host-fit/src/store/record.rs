@@ -484,7 +484,7 @@ mod tests {
     #[test]
     fn closed_sets_are_named_once_and_read_back() {
         for c in Command::ALL {
-            assert_eq!(from_name::<Command>(&c.name()), Some(c));
+            assert_eq!(from_name::<Command>(c.name()), Some(c));
         }
         assert_eq!(Command::Batch.name(), "batch");
         for v in [

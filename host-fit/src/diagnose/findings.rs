@@ -46,15 +46,15 @@ pub struct Finding {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position: Option<String>,
     /// The term in the catalogue's vocabulary, for a discovered term (`a_x*a_y`).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub term: Option<String>,
     /// What a discovered term corrects: the unit in flight (the blob compensates it), or
     /// only the calibration (a term of the rig or of the test's time).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub corrects: Option<Corrects>,
     /// For a discovered term: the library terms this design cannot tell from it (`term
     /// on axis`); it is named as the simplest of them (fewest factors).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub equivalent: Vec<String>,
 }
 

@@ -5,7 +5,7 @@
 //! that moves from a lot on) with the rule such a shift trips, and a stable process no
 //! more than the stated false-alarm rate; bad stores are refused, named, left alone.
 use host_fit::simulate::{PAPER_UNIT, PAPER_UNIT_TEMPS};
-use host_fit::store::record::{blob_run_id, from_name, name_of, Command, Record};
+use host_fit::store::record::{blob_run_id, Command, Record};
 use host_fit::store::trend::all_rules_rate;
 use host_fit::store::Store;
 use serde_json::Value;
@@ -140,7 +140,7 @@ fn assert_records_hold_what_was_made(
     let j = v.judged.as_ref().unwrap();
     assert_eq!(
         Some(j.verdict),
-        from_name(ver["acceptance"].as_str().unwrap())
+        ver["acceptance"].as_str().unwrap().parse().ok()
     );
     assert_eq!(j.reason, ver["reason"].as_str().unwrap());
     close(v.worst_dg_mg.unwrap(), worst(ver));
@@ -156,7 +156,7 @@ fn assert_records_hold_what_was_made(
     // diagnose: the contract's verdict and findings, its blob
     assert_eq!(
         d.diagnosis_verdict,
-        from_name(diag["verdict"].as_str().unwrap())
+        diag["verdict"].as_str().unwrap().parse().ok()
     );
     assert_eq!(d.findings.as_ref(), Some(&diag["findings"]));
     assert_eq!(d.blob.as_deref(), Some(&std::fs::read(dblob).unwrap()[..]));
@@ -363,10 +363,7 @@ fn assert_default_store_matches_the_files(root: &Path, dir: &Path, n: usize) {
             Some(sha256sum(Path::new(file)).as_str())
         );
         let j = r.judged.as_ref().unwrap();
-        assert_eq!(
-            (name_of(&j.verdict).as_str(), j.reason.as_str()),
-            (acc, reason)
-        );
+        assert_eq!((j.verdict.name(), j.reason.as_str()), (acc, reason));
         let blob = own.join(format!("{unit}.blob"));
         assert_eq!(r.blob.as_deref(), Some(&std::fs::read(&blob).unwrap()[..]));
         assert_eq!(blob_run_id(r.blob.as_ref().unwrap()), Some(r.run_id));

@@ -4,7 +4,7 @@
 //! and `store copy` use these three and nothing else, on either backend; a test holds
 //! the names of the three (and of a new store's table) equal.
 use super::record::UnitStatus;
-use super::record::{from_name, name_of, AtT0, Command, Judged, Record, RunId, Trace, COEFFS};
+use super::record::{AtT0, Command, Judged, Record, RunId, Trace, COEFFS};
 use firmware_core::model::COEFF_NAMES;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -234,14 +234,14 @@ impl Record {
             "acceptance",
             judged
                 .filter(|j| j.verdict != UnitStatus::NotJudged)
-                .map(|j| name_of(&j.verdict))
+                .map(|j| j.verdict.to_string())
                 .as_deref(),
         );
         b.text("reason", judged.map(|j| j.reason.as_str()));
         b.real("worst_dg_mg", self.worst_dg_mg);
         b.text(
             "diagnosis_verdict",
-            self.diagnosis_verdict.map(|v| name_of(&v)).as_deref(),
+            self.diagnosis_verdict.map(|v| v.to_string()).as_deref(),
         );
         b.text(
             "findings",
@@ -285,7 +285,7 @@ impl Record {
         }
         let judged = match (row.text("acceptance"), row.text("reason")) {
             (Some(v), reason) => Some(Judged {
-                verdict: from_name(&v).ok_or_else(|| named("acceptance", &v))?,
+                verdict: v.parse().ok().ok_or_else(|| named("acceptance", &v))?,
                 reason: reason.unwrap_or_default(),
             }),
             // a reason without a verdict: judged, and a band had nothing to judge
@@ -303,7 +303,7 @@ impl Record {
             time_utc: need("time_utc")?,
             version: need("host_fit_version")?,
             commit: need("host_fit_commit")?,
-            command: from_name::<Command>(&command).ok_or_else(|| named("command", &command))?,
+            command: Command::from_name(&command).ok_or_else(|| named("command", &command))?,
             options: json("options")?.unwrap_or_default(),
             lot: row.text("lot"),
             input: need("input")?,
@@ -325,7 +325,11 @@ impl Record {
             judged,
             worst_dg_mg: row.real("worst_dg_mg"),
             diagnosis_verdict: match row.text("diagnosis_verdict") {
-                Some(v) => Some(from_name(&v).ok_or_else(|| named("diagnosis_verdict", &v))?),
+                Some(v) => Some(
+                    v.parse()
+                        .ok()
+                        .ok_or_else(|| named("diagnosis_verdict", &v))?,
+                ),
                 None => None,
             },
             findings: json("findings")?,

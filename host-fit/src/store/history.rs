@@ -2,7 +2,7 @@
 //! calibration marked (`host-fit history`), and a stored blob re-issued bit for bit
 //! after its CRC is checked (`--blob RUN`).
 use super::db::{Filter, Store};
-use super::record::{name_of, Record, RunId};
+use super::record::{Record, RunId};
 use crate::error::{ErrorKind, HostError, Result};
 use serde::Serialize;
 
@@ -129,12 +129,12 @@ impl History {
             }
             let mut third = Vec::new();
             if let Some(j) = &r.judged {
-                third.push(format!("acceptance {}: {}", name_of(&j.verdict), j.reason));
+                third.push(format!("acceptance {}: {}", j.verdict, j.reason));
             }
             if let Some(dg) = r.worst_dg_mg {
                 third.push(format!("worst verification |dg| {dg:.4} mg"));
             }
-            if let Some(v) = r.diagnosis_verdict.map(|v| name_of(&v)) {
+            if let Some(v) = r.diagnosis_verdict.map(|v| v.to_string()) {
                 let effects: Vec<&str> = r
                     .findings
                     .as_ref()

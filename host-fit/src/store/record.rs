@@ -4,7 +4,6 @@
 use crate::diagnose::contract::Verdict as DiagnosisVerdict;
 use crate::error::{ErrorKind, HostError, Result};
 use firmware_core::model::{COEFF_NAMES, N_COEFFS};
-use serde::de::DeserializeOwned;
 use serde::ser::SerializeStruct;
 use serde::{Deserialize, Serialize, Serializer};
 use sha2::{Digest, Sha256};
@@ -100,20 +99,6 @@ impl Command {
     pub fn from_name(s: &str) -> Option<Command> {
         s.parse().ok()
     }
-}
-
-/// The name a closed set's value serialises to (`pass`, `not_judged`, `batch`, ...): the
-/// one spelling of it, in the store as in the JSON.
-pub fn name_of<T: Serialize>(v: &T) -> String {
-    match serde_json::to_value(v) {
-        Ok(serde_json::Value::String(s)) => s,
-        other => format!("{other:?}"),
-    }
-}
-
-/// The value of a closed set whose serde name is `s` (None for a name it does not have).
-pub fn from_name<T: DeserializeOwned>(s: &str) -> Option<T> {
-    serde_json::from_value(serde_json::Value::String(s.to_string())).ok()
 }
 
 /// How a unit of the batch ended, and the store's acceptance verdict (its serde name is
@@ -484,7 +469,7 @@ mod tests {
     #[test]
     fn closed_sets_are_named_once_and_read_back() {
         for c in Command::ALL {
-            assert_eq!(from_name::<Command>(c.name()), Some(c));
+            assert_eq!(Command::from_name(c.name()), Some(c));
         }
         assert_eq!(Command::Batch.name(), "batch");
         for v in [
@@ -493,10 +478,10 @@ mod tests {
             UnitStatus::NotJudged,
             UnitStatus::Error,
         ] {
-            assert_eq!(from_name::<UnitStatus>(&name_of(&v)), Some(v));
+            assert_eq!(v.name().parse::<UnitStatus>().ok(), Some(v));
         }
-        assert_eq!(name_of(&UnitStatus::NotJudged), "not_judged");
-        assert_eq!(from_name::<Command>("refit"), None);
+        assert_eq!(UnitStatus::NotJudged.name(), "not_judged");
+        assert_eq!(Command::from_name("refit"), None);
         let mut r = Record::new(Command::Verify, None, "SN", Path::new("r.csv")).unwrap();
         r.with_verdict(crate::acceptance::Verdict::Fail, "over");
         assert_eq!(r.judged.as_ref().unwrap().verdict, UnitStatus::Fail);

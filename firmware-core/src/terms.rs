@@ -365,7 +365,8 @@ impl Term {
 /// (1..=9) and ascending, zeros only after the last factor ([`Error::TermFactors`]);
 /// `abs(a_i)` (the even codes 2, 4, 6) and the decay (9) at most once, so never equal to
 /// their neighbour (also `TermFactors`); a decay's TAU positive and finite, 0 without a
-/// decay ([`Error::TermTimeConstant`]).
+/// decay, and that 0 is +0.0, whose bits are all zero, so the entry has one encoding
+/// ([`Error::TermTimeConstant`]).
 #[inline]
 pub fn check_codes(codes: [u8; MAX_FACTORS], tau_s: f32) -> Result<(), Error> {
     let [a, b, c] = codes;
@@ -381,7 +382,8 @@ pub fn check_codes(codes: [u8; MAX_FACTORS], tau_s: f32) -> Result<(), Error> {
     let tau_ok = if decay {
         tau_s > 0.0 && tau_s.is_finite()
     } else {
-        tau_s == 0.0
+        // -0.0 == 0.0, but its sign bit would re-encode as +0.0: not canonical
+        tau_s.to_bits() == 0
     };
     if !tau_ok {
         return Err(Error::TermTimeConstant);
@@ -726,6 +728,11 @@ mod tests {
         );
         assert_eq!(
             Term::from_codes([9, 0, 0], f32::NAN),
+            Err(Error::TermTimeConstant)
+        );
+        // a fuzz find: -0.0 passed `== 0.0` and re-encoded as +0.0
+        assert_eq!(
+            Term::from_codes([1, 0, 0], -0.0),
             Err(Error::TermTimeConstant)
         );
         assert_eq!(

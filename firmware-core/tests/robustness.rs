@@ -5,7 +5,8 @@
 mod common;
 
 use firmware_core::blob::{
-    example_physics, example_terms, Blob, BlobView, OutputUnit, RunId, MAX_BLOB_LEN,
+    example_physics, example_terms, Blob, BlobView, OutputUnit, RunId, FORMAT_VERSION, MAGIC,
+    MAX_BLOB_LEN, OLDEST_FORMAT_VERSION,
 };
 use firmware_core::compensate::{Compensator, ErrorModel, Method, Status};
 use firmware_core::temperature::{Calibration, TempModel};
@@ -144,4 +145,48 @@ proptest! {
             prop_assert_eq!(a.status, b.status);
         }
     }
+}
+
+/// `content` behind a valid magic, version, length and CRC, as the fuzz target
+/// `blob_decode` wraps its input (fuzz/fuzz_targets/common.rs), so a crash input the
+/// fuzzer found replays here byte for byte.
+fn wrap_like_the_fuzzer(content: &[u8]) -> Vec<u8> {
+    let mut b = MAGIC.to_vec();
+    let terms = content.get(2).is_some_and(|f| f & 2 != 0);
+    let version = if terms { FORMAT_VERSION } else { OLDEST_FORMAT_VERSION };
+    b.extend_from_slice(&version.to_le_bytes());
+    let n = u16::try_from(10 + content.len() + 4).unwrap_or(u16::MAX);
+    b.extend_from_slice(&n.to_le_bytes());
+    b.extend_from_slice(&(!n).to_le_bytes());
+    b.extend_from_slice(content);
+    let c = firmware_core::crc::crc32(&b);
+    b.extend_from_slice(&c.to_le_bytes());
+    b
+}
+
+/// Every input the fuzzer once crashed on (tests/data/fuzz-crash-*.bin) now either fails
+/// validation or re-encodes to the very same bytes and reads the same both ways.
+#[test]
+fn fuzz_crash_inputs_are_canonical_or_refused() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let mut seen = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_name().unwrap().to_string_lossy().into_owned();
+        if !name.starts_with("fuzz-crash-") {
+            continue;
+        }
+        seen += 1;
+        let data = std::fs::read(&p).unwrap();
+        let bytes = if data.starts_with(&MAGIC) { data } else { wrap_like_the_fuzzer(&data) };
+        if let Ok(v) = BlobView::new(&bytes) {
+            let b = v.to_blob();
+            assert_eq!(b.validate(), Ok(()), "{name}");
+            let mut buf = [0u8; MAX_BLOB_LEN];
+            let n = b.encode(&mut buf).unwrap();
+            assert_eq!(&buf[..n], &bytes[..], "{name}: encode(decode(b)) != b");
+            assert_eq!(Blob::decode(&bytes).as_ref(), Ok(&b), "{name}");
+        }
+    }
+    assert!(seen > 0, "no fuzz-crash-*.bin under {}", dir.display());
 }

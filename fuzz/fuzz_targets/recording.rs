@@ -11,7 +11,7 @@ fuzz_target!(|data: &[u8]| {
         let nz = host_fit::fit::noise::noise(&rec);
         assert!(nz.sigma.iter().all(|s| s.is_finite()));
         let all = |_: usize| true;
-        for st in host_fit::fit::identify::stops(&rec, &all, 3.0) {
+        for st in host_fit::data::stops::stops(&rec, &all, 3.0) {
             let _ = host_fit::fit::identify::identify_stop(&rec, &st, &nz);
         }
     }

@@ -20,11 +20,13 @@ fn cats_tag_diagnosis() {
 }
 
 #[test]
+#[ignore = "full tier (cargo xtask test --full): the three real recordings diagnosed, 45 s"]
 fn real_recordings_diagnosed() {
     same("real-recordings", &figures::real_recordings().1);
 }
 
 #[test]
+#[ignore = "full tier (cargo xtask test --full): the long blind suite, 17 min on 2 cores"]
 fn blind_long_suite() {
     same("blind-long", &figures::blind_long());
 }

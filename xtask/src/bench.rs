@@ -48,73 +48,6 @@ fn fmt_ns(ns: f64) -> String {
     }
 }
 
-/// The best of three wall-clock times (s) of one `host-fit` run, or None if it fails.
-fn best_of_three(bin: &Path, args: &[String]) -> Option<f64> {
-    (0..3)
-        .map(|_| {
-            let t = std::time::Instant::now();
-            let ok = Command::new(bin)
-                .args(args)
-                .output()
-                .map(|o| o.status.success())
-                .unwrap_or(false);
-            ok.then(|| t.elapsed().as_secs_f64())
-        })
-        .collect::<Option<Vec<f64>>>()
-        .map(|v| v.into_iter().fold(f64::INFINITY, f64::min))
-}
-
-/// The diagnosis of a 10k-row production recording (the in-flight example's unit on a
-/// three-stop profile) and of the 11k-row real wrist recording, end to end through the
-/// release binary (single-threaded), against the targets of 2 s and 10 s.
-fn diagnosis_times(bin: &Path, root: &Path, steps: &mut crate::Steps) -> String {
-    let dir = root.join("target/bench");
-    let _ = std::fs::create_dir_all(&dir);
-    let cfg = dir.join("production-10k.toml");
-    let _ = std::fs::write(
-        &cfg,
-        "[schedule]\npositions = [\"TP1\",\"TP2\",\"TP3\",\"TP4\",\"TP5\",\"TP6\",\"PP1\",\"PP2\",\"PP3\",\"PP4\",\"PP5\",\"PP6\"]\n[[schedule.stops]]\ntemp_c = 20.0\nsoak_s = 1200.0\n[[schedule.stops]]\ntemp_c = -20.0\nsoak_s = 1200.0\n[[schedule.stops]]\ntemp_c = 10.0\nsoak_s = 1200.0\n[effects.nonlinearity_k2]\nvalue = [2e-4, 0.0, -1e-4]\n[effects.temp_rate]\nvalue = [0.03, 0.0, 0.0]\n[effects.warmup_drift]\nd_v = [0.0, 0.0, 4e-4]\ntau_s = 1500.0\n",
-    );
-    let rec = dir.join("production-10k.csv");
-    let s = |p: &Path| p.display().to_string();
-    let _ = Command::new(bin)
-        .args(["simulate", &s(&cfg), "--out", &s(&rec), "--force"])
-        .output();
-    let rows = std::fs::read_to_string(&rec)
-        .map(|t| t.lines().count())
-        .unwrap_or(0);
-    let wrist = root.join("../shared/real/ggir-wrist");
-    let cases = [
-        (
-            format!("{rows}-row production recording (K2, rate, warm-up)"),
-            vec!["diagnose".to_string(), s(&rec), "--json".into()],
-            2.0,
-        ),
-        (
-            "11k-row real wrist recording, every orientation unknown".to_string(),
-            vec![
-                "diagnose".to_string(),
-                s(&wrist.join("recording.csv")),
-                "--positions".into(),
-                s(&wrist.join("positions.csv")),
-                "--unknown-orientations".into(),
-                "--json".into(),
-            ],
-            10.0,
-        ),
-    ];
-    let mut md = String::from("\n### Diagnosis, end to end (release binary, one thread, best of 3)\n\n| recording | time | target |\n|---|---|---|\n");
-    for (name, args, target) in cases {
-        let timed = steps.step(&format!("diagnose the {name}"), || {
-            best_of_three(bin, &args).ok_or(format!("host-fit {} failed", args.join(" ")))
-        });
-        if let Ok(t) = timed {
-            md.push_str(&format!("| {name} | {t:.2} s | < {target} s |\n"));
-        }
-    }
-    md
-}
-
 /// The CPU time (user + system, s) of this process's waited-for children so far, from
 /// /proc/self/stat (Linux; None elsewhere).
 fn children_cpu_s() -> Option<f64> {
@@ -272,7 +205,7 @@ pub fn bench(steps: &mut crate::Steps) {
     });
     let batch_s = t.elapsed().as_secs_f64();
     let verdicts = batch.unwrap_or_default();
-    let diag = diagnosis_times(&bin, &root, steps);
+    let diag = crate::bench_diagnosis::diagnosis_times(&bin, steps);
     let db = root.join("target/bench/store-batch.sqlite");
     let mut store = batch_with_and_without_store(&bin, &units, &db, steps);
     store.push_str(&crate::store_bench::store_figures(&bin, &root, &db, steps));

@@ -3,6 +3,7 @@
 //! each as it starts and ends with its time, collects the failures, and ends with a table
 //! of the steps (`steps`), exiting non-zero if any step failed.
 mod bench;
+mod bench_diagnosis;
 mod budgets;
 mod c_harness;
 mod cross;
@@ -59,7 +60,13 @@ fn main() -> ExitCode {
     let argv: Vec<String> = std::env::args().skip(1).collect();
     let rest = argv.get(1..).unwrap_or_default();
     match argv.first().map(String::as_str) {
-        Some("test") => task(test::test),
+        Some("test") => match test::Tier::parse(rest) {
+            Ok(tier) => task(|s| test::test(s, tier)),
+            Err(e) => {
+                eprintln!("xtask: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Some("demo") => host::demo(rest),
         Some("fuzz") => match fuzz::Options::parse(rest) {
             Ok(o) => task(|s| fuzz::fuzz(s, o.seconds, &o.targets)),
@@ -70,6 +77,9 @@ fn main() -> ExitCode {
         },
         Some("bench") if rest.first().map(String::as_str) == Some("store") => {
             task(store_bench::store_only)
+        }
+        Some("bench") if rest.first().map(String::as_str) == Some("diagnosis") => {
+            task(bench_diagnosis::diagnosis_only)
         }
         Some("bench") => task(bench::bench),
         Some("blind") => task(host::blind),
@@ -90,10 +100,12 @@ fn main() -> ExitCode {
 const USAGE: &str = "usage: cargo xtask <command>
 
 commands:
-  test                      fmt, clippy, no_std build, all tests (headless Chromium and a
+  test [--full]             fmt, clippy, no_std build, all tests (headless Chromium and a
                             throwaway PostgreSQL cluster included), thumb cross builds, the
-                            QEMU proof, a fuzz smoke run per target; installs what it needs
-                            when missing (apt as root)
+                            QEMU proof, a fuzz run per target (10 s); installs what it needs
+                            when missing (apt as root). --full adds the tests marked
+                            `full tier` (the long blind suite, the heavy README figures)
+                            and fuzzes 60 s per target: what .ci/run runs
   demo [--out DIR] [--seed N] [--force]
                             the paper's experiment on the digital twin -> demo-out/ (or DIR,
                             relative to where you run it): recording, blobs, summary.json,
@@ -102,6 +114,9 @@ commands:
   bench                     criterion benchmarks, a batch of 1000 simulated units, the record
                             store on SQLite and PostgreSQL (8 writers, history among 100 000
                             records) -> target/bench/summary.md
+  bench diagnosis           only the diagnosis's speed beside the previous release's (built
+                            from its commit under target/bench/previous)
+                            -> target/bench/diagnosis.md
   bench store               only the record store's figures (from a batch of 64 units)
                             -> target/bench/store.md
   fuzz [--seconds N] [TARGET..]

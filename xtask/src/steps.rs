@@ -30,6 +30,8 @@ pub struct Step {
 pub struct Steps {
     steps: Vec<Step>,
     started: Instant,
+    /// A line printed above the final table (which tier of the test ran).
+    title: Option<String>,
 }
 
 impl Default for Steps {
@@ -44,7 +46,14 @@ impl Steps {
         Steps {
             steps: Vec::new(),
             started: Instant::now(),
+            title: None,
         }
+    }
+
+    /// Say above the final table what ran (the test's tier), and print it now too.
+    pub fn title(&mut self, title: &str) {
+        eprintln!("{title}");
+        self.title = Some(title.to_string());
     }
 
     /// Run a command as a step: it passes when the command exits with success.
@@ -117,6 +126,9 @@ impl Steps {
 
     /// Print the table and the failures, and exit non-zero if any step failed.
     pub fn finish(self) -> ExitCode {
+        if let Some(t) = &self.title {
+            println!("\n{t}");
+        }
         println!("\n{}", table(&self.steps, self.started.elapsed()));
         let failures = failures(&self.steps);
         if !failures.is_empty() {

@@ -1,10 +1,53 @@
-//! `cargo xtask test`: everything, in this order: fmt, clippy, the no_std build and
-//! tests, the workspace's tests (Chromium installed first for the reports' browser
+//! `cargo xtask test [--full]`: everything, in this order: fmt, clippy, the no_std build
+//! and tests, the workspace's tests (Chromium installed first for the reports' browser
 //! test; PostgreSQL installed and a throwaway cluster started for the record store's,
 //! stopped right after them, also when one fails), the thumb cross builds, the
-//! firmware under QEMU, a fuzz smoke run per target.
+//! firmware under QEMU, a fuzz run per target. Two tiers: the default answers in
+//! minutes; `--full` adds the tests marked `#[ignore = "full tier: ..."]` (the long
+//! blind suite, the heavy README figures) and fuzzes longer.
 use crate::Steps;
 use std::process::Command;
+
+/// Which tests run: the default tier answers in minutes, the full one holds the long
+/// studies as well (what `.ci/run` runs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tier {
+    /// Every crate and behaviour, the long studies left out (`cargo xtask test`).
+    Default,
+    /// The default tier plus the long blind suite, the heavy figures and longer fuzzing
+    /// (`cargo xtask test --full`).
+    Full,
+}
+
+impl Tier {
+    /// `--full` or nothing; anything else is refused with the usage.
+    pub fn parse(args: &[String]) -> Result<Tier, String> {
+        match args {
+            [] => Ok(Tier::Default),
+            [a] if a == "--full" => Ok(Tier::Full),
+            _ => Err(format!(
+                "`cargo xtask test` takes `--full` or nothing, not `{}`",
+                args.join(" ")
+            )),
+        }
+    }
+
+    /// The line above the step table.
+    fn title(self) -> &'static str {
+        match self {
+            Tier::Default => "tier: default (`cargo xtask test`; the long blind suite, the heavy figures and long fuzzing are in `cargo xtask test --full`)",
+            Tier::Full => "tier: full (`cargo xtask test --full`: the default tier plus the long blind suite, the heavy figures and long fuzzing)",
+        }
+    }
+
+    /// Seconds of fuzzing per target, unless XTASK_FUZZ_SECONDS says otherwise.
+    fn fuzz_seconds(self) -> u64 {
+        match self {
+            Tier::Default => 10,
+            Tier::Full => 60,
+        }
+    }
+}
 
 /// `cargo ARGS` in the repository root.
 fn cargo(args: &[&str]) -> Command {
@@ -13,8 +56,9 @@ fn cargo(args: &[&str]) -> Command {
     c
 }
 
-/// `cargo xtask test`.
-pub fn test(s: &mut Steps) {
+/// `cargo xtask test [--full]`.
+pub fn test(s: &mut Steps, tier: Tier) {
+    s.title(tier.title());
     s.run("fmt", cargo(&["fmt", "--all", "--", "--check"]));
     s.run(
         "clippy (workspace)",
@@ -83,14 +127,29 @@ pub fn test(s: &mut Steps) {
     }
     // every test binary runs, so one failure does not hide the others
     s.run("tests (workspace)", tests);
+    if tier == Tier::Full {
+        // the tests the default tier leaves out, each marked `#[ignore = "full tier: why"]`
+        let mut full = cargo(&[
+            "test",
+            "--workspace",
+            "--release",
+            "--no-fail-fast",
+            "--",
+            "--ignored",
+        ]);
+        if let Some(c) = &cluster {
+            full.env(crate::pgcluster::TEST_PG_VAR, c.url("postgres"));
+        }
+        s.run("tests (full tier: the long blind suite, heavy figures)", full);
+    }
     drop(cluster);
     crate::cross::cross(s);
     crate::embedded::embedded(s);
-    // the fuzz smoke run: XTASK_FUZZ_SECONDS per target (default 30)
+    // the fuzz run: XTASK_FUZZ_SECONDS per target (by default 10 s, 60 s in the full tier)
     let secs = std::env::var("XTASK_FUZZ_SECONDS")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(30);
+        .unwrap_or(tier.fuzz_seconds());
     if secs > 0 {
         crate::fuzz::fuzz(s, secs, &crate::fuzz::TARGETS);
     } else {

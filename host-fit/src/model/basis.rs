@@ -75,20 +75,29 @@ impl Basis {
     /// The basis functions at temperature `t` (poly: powers of the scaled dT; pwl: hat
     /// functions, the end segments extrapolated as the firmware does).
     pub fn eval(&self, t0: f64, t: f64) -> Vec<f64> {
+        let mut out = Vec::new();
+        self.eval_into(t0, t, &mut out);
+        out
+    }
+
+    /// [`Basis::eval`] written into `out` (cleared first): the same values, and no new
+    /// allocation once `out` has room (the diagnosis evaluates the basis at every window
+    /// of every fit it tries).
+    pub fn eval_into(&self, t0: f64, t: f64, out: &mut Vec<f64>) {
+        out.clear();
         match self {
             Basis::Poly { order } => {
                 let x = (t - t0) / POLY_SCALE_C;
-                (0..=*order).map(|k| x.powi(k as i32)).collect()
+                out.extend((0..=*order).map(|k| x.powi(k as i32)));
             }
             Basis::Pwl { breakpoints } => {
                 // firmware-core's segment rule, so a fit and its table agree everywhere
-                let mut out = vec![0.0; breakpoints.len()];
+                out.resize(breakpoints.len(), 0.0);
                 if breakpoints.len() >= 2 {
                     let (s, f) = pwl_segment(breakpoints.len(), |j| breakpoints[j], t);
                     out[s] = 1.0 - f;
                     out[s + 1] = f;
                 }
-                out
             }
         }
     }

@@ -85,8 +85,13 @@ impl Data<'_> {
     /// The design of `spec`; `base_k` gives K(T) at every observation for fixture
     /// columns (without it they are left out).
     pub fn design(&self, spec: &Spec, base_k: Option<&[[[f64; 3]; 3]]>) -> Design {
+        // every row holds its axis's baseline columns, and most effects add one or
+        // two: room for them up front spares the rows' regrowth (a hot spot)
+        let inputs = if spec.cross { 3 } else { 1 };
+        let room = inputs * spec.basis.len() + offset_basis(spec).len() + 2 * spec.extras.len();
         let mut d = Design {
-            rows: vec![Vec::new(); self.n_rows()],
+            // (not `vec![..; n]`: a clone of an empty Vec drops its capacity)
+            rows: (0..self.n_rows()).map(|_| Vec::with_capacity(room)).collect(),
             labels: Vec::new(),
             temps: self.temps(spec),
         };
@@ -122,27 +127,35 @@ impl Data<'_> {
     /// temperature basis (the offsets' basis is the fine one of a `Curvature` extra).
     fn baseline_columns(&self, spec: &Spec, d: &mut Design) {
         let obasis = offset_basis(spec);
+        // every window's basis values in one flat table per basis (row r at r * len):
+        // a hot spot, where a vector per window cost more than the values
+        let (nb, nob) = (spec.basis.len(), obasis.len());
+        let mut phis = Vec::with_capacity(nb * d.temps.len());
+        let mut ophis = Vec::with_capacity(nob * d.temps.len());
+        let mut scratch = Vec::with_capacity(nb.max(nob));
         for i in 0..3 {
-            let phis: Vec<Vec<f64>> = d
-                .temps
-                .iter()
-                .map(|t| spec.basis.eval(self.t0, t[i]))
-                .collect();
-            let ophis: Vec<Vec<f64>> = d.temps.iter().map(|t| obasis.eval(self.t0, t[i])).collect();
+            phis.clear();
+            ophis.clear();
+            for t in &d.temps {
+                spec.basis.eval_into(self.t0, t[i], &mut scratch);
+                phis.extend_from_slice(&scratch);
+                obasis.eval_into(self.t0, t[i], &mut scratch);
+                ophis.extend_from_slice(&scratch);
+            }
             let inputs: Vec<usize> = if spec.cross { vec![0, 1, 2] } else { vec![i] };
             for j in inputs {
-                for k in 0..spec.basis.len() {
+                for k in 0..nb {
                     let col = self
                         .obs
                         .iter()
                         .enumerate()
-                        .map(|(r, o)| (3 * r + i, o.a[j] * phis[r][k]));
-                    d.push_column(Param::K { i, j, k }, col.collect::<Vec<_>>());
+                        .map(|(r, o)| (3 * r + i, o.a[j] * phis[r * nb + k]));
+                    d.push_column(Param::K { i, j, k }, col);
                 }
             }
-            for k in 0..obasis.len() {
-                let col = (0..self.obs.len()).map(|r| (3 * r + i, ophis[r][k]));
-                d.push_column(Param::U0 { i, k }, col.collect::<Vec<_>>());
+            for k in 0..nob {
+                let col = (0..self.obs.len()).map(|r| (3 * r + i, ophis[r * nob + k]));
+                d.push_column(Param::U0 { i, k }, col);
             }
         }
     }
@@ -330,38 +343,91 @@ pub fn static_at(
     t0: f64,
     temps: [f64; 3],
 ) -> ([[f64; 3]; 3], [f64; 3]) {
-    let obasis = offset_basis(spec);
-    let phi = temps.map(|t| spec.basis.eval(t0, t));
-    let ophi = temps.map(|t| obasis.eval(t0, t));
-    let mut k = [[0.0; 3]; 3];
-    let mut u0 = [0.0; 3];
-    for (c, l) in labels.iter().enumerate() {
-        let v = x[c];
-        match *l {
-            Param::K { i, j, k: b } => k[i][j] += v * phi[i][b],
-            Param::U0 { i, k: b } => u0[i] += v * ophi[i][b],
-            Param::Effect { term, axis, extra } => {
-                if let Some(Extra::Bend { knot_c }) = spec.extras.get(extra) {
-                    let h = (temps[axis] - knot_c).max(0.0);
-                    match term {
-                        Term::BendOffset => u0[axis] += v * h,
-                        Term::BendScale => k[axis][axis] += v * h,
-                        Term::Rate
-                        | Term::Hysteresis
-                        | Term::HysteresisScale
-                        | Term::K2
-                        | Term::Asymmetry
-                        | Term::Warmup
-                        | Term::Drift
-                        | Term::DriftScale
-                        | Term::Discovered => {}
-                    }
-                }
-            }
-            Param::FixtureAngle { .. } => {}
+    StaticAt::new(spec, labels, x, t0).at(temps)
+}
+
+/// [`static_at`] at many temperatures: the offsets' basis found once and the basis
+/// values written into buffers kept between calls (a fit reads K and U0 back at every
+/// window: a hot spot when each call allocated its own).
+pub struct StaticAt<'a> {
+    spec: &'a Spec,
+    labels: &'a [Param],
+    x: &'a DVector<f64>,
+    t0: f64,
+    obasis: Basis,
+    phi: [Vec<f64>; 3],
+    ophi: [Vec<f64>; 3],
+}
+
+impl<'a> StaticAt<'a> {
+    /// The fitted spec's parameters `x` (columns `labels`) about `t0`.
+    pub fn new(spec: &'a Spec, labels: &'a [Param], x: &'a DVector<f64>, t0: f64) -> Self {
+        StaticAt {
+            spec,
+            labels,
+            x,
+            t0,
+            obasis: offset_basis(spec),
+            phi: Default::default(),
+            ophi: Default::default(),
         }
     }
-    (k, u0)
+
+    /// K and U0, row i at temperature `temps[i]`.
+    pub fn at(&mut self, temps: [f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
+        let (spec, t0) = (self.spec, self.t0);
+        for i in 0..3 {
+            spec.basis.eval_into(t0, temps[i], &mut self.phi[i]);
+            self.obasis.eval_into(t0, temps[i], &mut self.ophi[i]);
+        }
+        let (phi, ophi) = (&self.phi, &self.ophi);
+        let mut k = [[0.0; 3]; 3];
+        let mut u0 = [0.0; 3];
+        for (c, l) in self.labels.iter().enumerate() {
+            let v = self.x[c];
+            match *l {
+                Param::K { i, j, k: b } => k[i][j] += v * phi[i][b],
+                Param::U0 { i, k: b } => u0[i] += v * ophi[i][b],
+                Param::Effect { term, axis, extra } => {
+                    bend(spec, extra, term, temps[axis], v, axis, &mut k, &mut u0);
+                }
+                Param::FixtureAngle { .. } => {}
+            }
+        }
+        (k, u0)
+    }
+}
+
+/// A bend's column (an offset or scale above a knot, `v` its value) added to row `axis`
+/// of K and U0 at the element's temperature `t`; nothing for the other effects, which
+/// K(T) and U0(T) do not hold.
+#[allow(clippy::too_many_arguments)]
+fn bend(
+    spec: &Spec,
+    extra: usize,
+    term: Term,
+    t: f64,
+    v: f64,
+    axis: usize,
+    k: &mut [[f64; 3]; 3],
+    u0: &mut [f64; 3],
+) {
+    if let Some(Extra::Bend { knot_c }) = spec.extras.get(extra) {
+        let h = (t - knot_c).max(0.0);
+        match term {
+            Term::BendOffset => u0[axis] += v * h,
+            Term::BendScale => k[axis][axis] += v * h,
+            Term::Rate
+            | Term::Hysteresis
+            | Term::HysteresisScale
+            | Term::K2
+            | Term::Asymmetry
+            | Term::Warmup
+            | Term::Drift
+            | Term::DriftScale
+            | Term::Discovered => {}
+        }
+    }
 }
 
 /// Two directions perpendicular to `a` (the fixture error's rotation axes, applied to a).

@@ -3,7 +3,7 @@
 //! fit without it, and Newey-West (HAC) standard errors that hold residuals correlated
 //! in time.
 use crate::model::data::Data;
-use crate::model::design::{static_at, Row, Spec};
+use crate::model::design::{Row, Spec, StaticAt};
 use crate::model::effects::Extra;
 use crate::model::lsq::Normal;
 use crate::model::params::{Param, Term};
@@ -135,11 +135,8 @@ impl Data<'_> {
             heldout_rows = self.heldout_rows(&d.rows, &b, &chunks, &total, &x);
             hac = Some(hac_sigma(&d.rows, c, &resid_rows, &self.w, self.obs.len()));
         }
-        let (k_at, u0_at): (Vec<_>, Vec<_>) = d
-            .temps
-            .iter()
-            .map(|t| static_at(spec, &d.labels, &x, self.t0, *t))
-            .unzip();
+        let mut at = StaticAt::new(spec, &d.labels, &x, self.t0);
+        let (k_at, u0_at): (Vec<_>, Vec<_>) = d.temps.iter().map(|t| at.at(*t)).unzip();
         Some(Fit {
             spec: spec.clone(),
             chi2,
@@ -186,10 +183,8 @@ impl Data<'_> {
 
     /// K(T) and U0(T) of a fitted spec at the temperatures `temps` (bends included).
     pub fn coefficients_at(&self, f: &Fit, temps: &[f64]) -> Vec<([[f64; 3]; 3], [f64; 3])> {
-        temps
-            .iter()
-            .map(|&t| static_at(&f.spec, &f.labels, &f.x, self.t0, [t; 3]))
-            .collect()
+        let mut at = StaticAt::new(&f.spec, &f.labels, &f.x, self.t0);
+        temps.iter().map(|&t| at.at([t; 3])).collect()
     }
 
     /// Per chunk: whether both fits predict it from the other chunks (not an

@@ -1,8 +1,8 @@
-//! `cargo xtask test`: everything, in this order: fmt, clippy, the no_std build and
-//! tests, the workspace's tests (Chromium installed first for the reports' browser
-//! test; PostgreSQL installed and a throwaway cluster started for the record store's,
-//! stopped right after them, also when one fails), the thumb cross builds, the
-//! firmware under QEMU, a fuzz smoke run per target.
+//! `cargo xtask test`: everything, in this order: fmt, the book (mdbook build, its links
+//! checked), clippy, the no_std build and tests, the workspace's tests (Chromium
+//! installed first for the reports' browser test; PostgreSQL installed and a throwaway
+//! cluster started for the record store's, stopped right after them, also when one
+//! fails), the thumb cross builds, the firmware under QEMU, a fuzz smoke run per target.
 use crate::Steps;
 use std::process::Command;
 
@@ -16,6 +16,7 @@ fn cargo(args: &[&str]) -> Command {
 /// `cargo xtask test`.
 pub fn test(s: &mut Steps) {
     s.run("fmt", cargo(&["fmt", "--all", "--", "--check"]));
+    crate::book::book(s);
     s.run(
         "clippy (workspace)",
         cargo(&[

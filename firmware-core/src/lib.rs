@@ -62,3 +62,8 @@ pub use real::Real;
 #[doc = include_str!("../../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
+
+/// The book's firmware chapter: its Rust example is compiled and run like the README's.
+#[doc = include_str!("../../docs/firmware.md")]
+#[cfg(doctest)]
+pub struct FirmwareChapterDoctests;

@@ -1,7 +1,7 @@
 //! Helpers for the end-to-end tests, by purpose: running the command line in-process
 //! ([`run`]), tiny synthetic recordings ([`synthetic`]), the digital twin's varied
-//! recordings ([`twins`]), the figures the README quotes ([`figures`]) and the check that
-//! holds the README to them ([`readme`]).
+//! recordings ([`twins`]), the figures the README and the book quote ([`figures`]) and the
+//! check that holds their text to them ([`readme`]).
 use std::path::PathBuf;
 
 pub mod figures;

@@ -1,6 +1,6 @@
 //! The twins and the figures of the time-true tests (issue 22): a unit's production test
 //! on an uneven logger clock and its flight, a diagnosed blob verified on both, through
-//! the CLI. Shared by `tests/tests/time_true.rs` and the README's `time-true` figure.
+//! the CLI. Shared by `tests/tests/time_true.rs` and the book's `time-true` figure.
 use crate::{cli, cli_json};
 use host_fit::simulate::{
     simulate, Curvature, Fixture, Flight, Logger, PerAxis, SimConfig, Warmup,
@@ -145,7 +145,7 @@ pub fn figures(effect: &str, dir: &Path) -> [f64; 4] {
     [own, fw, fl_diag, fl_plain]
 }
 
-/// The per-effect table (the README's `time-true` figure): every catalogue effect's
+/// The per-effect table (the book's `time-true` figure, docs/diagnosis.md): every catalogue effect's
 /// figures ([`figures`]), and the table as text.
 pub fn table() -> (Vec<(&'static str, [f64; 4])>, String) {
     let dir = tempfile::tempdir().unwrap();

@@ -456,7 +456,7 @@ fn real_hand_tumble_at_one_temperature() {
     }
 }
 
-/// The README's figure on the extended model: every dwell within 0.05 mg with the terms.
+/// The book's figure on the extended model (docs/diagnosis.md): every dwell within 0.05 mg with the terms.
 #[test]
 fn extended_model_in_the_blob_compensates_better_in_firmware() {
     let (a, b, line) = tests::figures::physics_blob();

@@ -1,7 +1,8 @@
 //! `host-fit plan` (issue 19): every candidate plan's predicted worst verification |dg|
 //! (from the fit's covariance) against the same plan run on the twin, fitted by `fit`
 //! and verified through firmware-core on the equilibrium verification block; the
-//! table is the README's figure `plan-candidates` (accuracy against chamber hours).
+//! table is the book's figure `plan-candidates` (accuracy against chamber hours,
+//! docs/sweeps-and-plans.md).
 use host_fit::plan::{candidates, program, run, twin, verification, Limits};
 use tests::cli_json;
 use tests::time_true::{s, verify};

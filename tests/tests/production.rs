@@ -42,7 +42,7 @@ fn the_predicted_error_covers_the_held_out_error_at_about_its_rate() {
     // the twins whose truth the chosen family holds and that settle at their stops; the
     // others (a truth between the stops no family follows, a recording never in
     // equilibrium) are where the covariance cannot know the model's error, and the
-    // README says so
+    // book says so (docs/production.md)
     let in_family = |name: &str| {
         !["kinks", "outside", "ramps"]
             .iter()

@@ -2,7 +2,8 @@
 //! settle behind a thermal lag is seen (`host_fit::fit::route::detect::settling`) and taken on the
 //! dynamic route; clean units and the catalogue's other effects are not, on an even
 //! 1-Hz clock and on an uneven logger clock (rows late, lost, 0.1 Hz at rest, a
-//! power-off). The table printed is the README's "share of the residual" figures.
+//! power-off). The table printed is the book's "share of the residual" figures
+//! (docs/sweeps-and-plans.md).
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::Recording;
 use host_fit::fit::pipeline::{fit_chosen, ModelRequest};

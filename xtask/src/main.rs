@@ -1,15 +1,17 @@
-//! Project tasks: `cargo xtask test | demo | blind | bench | fuzz | cross | embedded`
+//! Project tasks: `cargo xtask test | demo | blind | bench | fuzz | cross | embedded | book`
 //! (`cargo xtask --help` lists them). One task per file; each runs every step, prints
 //! each as it starts and ends with its time, collects the failures, and ends with a table
 //! of the steps (`steps`), exiting non-zero if any step failed.
 mod bench;
 mod bench_diagnosis;
+mod book;
 mod budgets;
 mod c_harness;
 mod cross;
 mod embedded;
 mod fuzz;
 mod host;
+mod links;
 mod measure;
 mod pgcluster;
 mod qemu;
@@ -85,6 +87,7 @@ fn main() -> ExitCode {
         Some("blind") => task(host::blind),
         Some("cross") => task(cross::cross),
         Some("embedded") => task(embedded::embedded),
+        Some("book") => task(book::book),
         Some("-h" | "--help" | "help") | None => {
             println!("{USAGE}");
             ExitCode::SUCCESS
@@ -100,12 +103,12 @@ fn main() -> ExitCode {
 const USAGE: &str = "usage: cargo xtask <command>
 
 commands:
-  test [--full]             fmt, clippy, no_std build, all tests (headless Chromium and a
-                            throwaway PostgreSQL cluster included), thumb cross builds, the
-                            QEMU proof, a fuzz run per target (10 s); installs what it needs
-                            when missing (apt as root). --full adds the tests marked
-                            `full tier` (the long blind suite, the heavy README figures)
-                            and fuzzes 60 s per target: what .ci/run runs
+  test [--full]             fmt, the book (links checked), clippy, no_std build, all tests
+                            (headless Chromium and a throwaway PostgreSQL cluster included),
+                            thumb cross builds, the QEMU proof, a fuzz run per target (10 s);
+                            installs what it needs when missing (apt as root). --full adds
+                            the tests marked `full tier` (the blind suites, the heavy
+                            figures) and fuzzes 60 s per target: what .ci/run runs
   demo [--out DIR] [--seed N] [--force]
                             the paper's experiment on the digital twin -> demo-out/ (or DIR,
                             relative to where you run it): recording, blobs, summary.json,
@@ -123,6 +126,8 @@ commands:
                             cargo-fuzz targets (default all, 60 s each)
   cross                     firmware-core built for thumbv7em-none-eabihf
   embedded                  the firmware test under QEMU (bit-exact against the host)
+  book                      the manual under docs/ built with mdbook -> target/book/, every
+                            relative link of README.md and docs/*.md checked
   help, -h, --help          this text
 
 Every task but demo prints each step as it starts and ends with its time, then a table

@@ -1,7 +1,8 @@
 //! What the full test needs beyond the Rust toolchain, installed when missing: QEMU 10
 //! from bookworm-backports, LLVM's nm/size, gcc, the Arm GNU toolchain (Debian's
 //! gcc-arm-none-eabi, for the C harness), Debian's Chromium (the reports' browser
-//! test), Debian's PostgreSQL server (the record store's tests), cargo-fuzz. Installing with apt needs
+//! test), Debian's PostgreSQL server (the record store's tests), cargo-fuzz, mdbook (the
+//! book). Installing with apt needs
 //! root (CI runs as root); otherwise the message says what to install.
 use std::process::Command;
 
@@ -202,5 +203,25 @@ pub fn cargo_fuzz() -> Result<(), String> {
         Ok(())
     } else {
         Err("cargo install cargo-fuzz failed".into())
+    }
+}
+
+/// mdbook (from crates.io), which builds the book under docs/.
+pub fn mdbook() -> Result<(), String> {
+    if ok(Command::new("mdbook").arg("--version")) {
+        return Ok(());
+    }
+    eprintln!("xtask: installing mdbook from crates.io (a few minutes of build, once)");
+    let st = Command::new("cargo")
+        .args(["install", "mdbook", "--locked", "--version", "0.5.4"])
+        .status()
+        .map_err(|e| e.to_string())?;
+    if !st.success() {
+        return Err("cargo install mdbook --locked --version 0.5.4 failed".into());
+    }
+    if ok(Command::new("mdbook").arg("--version")) {
+        Ok(())
+    } else {
+        Err("mdbook was installed but is not on PATH: add cargo's bin folder (~/.cargo/bin)".into())
     }
 }

@@ -1,10 +1,11 @@
-//! `cargo xtask test [--full]`: everything, in this order: fmt, clippy, the no_std build
-//! and tests, the workspace's tests (Chromium installed first for the reports' browser
-//! test; PostgreSQL installed and a throwaway cluster started for the record store's,
-//! stopped right after them, also when one fails), the thumb cross builds, the
-//! firmware under QEMU, a fuzz run per target. Two tiers: the default answers in
-//! minutes; `--full` adds the tests marked `#[ignore = "full tier: ..."]` (the long
-//! blind suite, the heavy README figures) and fuzzes longer.
+//! `cargo xtask test [--full]`: everything, in this order: fmt, the book (mdbook build,
+//! its links checked), clippy, the no_std build and tests, the workspace's tests
+//! (Chromium installed first for the reports' browser test; PostgreSQL installed and a
+//! throwaway cluster started for the record store's, stopped right after them, also
+//! when one fails), the thumb cross builds, the firmware under QEMU, a fuzz run per
+//! target. Two tiers: the default answers in minutes; `--full` adds the tests marked
+//! `#[ignore = "full tier ..."]` (the long blind suites, the heavy figures) and fuzzes
+//! longer.
 use crate::Steps;
 use std::process::Command;
 
@@ -60,6 +61,7 @@ fn cargo(args: &[&str]) -> Command {
 pub fn test(s: &mut Steps, tier: Tier) {
     s.title(tier.title());
     s.run("fmt", cargo(&["fmt", "--all", "--", "--check"]));
+    crate::book::book(s);
     s.run(
         "clippy (workspace)",
         cargo(&[

@@ -1,6 +1,7 @@
-//! The figures the README quotes, each produced by the command or test it names. Each is
-//! computed once per test run, by the test that checks its values, which also holds the
-//! README's block to it (`crate::readme::same`); `tests/readme.rs` checks the others.
+//! The figures the README and the book (`docs/`) quote, each produced by the command or
+//! test it names. Each is computed once per test run, by the test that checks its values,
+//! which also holds the quoted block to it (`crate::readme::same`); `tests/readme.rs`
+//! checks the others.
 mod diagnosis;
 mod paper;
 mod production;

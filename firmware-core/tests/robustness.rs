@@ -153,7 +153,11 @@ proptest! {
 fn wrap_like_the_fuzzer(content: &[u8]) -> Vec<u8> {
     let mut b = MAGIC.to_vec();
     let terms = content.get(2).is_some_and(|f| f & 2 != 0);
-    let version = if terms { FORMAT_VERSION } else { OLDEST_FORMAT_VERSION };
+    let version = if terms {
+        FORMAT_VERSION
+    } else {
+        OLDEST_FORMAT_VERSION
+    };
     b.extend_from_slice(&version.to_le_bytes());
     let n = u16::try_from(10 + content.len() + 4).unwrap_or(u16::MAX);
     b.extend_from_slice(&n.to_le_bytes());
@@ -178,7 +182,11 @@ fn fuzz_crash_inputs_are_canonical_or_refused() {
         }
         seen += 1;
         let data = std::fs::read(&p).unwrap();
-        let bytes = if data.starts_with(&MAGIC) { data } else { wrap_like_the_fuzzer(&data) };
+        let bytes = if data.starts_with(&MAGIC) {
+            data
+        } else {
+            wrap_like_the_fuzzer(&data)
+        };
         if let Ok(v) = BlobView::new(&bytes) {
             let b = v.to_blob();
             assert_eq!(b.validate(), Ok(()), "{name}");

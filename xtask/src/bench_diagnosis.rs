@@ -133,12 +133,18 @@ pub fn diagnosis_times(bin: &Path, steps: &mut crate::Steps) -> String {
     let root = crate::root();
     let short = PREVIOUS_RELEASE.get(..7).unwrap_or(PREVIOUS_RELEASE);
     let mut md = format!("\n### Diagnosis, end to end, beside the previous release ({short})\n\nRelease binaries, one thread each, best of 3, the two alternating.\n\n| recording | this release | previous release | ratio |\n|---|---|---|---|\n");
-    let Some(before) = steps.step("build the previous release's host-fit", || {
-        previous_binary(&root)
-    }).ok() else {
+    let Some(before) = steps
+        .step("build the previous release's host-fit", || {
+            previous_binary(&root)
+        })
+        .ok()
+    else {
         return md;
     };
-    let Some(cases) = steps.step("the recordings to diagnose", || cases(bin, &root)).ok() else {
+    let Some(cases) = steps
+        .step("the recordings to diagnose", || cases(bin, &root))
+        .ok()
+    else {
         return md;
     };
     for c in cases {

@@ -142,7 +142,10 @@ pub fn test(s: &mut Steps, tier: Tier) {
         if let Some(c) = &cluster {
             full.env(crate::pgcluster::TEST_PG_VAR, c.url("postgres"));
         }
-        s.run("tests (full tier: the long blind suite, heavy figures)", full);
+        s.run(
+            "tests (full tier: the long blind suite, heavy figures)",
+            full,
+        );
     }
     drop(cluster);
     crate::cross::cross(s);

@@ -91,7 +91,9 @@ impl Data<'_> {
         let room = inputs * spec.basis.len() + offset_basis(spec).len() + 2 * spec.extras.len();
         let mut d = Design {
             // (not `vec![..; n]`: a clone of an empty Vec drops its capacity)
-            rows: (0..self.n_rows()).map(|_| Vec::with_capacity(room)).collect(),
+            rows: (0..self.n_rows())
+                .map(|_| Vec::with_capacity(room))
+                .collect(),
             labels: Vec::new(),
             temps: self.temps(spec),
         };

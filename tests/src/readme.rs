@@ -4,8 +4,9 @@
 //! it ([`crate::figures`]), in the test that computes the figure (so each heavy figure
 //! runs once per test run). Each marker is in exactly one of those files ([`holder`]
 //! finds it). A change of behaviour that moves a figure fails there until the text says
-//! the new one; `UPDATE_README=1 cargo test --release -p tests` writes today's outputs
-//! into the blocks of whichever files hold them, to review.
+//! the new one; `UPDATE_README=1 cargo test --release -p tests -- --include-ignored`
+//! writes today's outputs into the blocks of whichever files hold them, to review (the
+//! heavy figures are in the full tier: `#[ignore = "full tier ..."]`).
 use crate::repo;
 use std::path::PathBuf;
 

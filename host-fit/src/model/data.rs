@@ -37,6 +37,9 @@ pub struct Data<'a> {
     /// Each observation's direction of the last change of more than
     /// [`Rules::direction_threshold_c`] (0 before the first), for locating.
     pub dir: Vec<f64>,
+    /// The baseline's normal equations, once per baseline (keyed by the values they
+    /// read, so a change of the windows or weights above is never served stale).
+    pub normal_cache: crate::model::normal_cache::NormalCache,
 }
 
 impl<'a> Data<'a> {
@@ -62,6 +65,7 @@ impl<'a> Data<'a> {
             stop_starts: stop_starts(rec),
             rate,
             dir,
+            normal_cache: Default::default(),
         }
     }
 

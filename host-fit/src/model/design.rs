@@ -322,7 +322,7 @@ impl Data<'_> {
 }
 
 /// The offsets' temperature basis: a `Curvature` extra's fine one, else the baseline's.
-fn offset_basis(spec: &Spec) -> Basis {
+pub fn offset_basis(spec: &Spec) -> Basis {
     spec.extras
         .iter()
         .find_map(|e| {

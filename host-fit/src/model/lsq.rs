@@ -108,6 +108,40 @@ impl Normal {
         }
     }
 
+    /// These equations (of the first columns) as the leading block of equations for
+    /// `p` columns, the others zero.
+    pub fn embedded(&self, p: usize) -> Normal {
+        let mut n = Normal::new(p);
+        let q = self.atb.len().min(p);
+        n.ata
+            .view_mut((0, 0), (q, q))
+            .copy_from(&self.ata.view((0, 0), (q, q)));
+        n.atb.rows_mut(0, q).copy_from(&self.atb.rows(0, q));
+        n
+    }
+
+    /// [`Normal::add_sparse`] of a row in ascending column order, less what it adds to
+    /// the block of the columns before `first` (already there, see [`Normal::embedded`]):
+    /// every other entry of the lower triangle gets the same `w * vi * vj` in the same
+    /// row order, so the equations are bit for bit those of `add_sparse`.
+    pub fn add_sparse_beyond(&mut self, row: &[(usize, f64)], b: f64, w: f64, first: usize) {
+        let n = self.ata.nrows();
+        let ata = self.ata.as_mut_slice();
+        let beyond = row.partition_point(|e| e.0 < first);
+        for (at, &(j, vj)) in row.iter().enumerate() {
+            let col = &mut ata[j * n..(j + 1) * n];
+            let from = if j >= first {
+                self.atb[j] += w * vj * b;
+                at
+            } else {
+                beyond
+            };
+            for &(i, vi) in &row[from..] {
+                col[i] += w * vi * vj;
+            }
+        }
+    }
+
     /// The equations of these rows without `other`'s (a fold held out).
     pub fn minus(&self, other: &Normal) -> Normal {
         Normal {
@@ -243,6 +277,46 @@ pub fn residual(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A leading block accumulated apart, embedded, and the rest added beyond it, gives
+    /// bit for bit the equations of the whole rows.
+    #[test]
+    fn a_leading_block_apart_gives_the_same_equations_bit_for_bit() {
+        let mut rng = crate::rng::Rng::new(11);
+        let (p, first) = (10, 6);
+        let rows: Vec<Vec<(usize, f64)>> = (0..400)
+            .map(|_| {
+                (0..p)
+                    .filter(|_| rng.uniform() < 0.6)
+                    .map(|c| {
+                        (
+                            c,
+                            rng.normal() * 10f64.powi((rng.uniform() * 6.0) as i32 - 3),
+                        )
+                    })
+                    .collect()
+            })
+            .collect();
+        let bw: Vec<(f64, f64)> = rows.iter().map(|_| (rng.normal(), rng.uniform())).collect();
+        let mut whole = Normal::new(p);
+        let mut lead = Normal::new(first);
+        for (row, &(b, w)) in rows.iter().zip(&bw) {
+            whole.add_sparse(row, b, w);
+            let k = row.partition_point(|e| e.0 < first);
+            lead.add_sparse(&row[..k], b, w);
+        }
+        let mut split = lead.embedded(p);
+        for (row, &(b, w)) in rows.iter().zip(&bw) {
+            split.add_sparse_beyond(row, b, w, first);
+        }
+        let bits = |n: &Normal| {
+            (
+                n.ata.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                n.atb.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            )
+        };
+        assert_eq!(bits(&split), bits(&whole));
+    }
 
     /// The column-by-column accumulation of the lower triangle gives, bit for bit, what
     /// the entry-by-entry double loop gives there, and the same solution (rows in

@@ -8,7 +8,8 @@
 //! built once, with [`weights`] from the floor); the terms a model may hold ([`effects`]:
 //! the catalogue's, with their structural unknowns; [`params`]: every column typed) and
 //! their columns ([`design`]); the solve with held-out blocks of time and Newey-West
-//! errors ([`solve`]); the structural unknowns profiled ([`profile`]); the figures of
+//! errors ([`solve`], the baseline's normal equations kept once per data by
+//! [`normal_cache`]); the structural unknowns profiled ([`profile`]); the figures of
 //! merit and the judge of a larger model against a smaller one ([`metrics`]); the
 //! [`baseline`]; the model in the firmware's forms ([`flashed`]), its cache step
 //! ([`cache`]) and its f32 path against f64 ([`precision`]); the [`units`] of every
@@ -24,6 +25,7 @@ pub mod floor;
 pub mod library;
 pub mod lsq;
 pub mod metrics;
+pub mod normal_cache;
 pub mod observations;
 pub mod params;
 pub mod precision;

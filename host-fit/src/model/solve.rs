@@ -3,9 +3,10 @@
 //! fit without it, and Newey-West (HAC) standard errors that hold residuals correlated
 //! in time.
 use crate::model::data::Data;
-use crate::model::design::{Row, Spec, StaticAt};
+use crate::model::design::{offset_basis, Design, Row, Spec, StaticAt};
 use crate::model::effects::Extra;
 use crate::model::lsq::Normal;
+use crate::model::normal_cache::{Blocks, Key};
 use crate::model::params::{Param, Term};
 use nalgebra::{DMatrix, DVector};
 
@@ -115,10 +116,7 @@ impl Data<'_> {
         }
         let p = d.labels.len();
         let b: Vec<f64> = self.obs.iter().flat_map(|o| o.u).collect();
-        let mut chunks: Vec<Normal> = (0..self.n_chunks()).map(|_| Normal::new(p)).collect();
-        for (r, row) in d.rows.iter().enumerate() {
-            chunks[self.obs[r / 3].chunk].add_sparse(row, b[r], self.w[r]);
-        }
+        let chunks = self.chunk_normals(spec, &d, &b);
         let total = chunks.iter().fold(Normal::new(p), |a, f| a.plus(f));
         let (x, cov) = match depth {
             Depth::Full => {
@@ -156,6 +154,39 @@ impl Data<'_> {
                 .collect(),
             x,
         })
+    }
+
+    /// The normal equations of every chunk of held-out time. The baseline's block (its
+    /// leading columns) is taken from [`crate::model::normal_cache`] when the baseline
+    /// reads the windows' own temperatures (no thermal lag moves them) and the rows
+    /// list their columns in ascending order, as the design builds them; either way the
+    /// equations are bit for bit those of every row added whole.
+    fn chunk_normals(&self, spec: &Spec, d: &Design, b: &[f64]) -> Vec<Normal> {
+        let p = d.labels.len();
+        let chunk = |r: usize| self.obs[r / 3].chunk;
+        let baseline = |l: &Param| matches!(l, Param::K { .. } | Param::U0 { .. });
+        let lead = d.labels.iter().take_while(|l| baseline(l)).count();
+        let lagged = spec.extras.iter().any(|e| matches!(e, Extra::Lag { .. }));
+        let cacheable = !lagged
+            && lead > 0
+            && !d.labels[lead..].iter().any(baseline)
+            && d.rows.iter().all(|r| r.windows(2).all(|e| e[0].0 < e[1].0));
+        if !cacheable {
+            let mut chunks: Vec<Normal> = (0..self.n_chunks()).map(|_| Normal::new(p)).collect();
+            for (r, row) in d.rows.iter().enumerate() {
+                chunks[chunk(r)].add_sparse(row, b[r], self.w[r]);
+            }
+            return chunks;
+        }
+        let key = Key::of(self, spec, &offset_basis(spec));
+        let blocks = self.normal_cache.get_or(key, || {
+            Blocks::accumulate(&d.rows, lead, self.n_chunks(), chunk, b, &self.w)
+        });
+        let mut chunks: Vec<Normal> = blocks.chunks.iter().map(|c| c.embedded(p)).collect();
+        for (r, row) in d.rows.iter().enumerate() {
+            chunks[chunk(r)].add_sparse_beyond(row, b[r], self.w[r], lead);
+        }
+        chunks
     }
 
     /// Every row's chi-square when its chunk is predicted by the fit without it (a chunk

@@ -161,3 +161,26 @@ pub fn test(s: &mut Steps, tier: Tier) {
         s.skip("fuzz smoke run", "XTASK_FUZZ_SECONDS=0");
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Tier;
+
+    fn words(w: &[&str]) -> Vec<String> {
+        w.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn the_tier_is_the_default_or_full_and_nothing_else() {
+        assert_eq!(Tier::parse(&words(&[])), Ok(Tier::Default));
+        assert_eq!(Tier::parse(&words(&["--full"])), Ok(Tier::Full));
+        for bad in [&["--fast"][..], &["--full", "--full"], &["full"]] {
+            let e = Tier::parse(&words(bad)).unwrap_err();
+            assert!(e.contains("--full"), "{bad:?}: {e}");
+        }
+        // the step table says which tier ran, and the full tier fuzzes longer
+        assert!(Tier::Default.title().starts_with("tier: default"));
+        assert!(Tier::Full.title().starts_with("tier: full"));
+        assert!(Tier::Full.fuzz_seconds() > Tier::Default.fuzz_seconds());
+    }
+}

@@ -284,19 +284,17 @@ mod tests {
     fn a_leading_block_apart_gives_the_same_equations_bit_for_bit() {
         let mut rng = crate::rng::Rng::new(11);
         let (p, first) = (10, 6);
-        let rows: Vec<Vec<(usize, f64)>> = (0..400)
-            .map(|_| {
-                (0..p)
-                    .filter(|_| rng.uniform() < 0.6)
-                    .map(|c| {
-                        (
-                            c,
-                            rng.normal() * 10f64.powi((rng.uniform() * 6.0) as i32 - 3),
-                        )
-                    })
-                    .collect()
-            })
-            .collect();
+        let mut rows: Vec<Vec<(usize, f64)>> = Vec::new();
+        for _ in 0..400 {
+            let mut row = Vec::new();
+            for c in 0..p {
+                if rng.uniform() < 0.6 {
+                    let scale = 10f64.powi((rng.uniform() * 6.0) as i32 - 3);
+                    row.push((c, rng.normal() * scale));
+                }
+            }
+            rows.push(row);
+        }
         let bw: Vec<(f64, f64)> = rows.iter().map(|_| (rng.normal(), rng.uniform())).collect();
         let mut whole = Normal::new(p);
         let mut lead = Normal::new(first);

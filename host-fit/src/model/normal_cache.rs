@@ -8,9 +8,8 @@
 //! (each window's chunk, temperature, force and outputs, every row's weight, T0), so a
 //! caller that changes the data's windows or weights gets a new block, never a stale one.
 use crate::model::basis::Basis;
-use crate::model::data::Data;
-use crate::model::design::{Row, Spec};
 use crate::model::lsq::Normal;
+use crate::model::observations::DObs;
 use std::hash::{Hash, Hasher};
 use std::sync::{Arc, Mutex, PoisonError};
 
@@ -18,7 +17,8 @@ use std::sync::{Arc, Mutex, PoisonError};
 /// others).
 const KEPT: usize = 4;
 
-/// What a block was accumulated from.
+/// What a block was accumulated from. (This module reads the windows, not the
+/// diagnosis's data or design, which hold the cache: no import in a circle.)
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Key {
     /// The baseline's definition: basis, offsets' basis, cross terms.
@@ -28,11 +28,19 @@ pub struct Key {
 }
 
 impl Key {
-    /// The key of `spec`'s baseline on `data` (the spec's baseline read at the windows'
-    /// own temperatures: no thermal lag).
-    pub fn of(data: &Data, spec: &Spec, offsets: &Basis) -> Key {
-        let mut baseline = vec![u64::from(spec.cross)];
-        for b in [&spec.basis, offsets] {
+    /// The key of a baseline (cross terms or not, the K rows' and the offsets' bases)
+    /// on windows `obs` with row weights `w` about `t0`, read at the windows' own
+    /// temperatures (no thermal lag).
+    pub fn of(
+        cross: bool,
+        basis: &Basis,
+        offsets: &Basis,
+        t0: f64,
+        obs: &[DObs],
+        w: &[f64],
+    ) -> Key {
+        let mut baseline = vec![u64::from(cross)];
+        for b in [basis, offsets] {
             match b {
                 Basis::Poly { order } => baseline.extend([0, *order as u64]),
                 Basis::Pwl { breakpoints } => {
@@ -42,17 +50,17 @@ impl Key {
             }
         }
         let mut h = std::collections::hash_map::DefaultHasher::new();
-        data.t0.to_bits().hash(&mut h);
-        data.obs.len().hash(&mut h);
-        for o in &data.obs {
+        t0.to_bits().hash(&mut h);
+        obs.len().hash(&mut h);
+        for o in obs {
             o.chunk.hash(&mut h);
             o.temp_c.to_bits().hash(&mut h);
             o.a.map(f64::to_bits).hash(&mut h);
             o.u.map(f64::to_bits).hash(&mut h);
         }
-        data.w.len().hash(&mut h);
-        for w in &data.w {
-            w.to_bits().hash(&mut h);
+        w.len().hash(&mut h);
+        for v in w {
+            v.to_bits().hash(&mut h);
         }
         Key {
             baseline,
@@ -74,7 +82,7 @@ impl Blocks {
     /// Accumulate the leading `columns` columns of `rows` (each in ascending column
     /// order), row `r` in chunk `chunk(r)` with right-hand side `b[r]` and weight `w[r]`.
     pub fn accumulate(
-        rows: &[Row],
+        rows: &[Vec<(usize, f64)>],
         columns: usize,
         n_chunks: usize,
         chunk: impl Fn(usize) -> usize,

@@ -178,7 +178,15 @@ impl Data<'_> {
             }
             return chunks;
         }
-        let key = Key::of(self, spec, &offset_basis(spec));
+        let offsets = offset_basis(spec);
+        let key = Key::of(
+            spec.cross,
+            &spec.basis,
+            &offsets,
+            self.t0,
+            &self.obs,
+            &self.w,
+        );
         let blocks = self.normal_cache.get_or(key, || {
             Blocks::accumulate(&d.rows, lead, self.n_chunks(), chunk, b, &self.w)
         });

@@ -32,6 +32,7 @@ pub mod terms;
 pub mod model;
 
 pub mod fit;
+pub mod fuzzing;
 pub mod simulate;
 
 pub mod acceptance;

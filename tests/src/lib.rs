@@ -1,9 +1,10 @@
 //! Helpers for the end-to-end tests, by purpose: running the command line in-process
 //! ([`run`]), tiny synthetic recordings ([`synthetic`]), the digital twin's varied
-//! recordings ([`twins`]), the figures the README and the book quote ([`figures`]) and the
+//! recordings ([`twins`]), the demo run once and shared ([`demo`]), the figures the README and the book quote ([`figures`]) and the
 //! check that holds their text to them ([`readme`]).
 use std::path::PathBuf;
 
+pub mod demo;
 pub mod figures;
 pub mod four_stops;
 pub mod lab;

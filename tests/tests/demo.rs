@@ -35,11 +35,8 @@ fn at(rows: &[(String, String, f64, f64)], model: &str, method: &str, t: f64) ->
 /// those numbers.
 #[test]
 fn demo_outputs_agree_with_each_other_and_the_report_holds_its_data() {
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("demo");
-    let d = dir.to_str().unwrap();
-    let (code, out, err) = cli(&["demo", "--out", d]);
-    assert_eq!(code, 0, "{err}");
+    let demo = tests::demo::demo();
+    let (dir, out) = (&demo.dir, &demo.out);
 
     let summary: Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
@@ -101,12 +98,17 @@ fn demo_outputs_agree_with_each_other_and_the_report_holds_its_data() {
         }
     }
 
-    check_plan(&dir, &summary);
+    check_plan(dir, &summary);
 
-    // a second run does not overwrite without --force
-    let (code, _, err) = cli(&["demo", "--out", d]);
+    // a second run does not overwrite without --force (over a copy: the run is shared)
+    let tmp = tempfile::tempdir().unwrap();
+    let copy = tmp.path().join("demo");
+    demo.copy_to(&copy);
+    let before = std::fs::read(copy.join("report.html")).unwrap();
+    let (code, _, err) = cli(&["demo", "--out", copy.to_str().unwrap()]);
     assert_eq!(code, 1);
     assert!(err.contains("--force"), "{err}");
+    assert_eq!(std::fs::read(copy.join("report.html")).unwrap(), before);
 
     check_report(
         &std::fs::read_to_string(dir.join("report.html")).unwrap(),

@@ -424,10 +424,7 @@ fn the_plan_report_in_a_browser() {
 
 #[test]
 fn the_demo_report_in_a_browser() {
-    let tmp = tempdir();
-    let dir = tmp.path();
-    let (code, _, err) = cli(&["demo", "--out", dir.to_str().unwrap()]);
-    assert_eq!(code, 0, "{err}");
+    let dir = &tests::demo::demo().dir;
     let seen = check_in_browser("demo report", &dir.join("report.html"));
     check_model_colours("demo report", &seen);
 }

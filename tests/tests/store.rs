@@ -604,11 +604,8 @@ fn bad_stores_are_refused_named_and_left_alone() {
 /// `--force` it appends.
 #[test]
 fn the_demo_records_its_blobs_and_shows_the_history() {
-    let tmp = tempfile::tempdir().unwrap();
-    let root = tmp.path().to_path_buf();
-    let dir = root.join("demo-out");
-    let (code, out, err) = cli(&["demo", "--out", s(&dir)]);
-    assert_eq!(code, 0, "{err}");
+    let demo = tests::demo::demo();
+    let (dir, out) = (&demo.dir, &demo.out);
     let db = dir.join("records.sqlite");
     let all = records(&db);
     // the paper's pwl-2, the pwl through every stop, the plan's blob, the chosen model
@@ -648,7 +645,11 @@ fn the_demo_records_its_blobs_and_shows_the_history() {
         "{text}"
     );
     assert!(text.contains("model chosen-poly4"), "{text}");
-    let (code, _, err) = cli(&["demo", "--out", s(&dir), "--force"]);
+    // run again with --force over a copy (the run is shared): the store appends
+    let tmp = tempfile::tempdir().unwrap();
+    let copy = tmp.path().join("demo-out");
+    demo.copy_to(&copy);
+    let (code, _, err) = cli(&["demo", "--out", s(&copy), "--force"]);
     assert_eq!(code, 0, "{err}");
-    assert_eq!(records(&db).len(), 8);
+    assert_eq!(records(&copy.join("records.sqlite")).len(), 8);
 }

@@ -7,6 +7,20 @@ use std::process::Command;
 /// The targets of fuzz/Cargo.toml.
 pub const TARGETS: [&str; 4] = ["blob_decode", "compensate", "recording", "positions"];
 
+/// The firmware's targets: built without host-fit, so a change to the host costs them
+/// no instrumented rebuild (the default tier fuzzes these; the host's corpus is replayed
+/// by `host-fit/tests/fuzz_corpus.rs` on every test run).
+pub const FIRMWARE_TARGETS: [&str; 2] = ["blob_decode", "compensate"];
+
+/// The cargo features target `t` needs (the host's readers need host-fit).
+fn features(t: &str) -> &'static [&'static str] {
+    if FIRMWARE_TARGETS.contains(&t) {
+        &[]
+    } else {
+        &["--features", "host"]
+    }
+}
+
 /// `cargo xtask fuzz [--seconds N] [TARGET..]`.
 pub struct Options {
     /// Seconds per target (default 60).
@@ -76,7 +90,9 @@ fn target(t: &str, seconds: u64) -> Result<String, String> {
     let _ = std::fs::create_dir_all(&artifacts);
     let out = Command::new("cargo")
         .current_dir(&root)
-        .args(["+nightly", "fuzz", "run", t])
+        .args(["+nightly", "fuzz", "run"])
+        .args(features(t))
+        .arg(t)
         .arg(&work)
         .arg(root.join("fuzz/corpus").join(t))
         .arg("--")
@@ -145,7 +161,7 @@ fn escape(bytes: &[u8]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{Options, TARGETS};
+    use super::{features, Options, TARGETS};
 
     #[test]
     fn options_name_targets_and_seconds() {
@@ -156,6 +172,10 @@ mod tests {
         assert_eq!((all.seconds, all.targets), (60, TARGETS.to_vec()));
         assert!(Options::parse(&a(&["--seconds", "x"])).is_err());
         assert!(Options::parse(&a(&["--seconds"])).is_err());
+        // the host's readers need host-fit; the firmware's targets build without it
+        assert_eq!(features("recording"), ["--features", "host"]);
+        assert_eq!(features("positions"), ["--features", "host"]);
+        assert!(features("blob_decode").is_empty() && features("compensate").is_empty());
         assert!(Options::parse(&a(&["nope"])).is_err_and(|e| e.contains("`nope`")));
     }
 }

@@ -36,8 +36,18 @@ impl Tier {
     /// The line above the step table.
     fn title(self) -> &'static str {
         match self {
-            Tier::Default => "tier: default (`cargo xtask test`; the long blind suite, the heavy figures and long fuzzing are in `cargo xtask test --full`)",
+            Tier::Default => "tier: default (`cargo xtask test`; the long blind suite, the heavy figures, long fuzzing and fuzzing the host's readers are in `cargo xtask test --full`)",
             Tier::Full => "tier: full (`cargo xtask test --full`: the default tier plus the long blind suite, the heavy figures and long fuzzing)",
+        }
+    }
+
+    /// The fuzz targets run: the firmware's in the default tier (a change to the host
+    /// costs no instrumented rebuild of it; its corpus is replayed by the tests), all in
+    /// the full tier.
+    fn fuzz_targets(self) -> &'static [&'static str] {
+        match self {
+            Tier::Default => &crate::fuzz::FIRMWARE_TARGETS,
+            Tier::Full => &crate::fuzz::TARGETS,
         }
     }
 
@@ -150,13 +160,14 @@ pub fn test(s: &mut Steps, tier: Tier) {
     drop(cluster);
     crate::cross::cross(s);
     crate::embedded::embedded(s);
-    // the fuzz run: XTASK_FUZZ_SECONDS per target (by default 10 s, 60 s in the full tier)
+    // the fuzz run: XTASK_FUZZ_SECONDS per target (by default 10 s on the firmware's
+    // targets, 60 s on all four in the full tier)
     let secs = std::env::var("XTASK_FUZZ_SECONDS")
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(tier.fuzz_seconds());
     if secs > 0 {
-        crate::fuzz::fuzz(s, secs, &crate::fuzz::TARGETS);
+        crate::fuzz::fuzz(s, secs, tier.fuzz_targets());
     } else {
         s.skip("fuzz smoke run", "XTASK_FUZZ_SECONDS=0");
     }
@@ -182,5 +193,9 @@ mod tests {
         assert!(Tier::Default.title().starts_with("tier: default"));
         assert!(Tier::Full.title().starts_with("tier: full"));
         assert!(Tier::Full.fuzz_seconds() > Tier::Default.fuzz_seconds());
+        // the full tier fuzzes every target; the default the firmware's, which build
+        // without host-fit
+        assert_eq!(Tier::Full.fuzz_targets(), crate::fuzz::TARGETS);
+        assert_eq!(Tier::Default.fuzz_targets(), crate::fuzz::FIRMWARE_TARGETS);
     }
 }

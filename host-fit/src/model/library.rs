@@ -3,6 +3,7 @@
 //! temperature, its rate, the time, the events) that no catalogue effect expresses, each
 //! a column of the diagnosis's design on one output axis, computed on the recording's own
 //! rows and clock and averaged into its windows as every other column is.
+use crate::data::recording::Recording;
 use crate::model::data::Data;
 use crate::model::regressors;
 use firmware_core::model::AXES;
@@ -13,9 +14,11 @@ use std::fmt;
 pub enum Event {
     /// The recording's start and the end of every stated power-off.
     PowerOn,
-    /// A new temperature stop begins (its first static dwell).
+    /// A new temperature stop begins: the chamber's ramp to it ends (see
+    /// [`stop_arrivals`]).
     Stop,
-    /// The unit was turned to another position (a dwell begins).
+    /// The unit was turned to another position: a dwell begins at a position other
+    /// than the previous dwell's (see [`moves`]).
     Position,
 }
 
@@ -399,6 +402,131 @@ pub struct Series {
     t: Vec<f64>,
 }
 
+/// When the unit came to rest at another position: the start of every dwell whose
+/// position differs from the previous dwell's. The recording's first dwell is no move
+/// (what happened before the recording is not seen), and a return to the same position
+/// through rows in transit (a program that "moves" to where the unit already is) turns
+/// nothing: the leads a move flexes were not flexed.
+pub fn moves(rec: &Recording) -> Vec<f64> {
+    let mut out = Vec::new();
+    let mut last: Option<usize> = None;
+    for d in &rec.dwells {
+        let Some(row) = rec.rows.get(d.start) else {
+            continue;
+        };
+        if last.is_some_and(|p| p != d.position) {
+            out.push(row.t_s);
+        }
+        last = Some(d.position);
+    }
+    out
+}
+
+/// When each new temperature stop began: the end of the chamber's ramp to it, read off
+/// the chamber's own reading (`chamber_c`). The ramp's middle half (a quarter to three
+/// quarters of the way from the previous stop's level) gives its line; the line meets
+/// the stop's level `t_x`, a chamber's own lag `tau_c` after the program's ramp ended.
+/// For a chamber that follows its set point with one time constant, the reading at `t_x`
+/// is `rate tau_c / e` short of the level, which gives `tau_c` and so the ramp's end
+/// `t_x - tau_c`. A stop the recording starts at (no ramp seen) has no event. Without a
+/// chamber column the sensor's own temperature lags too much to time the ramp's end, and
+/// the stop's first static dwell is taken (the event then comes late by the soak, and a
+/// settling is only fitted after it).
+pub fn stop_arrivals(rec: &Recording) -> Vec<f64> {
+    let stops = crate::data::stops::stops(rec, &|_| true, 3.0);
+    let first_static = |s: &crate::data::stops::Stop| {
+        s.dwells
+            .first()
+            .and_then(|&d| rec.dwells.get(d))
+            .map(|d| d.start)
+    };
+    if rec.rows.iter().any(|r| r.chamber_c.is_none()) {
+        return stops
+            .iter()
+            .filter_map(first_static)
+            .filter_map(|i| rec.rows.get(i).map(|r| r.t_s))
+            .collect();
+    }
+    let chamber = |i: usize| {
+        rec.rows
+            .get(i)
+            .and_then(|r| r.chamber_c)
+            .unwrap_or(f64::NAN)
+    };
+    let mut out = Vec::new();
+    let mut prev_level = chamber(0);
+    for s in &stops {
+        let Some(anchor) = first_static(s) else {
+            continue;
+        };
+        let mut at: Vec<f64> = s
+            .dwells
+            .iter()
+            .filter_map(|&d| rec.dwells.get(d))
+            .flat_map(|d| (d.start..d.end).map(chamber))
+            .collect();
+        at.sort_by(f64::total_cmp);
+        let Some(&level) = at.get(at.len() / 2) else {
+            continue;
+        };
+        let step = level - prev_level;
+        prev_level = level;
+        if let Some(t) = ramp_end(rec, anchor, level, step) {
+            out.push(t);
+        }
+    }
+    out
+}
+
+/// The end of the chamber's ramp of `step` C to `level` before row `anchor` (see
+/// [`stop_arrivals`]); `None` where no ramp is seen.
+fn ramp_end(rec: &Recording, anchor: usize, level: f64, step: f64) -> Option<f64> {
+    // a stop closer than this to the one before is no ramp (the chamber's own wander)
+    if step.abs() < 2.0 {
+        return None;
+    }
+    let frac = |i: usize| {
+        let c = rec.rows.get(i).and_then(|r| r.chamber_c)?;
+        Some((c - (level - step)) / step)
+    };
+    let back = |from: usize, below: f64| {
+        (0..from)
+            .rev()
+            .find(|&i| frac(i).is_some_and(|f| f <= below))
+    };
+    let hi = back(anchor, 0.75)?;
+    let lo = back(hi, 0.25)?;
+    let rows = rec.rows.get(lo..=hi)?;
+    if rows.len() < 5 {
+        return None;
+    }
+    // the ramp's line by least squares
+    let n = rows.len() as f64;
+    let mt = rows.iter().map(|r| r.t_s).sum::<f64>() / n;
+    let mc = rows.iter().filter_map(|r| r.chamber_c).sum::<f64>() / n;
+    let (mut stt, mut stc) = (0.0, 0.0);
+    for r in rows {
+        let dt = r.t_s - mt;
+        stt += dt * dt;
+        stc += dt * (r.chamber_c.unwrap_or(mc) - mc);
+    }
+    let rate = stc / stt;
+    if rate.is_nan() || rate * step <= 0.0 {
+        return None;
+    }
+    let t_x = mt + (level - mc) / rate;
+    // the reading at t_x (the last row at or before it)
+    let after = rec.rows.get(hi..anchor.max(hi))?;
+    let c_x = after
+        .iter()
+        .take_while(|r| r.t_s <= t_x)
+        .last()?
+        .chamber_c?;
+    let room = (t_x - rows.last()?.t_s).max(0.0);
+    let tau_c = (std::f64::consts::E * (level - c_x) / rate).clamp(0.0, room);
+    Some(t_x - tau_c)
+}
+
 /// The rate estimator's time constant for `dTdt` terms, s: the firmware's own rate
 /// estimate for locating (a minute smooths the sensor's steps and follows a ramp).
 pub const RATE_TAU_S: f64 = 60.0;
@@ -412,13 +540,8 @@ impl Series {
         let mut power: Vec<f64> = vec![t_first];
         power.extend(rec.power_off.iter().map(|s| s[1]));
         power.sort_by(f64::total_cmp);
-        let position: Vec<f64> = rec
-            .dwells
-            .iter()
-            .filter_map(|d| rec.rows.get(d.start).map(|r| r.t_s))
-            .collect();
         Series {
-            events: [power, data.stop_starts.clone(), position],
+            events: [power, stop_arrivals(rec), moves(rec)],
             t,
         }
     }
@@ -536,6 +659,93 @@ mod tests {
         for (t, want) in cases {
             assert_eq!(t.to_string(), want);
         }
+    }
+
+    /// A move is a dwell at another position than the one before: none at the
+    /// recording's start, none where the unit comes back to where it was.
+    #[test]
+    fn a_move_is_a_change_of_position() {
+        use crate::data::positions::Positions;
+        let mut csv = String::from("t_s,position,temp_c,ux_v,uy_v,uz_v\n");
+        let mut t = 0.0;
+        for (name, n) in [
+            ("TP1", 30),
+            ("-", 5),
+            ("TP1", 30),
+            ("-", 5),
+            ("TP2", 30),
+            ("-", 5),
+            ("PP1", 30),
+        ] {
+            for _ in 0..n {
+                csv.push_str(&format!("{t:.1},{name},20.0,0.0,0.0,1.0\n"));
+                t += 1.0;
+            }
+        }
+        let rec = Recording::from_reader(
+            std::path::Path::new("m.csv"),
+            csv.as_bytes(),
+            Positions::default(),
+        )
+        .unwrap();
+        assert_eq!(rec.dwells.len(), 4, "{:?}", rec.dwells);
+        assert_eq!(moves(&rec), vec![70.0, 105.0]);
+    }
+
+    /// A chamber that follows its program with one time constant (90 s): 300 s at
+    /// +20 C, a ramp of 1 C/min to -20 C ending at 2700 s, a hold with dwells; the
+    /// sensor lags the chamber by 60 s.
+    fn ramp_recording(chamber: bool) -> Recording {
+        use crate::data::positions::Positions;
+        let mut csv = String::from(if chamber {
+            "t_s,position,temp_c,chamber_c,ux_v,uy_v,uz_v\n"
+        } else {
+            "t_s,position,temp_c,ux_v,uy_v,uz_v\n"
+        });
+        let (mut c, mut s) = (20.0, 20.0);
+        for k in 0..6000 {
+            let t = k as f64;
+            let set = if t < 300.0 {
+                20.0
+            } else {
+                (20.0 - (t - 300.0) / 60.0).max(-20.0)
+            };
+            c += (set - c) / 90.0;
+            s += (c - s) / 60.0;
+            let pos = if t < 3600.0 || (t as i64 % 110) >= 100 {
+                "-"
+            } else if (t as i64 / 110) % 2 == 0 {
+                "TP1"
+            } else {
+                "TP2"
+            };
+            let ch = if chamber {
+                format!("{c:.3},")
+            } else {
+                String::new()
+            };
+            csv.push_str(&format!("{t:.1},{pos},{s:.4},{ch}0.0,0.0,1.0\n"));
+        }
+        Recording::from_reader(
+            std::path::Path::new("r.csv"),
+            csv.as_bytes(),
+            Positions::default(),
+        )
+        .unwrap()
+    }
+
+    /// The stop's event is the end of the chamber's ramp, read off its reading; without
+    /// a chamber column, the stop's first static dwell.
+    #[test]
+    fn a_stop_begins_where_the_chamber_ramp_ends() {
+        let rec = ramp_recording(true);
+        let ev = stop_arrivals(&rec);
+        assert_eq!(ev.len(), 1, "{ev:?}");
+        assert!((ev[0] - 2700.0).abs() < 5.0, "{ev:?}");
+        let rec = ramp_recording(false);
+        let first = rec.dwells.first().map(|d| rec.rows[d.start].t_s);
+        assert_eq!(stop_arrivals(&rec).first().copied(), first);
+        assert!(first.is_some_and(|t| t >= 3600.0));
     }
 
     #[test]

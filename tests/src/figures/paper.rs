@@ -1,6 +1,6 @@
 //! The paper's experiment on the twin (`host-fit demo`) and the paper's own tables
 //! (`temp-fit` against Table 3).
-use crate::{cli, cli_json, repo, s};
+use crate::{cli_json, repo};
 
 /// `host-fit demo --seed 1`: the table it prints.
 pub fn demo_table() -> String {
@@ -17,17 +17,14 @@ pub struct DemoRun {
     pub program_head: String,
 }
 
-/// `host-fit demo --seed 1` into a temporary folder: its printed paragraphs and the
-/// head of the program it writes.
+/// `host-fit demo --seed 1` (the shared run, [`crate::demo`]): its printed paragraphs
+/// and the head of the program it writes.
 pub fn demo_run() -> DemoRun {
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("demo");
-    let (code, out, err) = cli(&["demo", "--out", s(&dir), "--seed", "1"]);
-    assert_eq!(code, 0, "{err}");
-    let mut paras = out.split("\n\n");
+    let d = crate::demo::demo();
+    let mut paras = d.out.split("\n\n");
     let table = paras.next().unwrap_or("").trim_end().to_string();
     let plan = paras.next().unwrap_or("").trim_end().to_string();
-    let program = std::fs::read_to_string(dir.join("plan.csv")).unwrap();
+    let program = std::fs::read_to_string(d.dir.join("plan.csv")).unwrap();
     let n = program.lines().count();
     let mut program_head: Vec<String> = program.lines().take(13).map(String::from).collect();
     program_head.push(format!("... ({n} lines in all)"));

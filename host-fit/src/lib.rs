@@ -13,7 +13,7 @@
 //! | 0 | `error`, `rng`, `output`, `progress` | foundations: errors, random numbers, atomic writes, JSON/CSV, progress of long work |
 //! | 1 | `data`, `terms` | recordings, positions with their roles, stops and windows, coefficient tables; the vocabulary of discovered terms (parse, print, evaluate, a blob's term table) |
 //! | 2 | `model` | the engine: one least-squares solver, the temperature basis, the floor, the windows and their weights, the terms and their columns, the solve with held-out blocks, the judge, the flashed model, its cache and f32 check |
-//! | 3 | `fit`, `simulate` | identification, temperature models, the pipeline, the route (detection, the dynamic fit, the choice, the calibration), the predicted error; the digital twin |
+//! | 3 | `fit`, `fuzzing`, `simulate` | identification, temperature models, the pipeline, the route (detection, the dynamic fit, the choice, the calibration), the predicted error; what the fuzz targets of the readers hold (replayed by the tests); the digital twin |
 //! | 4 | `blob`, `verify`, `vectors`, `acceptance` | blobs built and read, formula (13) through firmware-core, firmware test vectors, pass/fail against a specification |
 //! | 5 | `diagnose` | the search for what the paper's model leaves out, the findings, where the rest is, the JSON contract |
 //! | 6 | `analysis`, `blind`, `plan`, `store` | the demo's comparison (pure), the blind tests of the diagnosis, chamber programs designed for a target accuracy, the record store (SQLite: records, history, trends) |

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 const MAX_FN_LINES: usize = 120;
 
 /// The layers of lib.rs's table: a module may use modules of its own rank or below.
-const LAYERS: [(&str, u8); 26] = [
+const LAYERS: [(&str, u8); 27] = [
     ("error", 0),
     ("rng", 0),
     ("output", 0),
@@ -22,6 +22,7 @@ const LAYERS: [(&str, u8); 26] = [
     ("terms", 1),
     ("model", 2),
     ("fit", 3),
+    ("fuzzing", 3),
     ("simulate", 3),
     ("blob", 4),
     ("verify", 4),

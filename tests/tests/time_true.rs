@@ -23,12 +23,12 @@ const FLIGHT_BOUND_MG: f64 = 0.06;
 const REFERENCE_BOUND_MG: f64 = 0.002;
 /// In flight, a unit with two coupled effects (a pair of the table: `thermal_lag` +
 /// `temp_rate`, `hysteresis` + `temp_rate`) within this (mg) and no worse than the plain
-/// `fit` blob. Not the aim of 0.05 mg: the hysteresis + rate unit reaches 0.139 mg,
-/// its errors in the first fast warming (6 C/min) though the diagnosis splits the pair
-/// right (both named, r and h within 4 % of the truth); the rate estimator refitted for
-/// flight at 2 s beside the hysteresis is the suspect, unresolved (a longer estimator is
-/// worse: 0.142 mg at 6 s, 0.259 mg at 15 s). This bound holds what is reached.
-const PAIR_FLIGHT_BOUND_MG: f64 = 0.15;
+/// `fit` blob. Not the aim of 0.05 mg for both: the hysteresis + rate unit reaches it
+/// (0.045 mg) since the flight's rate estimator keeps the diagnosed `r` (it was 0.139 mg
+/// with `r` refitted beside the hysteresis), the lag + rate unit does not (0.084 mg: its
+/// `r` comes out 1.6 % high on x beside a lag 0.7 % short, and in flight at 6 C/min that
+/// is the error). This bound holds what is reached.
+const PAIR_FLIGHT_BOUND_MG: f64 = 0.1;
 /// "No worse than the `fit` blob" up to this (mg): where `fit` itself takes the dynamic
 /// route (a lagging unit's dwells still settle) both blobs carry the same lag and tie.
 const TIE_MG: f64 = 0.001;

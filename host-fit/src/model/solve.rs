@@ -92,6 +92,96 @@ impl Data<'_> {
         self.fit_with(spec, base, Depth::Profile, Some(scale))
     }
 
+    /// `spec` at the parameters `x` of a fit of the same columns (`x` in its labels'
+    /// order), not refitted: its residuals, chi-square and coefficients on these data
+    /// (no covariance, no held-out chunks). `base_k` as for the design (fixture columns).
+    /// `None` when `spec`'s columns are not `x`'s.
+    pub fn evaluate(
+        &self,
+        spec: &Spec,
+        base_k: Option<&[[[f64; 3]; 3]]>,
+        x: &DVector<f64>,
+    ) -> Option<Fit> {
+        let d = self.design(spec, base_k);
+        let p = d.labels.len();
+        if p != x.len() {
+            return None;
+        }
+        let b: Vec<f64> = self.obs.iter().flat_map(|o| o.u).collect();
+        let resid_rows: Vec<f64> = (0..b.len()).map(|r| b[r] - d.predict(x, r)).collect();
+        let insample_rows: Vec<f64> = resid_rows
+            .iter()
+            .zip(&self.w)
+            .map(|(r, w)| w * r * r)
+            .collect();
+        let mut at = StaticAt::new(spec, &d.labels, x, self.t0);
+        let (k_at, u0_at): (Vec<_>, Vec<_>) = d.temps.iter().map(|t| at.at(*t)).unzip();
+        Some(Fit {
+            spec: spec.clone(),
+            chi2: insample_rows.iter().sum(),
+            k: p,
+            cov: None,
+            hac: None,
+            labels: d.labels,
+            resid: resid_rows.chunks(3).map(|c| [c[0], c[1], c[2]]).collect(),
+            k_at,
+            u0_at,
+            heldout: 0.0,
+            heldout_rows: vec![0.0; b.len()],
+            insample_rows,
+            x: x.clone(),
+        })
+    }
+
+    /// `spec` refitted with the parameters `held` (label indices into `x`, a fit of the
+    /// same columns) kept at their values in `x`: every other linear parameter solved
+    /// with those columns' part taken off the data, then evaluated as
+    /// [`Data::evaluate`]. `None` when the columns differ or the rest is not determined.
+    pub fn fit_holding(
+        &self,
+        spec: &Spec,
+        base_k: Option<&[[[f64; 3]; 3]]>,
+        x: &DVector<f64>,
+        held: &[usize],
+    ) -> Option<Fit> {
+        let d = self.design(spec, base_k);
+        let p = d.labels.len();
+        if p != x.len() {
+            return None;
+        }
+        // the free columns, renumbered
+        let mut free = vec![None; p];
+        let mut n = 0;
+        for (j, slot) in free.iter_mut().enumerate() {
+            if !held.contains(&j) {
+                *slot = Some(n);
+                n += 1;
+            }
+        }
+        let mut normal = Normal::new(n);
+        let mut row_free: Vec<(usize, f64)> = Vec::new();
+        for (r, row) in d.rows.iter().enumerate() {
+            let o = &self.obs[r / 3];
+            let mut b = o.u[r % 3];
+            row_free.clear();
+            for &(j, v) in row {
+                match free[j] {
+                    Some(k) => row_free.push((k, v)),
+                    None => b -= v * x[j],
+                }
+            }
+            normal.add_sparse(&row_free, b, self.w[r]);
+        }
+        let solved = normal.solve_x()?;
+        let mut all = x.clone();
+        for (j, slot) in free.iter().enumerate() {
+            if let Some(k) = slot {
+                all[j] = solved[*k];
+            }
+        }
+        self.evaluate(spec, base_k, &all)
+    }
+
     fn fit_with(
         &self,
         spec: &Spec,

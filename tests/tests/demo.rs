@@ -195,7 +195,9 @@ fn check_plan(dir: &std::path::Path, summary: &Value) {
     assert_eq!(p["target_from"], "paper_prediction", "{p}");
     let chosen = &p["chosen"];
     assert!(chosen["predicted_mg"].as_f64().unwrap() <= target, "{p}");
-    let again = dir.join("again.csv");
+    // `plan` writes beside a copy, never into the shared demo run
+    let tmp = tempfile::tempdir().unwrap();
+    let again = tmp.path().join("again.csv");
     let (code, _, err) = cli(&[
         "plan",
         "--range-c=-40,70",

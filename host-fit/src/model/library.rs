@@ -696,6 +696,12 @@ mod tests {
     /// +20 C, a ramp of 1 C/min to -20 C ending at 2700 s, a hold with dwells; the
     /// sensor lags the chamber by 60 s.
     fn ramp_recording(chamber: bool) -> Recording {
+        ramp_recording_on(chamber, false)
+    }
+
+    /// [`ramp_recording`], on an even 1 Hz clock or unevenly: rows every 10 s while the
+    /// unit rests through the ramp, each up to 0.3 s late, and a 2-min gap in the ramp.
+    fn ramp_recording_on(chamber: bool, uneven: bool) -> Recording {
         use crate::data::positions::Positions;
         let mut csv = String::from(if chamber {
             "t_s,position,temp_c,chamber_c,ux_v,uy_v,uz_v\n"
@@ -718,6 +724,15 @@ mod tests {
                 "TP1"
             } else {
                 "TP2"
+            };
+            let resting = t < 3600.0 || (t as i64 % 110) >= 100;
+            if uneven && ((resting && k % 10 != 0) || (1500.0..1620.0).contains(&t)) {
+                continue;
+            }
+            let t = if uneven {
+                t + 0.3 * ((k * 7919) % 10) as f64 / 10.0
+            } else {
+                t
             };
             let ch = if chamber {
                 format!("{c:.3},")
@@ -742,6 +757,10 @@ mod tests {
         let ev = stop_arrivals(&rec);
         assert_eq!(ev.len(), 1, "{ev:?}");
         assert!((ev[0] - 2700.0).abs() < 5.0, "{ev:?}");
+        // the same on an uneven logger clock
+        let ev = stop_arrivals(&ramp_recording_on(true, true));
+        assert_eq!(ev.len(), 1, "{ev:?}");
+        assert!((ev[0] - 2700.0).abs() < 10.0, "{ev:?}");
         let rec = ramp_recording(false);
         let first = rec.dwells.first().map(|d| rec.rows[d.start].t_s);
         assert_eq!(stop_arrivals(&rec).first().copied(), first);

@@ -114,7 +114,7 @@ impl<'a> Data<'a> {
 }
 
 /// The start time of every stop of `rec` (see [`Data::stop_starts`]).
-fn stop_starts(rec: &Recording) -> Vec<f64> {
+pub(crate) fn stop_starts(rec: &Recording) -> Vec<f64> {
     crate::data::stops::stops(rec, &|_| true, 3.0)
         .iter()
         .filter_map(|s| s.dwells.first())

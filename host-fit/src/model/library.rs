@@ -441,11 +441,7 @@ pub fn stop_arrivals(rec: &Recording) -> Vec<f64> {
             .map(|d| d.start)
     };
     if rec.rows.iter().any(|r| r.chamber_c.is_none()) {
-        return stops
-            .iter()
-            .filter_map(first_static)
-            .filter_map(|i| rec.rows.get(i).map(|r| r.t_s))
-            .collect();
+        return crate::model::data::stop_starts(rec);
     }
     let chamber = |i: usize| {
         rec.rows

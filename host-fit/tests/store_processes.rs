@@ -325,3 +325,72 @@ fn a_new_store_is_readable_as_the_umask_allows() {
         assert_eq!(mode & 0o777, want, "umask {umask}: {mode:o}");
     }
 }
+
+/// Every record names where and by whom it was made: the station, the chamber, the
+/// tilter and the operator, from the environment (`HOSTFIT_STATION`, `HOSTFIT_CHAMBER`,
+/// `HOSTFIT_TILTER`, `HOSTFIT_OPERATOR`: a station's login sets them once) or from the
+/// flags, a flag winning over the environment.
+#[test]
+fn every_record_names_its_station_chamber_tilter_and_operator() {
+    let tmp = tempfile::tempdir().unwrap();
+    // two lots of two units (a lot run again would resume: nothing new recorded)
+    for prefix in ["TR", "TS"] {
+        let dir = tmp.path().join(prefix);
+        std::fs::create_dir_all(&dir).unwrap();
+        for (i, csv) in recordings().iter().take(2).enumerate() {
+            let serial = format!("{prefix}-{i}");
+            let text = csv.replacen("# unit=SERIAL", &format!("# unit={serial}"), 1);
+            std::fs::write(dir.join(format!("{serial}.csv")), text).unwrap();
+        }
+    }
+    let db = tmp.path().join("line.sqlite").display().to_string();
+    let run = |lot: &str, out: &str, flags: &[&str]| {
+        let o = Process::new(env!("CARGO_BIN_EXE_host-fit"))
+            .arg("batch")
+            .arg(tmp.path().join(lot))
+            .arg("--out")
+            .arg(tmp.path().join(out))
+            .args(["--db", &db, "--jobs", "1"])
+            .args(flags)
+            .env("HOSTFIT_STATION", "ST-04")
+            .env("HOSTFIT_CHAMBER", "CH-2")
+            .env("HOSTFIT_TILTER", "TL-7")
+            .env("HOSTFIT_OPERATOR", "m.kovalenko")
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    run("TR", "from-env", &[]);
+    run(
+        "TS",
+        "from-flags",
+        &["--chamber", "CH-9", "--operator", "o.petrenko"],
+    );
+    let all = store(&db).all().unwrap();
+    assert_eq!(all.len(), 4);
+    let traces: Vec<[Option<&str>; 4]> = all
+        .iter()
+        .map(|r| {
+            let t = &r.trace;
+            [
+                t.station.as_deref(),
+                t.chamber.as_deref(),
+                t.tilter.as_deref(),
+                t.operator.as_deref(),
+            ]
+        })
+        .collect();
+    let env = [
+        Some("ST-04"),
+        Some("CH-2"),
+        Some("TL-7"),
+        Some("m.kovalenko"),
+    ];
+    let flags = [
+        Some("ST-04"),
+        Some("CH-9"),
+        Some("TL-7"),
+        Some("o.petrenko"),
+    ];
+    assert_eq!(traces, vec![env, env, flags, flags], "{all:?}");
+}

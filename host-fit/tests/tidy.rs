@@ -734,24 +734,13 @@ fn tuple_aliases(code: &str) -> Vec<String> {
         .collect()
 }
 
-/// Files that still hold a tuple alias while another branch rewrites them (the store's
-/// and the search's rewrites); each entry must still hold one (the test says when to drop
-/// it), so the list only shrinks.
-const TUPLE_ALIASES_REWRITTEN_ELSEWHERE: [&str; 0] = [];
-
 #[test]
 fn no_tuple_type_aliases() {
     let mut bad = Vec::new();
     for dir in all_code() {
         for (m, p) in files(&dir) {
             let aliases = tuple_aliases(&code_only(&std::fs::read_to_string(&p).unwrap()));
-            let elsewhere = dir == src() && TUPLE_ALIASES_REWRITTEN_ELSEWHERE.contains(&m.as_str());
-            if elsewhere {
-                assert!(
-                    !aliases.is_empty(),
-                    "{m} has no tuple alias left: drop it from TUPLE_ALIASES_REWRITTEN_ELSEWHERE"
-                );
-            } else if !aliases.is_empty() {
+            if !aliases.is_empty() {
                 bad.push(format!("{}: {m}: {}", dir.display(), aliases.join(", ")));
             }
         }
@@ -1154,4 +1143,47 @@ fn no_function_of_xtask_or_firmware_core_is_longer_than_the_limit() {
         "functions over {MAX_FN_LINES} lines of code:\n{}",
         long.join("\n")
     );
+}
+
+/// The modules (of `modules`, as `a::b`) that the layout page's row of their layer (a
+/// table row `| N | ...`, N the layer's rank) does not name as `` `b` `` or `` `b/` ``.
+fn unnamed_in_layout(page: &str, modules: &[String]) -> Vec<String> {
+    let row = |layer: u8| {
+        page.lines()
+            .find(|l| l.starts_with(&format!("| {layer} |")))
+            .unwrap_or("")
+    };
+    modules
+        .iter()
+        .filter(|m| {
+            let base = m.rsplit("::").next().unwrap_or(m);
+            let r = row(rank(m));
+            !r.contains(&format!("`{base}`")) && !r.contains(&format!("`{base}/`"))
+        })
+        .cloned()
+        .collect()
+}
+
+/// docs/layout.md is the code's map: every module of host-fit is named in its layer's
+/// row, so a module added, moved or renamed shows up there or fails here.
+#[test]
+fn the_layout_page_names_every_module_in_its_layer() {
+    let page = std::fs::read_to_string(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../docs/layout.md"),
+    )
+    .unwrap();
+    let modules: Vec<String> = files(&src()).into_iter().map(|(m, _)| m).collect();
+    let missing = unnamed_in_layout(&page, &modules);
+    assert!(
+        missing.is_empty(),
+        "docs/layout.md does not name these modules in their layer's row: {missing:?}"
+    );
+    // the check itself: a module named in another layer's row is not named
+    let page = "| 2 | `model/` | `lsq` |\n| 3 | `fit/` | `select` |\n";
+    let ms = [
+        "model::lsq".to_string(),
+        "fit::lsq".to_string(),
+        "fit::select".to_string(),
+    ];
+    assert_eq!(unnamed_in_layout(page, &ms), vec!["fit::lsq".to_string()]);
 }

@@ -222,7 +222,7 @@ fn fit_unit(
     if let Some(t) = &o.store {
         let mut rc = t.record(Recorded::Batch, &r.unit, path)?;
         rc.input_sha256 = Some(sha);
-        rc.output_unit = Some(rec.output_unit.to_string());
+        rc.output_unit = Some(rec.output_unit.clone());
         rc.model = Some(r.model.clone());
         rc.at_t0 = Some(AtT0 {
             t0_c: cal.t0_c,
@@ -304,14 +304,8 @@ fn write_test_record(
         }
     };
     let tr = test_record::build(rc, unit);
-    let v = serde_json::to_value(&tr).map_err(|e| {
-        HostError::new(
-            ErrorKind::Internal,
-            format!("cannot encode the test record: {e}"),
-        )
-    })?;
     if let Some(rc) = &mut r.record {
-        rc.test_record = Some(v);
+        rc.test_record = Some(tr.clone());
     }
     write_json(&test_record::path(out, stem), &tr, force)
 }
@@ -323,24 +317,11 @@ fn kept(path: &Path, out: &Path, r: &Record) -> Result<UnitResult> {
     crate::store::resume::restore_files(path, out, r)?;
     let judged = r.judged.as_ref();
     // the uncompensated |dg| is in the test record's verify phase
-    let uncompensated = r.test_record.as_ref().and_then(|t| {
-        t["phases"]
-            .as_array()?
-            .iter()
-            .find(|p| p["name"] == "verify")?["measurements"]["worst_dg_uncompensated_mg"]
-            ["measured_value"]
-            .as_f64()
-    });
-    let findings = r
-        .findings
+    let uncompensated = r
+        .test_record
         .as_ref()
-        .and_then(|f| f.as_array())
-        .map(|a| {
-            a.iter()
-                .filter_map(|f| f["effect"].as_str().and_then(EffectId::parse))
-                .collect()
-        })
-        .unwrap_or_default();
+        .and_then(test_record::TestRecord::uncompensated_mg);
+    let findings = r.finding_effects()?;
     Ok(UnitResult {
         file: path.to_path_buf(),
         unit: r.serial.clone(),
@@ -388,7 +369,7 @@ fn one(path: &Path, out: &Path, o: &BatchOptions, force: bool) -> UnitResult {
                     reason: &r.reason,
                     uncompensated_mg: None,
                 };
-                rc.test_record = serde_json::to_value(test_record::build(rc, &unit)).ok();
+                rc.test_record = Some(test_record::build(rc, &unit));
             }
         }
     }

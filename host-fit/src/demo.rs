@@ -123,7 +123,7 @@ fn records(
         r.time_utc.clone_from(&started);
         r.options = serde_json::json!({ "seed": seed, "model": m.model.to_string(), "blob": m.model.file() });
         r.input_sha256 = Some(sha.clone());
-        r.output_unit = Some(oc.recording.output_unit.to_string());
+        r.output_unit = Some(oc.recording.output_unit.clone());
         r.model = Some(m.model.to_string());
         let cal = m.fit.calibration(0.1, false);
         r.at_t0 = Some(AtT0 {
@@ -175,7 +175,7 @@ fn plan_record(
         "plan": plan.candidates[plan.chosen].kind.describe(),
     });
     r.input_sha256 = Some(sha);
-    r.output_unit = Some(plan.recording.output_unit.to_string());
+    r.output_unit = Some(plan.recording.output_unit.clone());
     r.model = Some(format!("plan ({})", j.fitted));
     r.at_t0 = Some(AtT0 {
         t0_c: plan.calibration.t0_c,

@@ -104,7 +104,10 @@ fn assert_records_hold_what_was_made(
             r.commit
         );
         assert!(host_fit::store::clock::parse(&r.time_utc, false).is_some());
-        assert_eq!(r.output_unit.as_deref(), Some("V"));
+        assert_eq!(
+            r.output_unit,
+            Some(host_fit::data::output_unit::OutputUnit::Volt)
+        );
     }
     let (f, v, d) = (&all[0], &all[1], &all[2]);
     // fit: its options, model, blob, coefficients at T0 (the blob's f32 row dT^0)

@@ -161,7 +161,7 @@ impl Run<'_> {
         let mut store = Store::open(&t.db)?;
         let mut r = t.record(command, self.serial, &self.rec.path)?;
         r.input_sha256 = Some(sha256_file(&self.rec.path)?);
-        r.output_unit = Some(self.rec.output_unit.to_string());
+        r.output_unit = Some(self.rec.output_unit.clone());
         fill(&mut r)?;
         store.append(std::slice::from_mut(&mut r))?;
         let _ = writeln!(

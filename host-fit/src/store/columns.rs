@@ -5,6 +5,7 @@
 //! the names of the three (and of a new store's table) equal.
 use super::record::UnitStatus;
 use super::record::{AtT0, Command, Judged, Record, RunId, Trace, COEFFS};
+use crate::data::output_unit::OutputUnit;
 use firmware_core::model::COEFF_NAMES;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -210,7 +211,10 @@ impl Record {
         b.text("lot", self.lot.as_deref());
         b.text("input", Some(&self.input));
         b.text("input_sha256", self.input_sha256.as_deref());
-        b.text("output_unit", self.output_unit.as_deref());
+        b.text(
+            "output_unit",
+            self.output_unit.as_ref().map(OutputUnit::as_str),
+        );
         b.text("model", self.model.as_deref());
         b.real("t0_c", self.at_t0.map(|a| a.t0_c));
         for (k, n) in COEFF_NAMES.iter().enumerate() {
@@ -253,7 +257,10 @@ impl Record {
         b.text("operator", self.trace.operator.as_deref());
         b.text(
             "test_record",
-            self.test_record.as_ref().map(|t| t.to_string()).as_deref(),
+            self.test_record
+                .as_ref()
+                .and_then(|t| serde_json::to_string(t).ok())
+                .as_deref(),
         );
         b.0
     }
@@ -268,6 +275,15 @@ impl Record {
                 .transpose()
         };
         let named = |n: &str, v: &str| format!("column `{n}`: `{v}` is not a known name");
+        // a column holding a typed JSON document
+        fn typed<T: serde::de::DeserializeOwned>(
+            row: &Row,
+            n: &str,
+        ) -> std::result::Result<Option<T>, String> {
+            row.text(n)
+                .map(|s| serde_json::from_str(&s).map_err(|e| format!("column `{n}`: {e}")))
+                .transpose()
+        }
         let run = need("run_id")?;
         let command = need("command")?;
         let mut values = [0.0; COEFFS];
@@ -308,7 +324,7 @@ impl Record {
             lot: row.text("lot"),
             input: need("input")?,
             input_sha256: row.text("input_sha256"),
-            output_unit: row.text("output_unit"),
+            output_unit: row.text("output_unit").map(|u| OutputUnit::parse(&u)),
             model: row.text("model"),
             at_t0: match (row.real("t0_c"), have) {
                 (Some(t0_c), true) => Some(AtT0 {
@@ -339,7 +355,7 @@ impl Record {
                 tilter: row.text("tilter"),
                 operator: row.text("operator"),
             },
-            test_record: json("test_record")?,
+            test_record: typed(row, "test_record")?,
         })
     }
 }
@@ -371,7 +387,18 @@ mod tests {
         r.findings = Some(serde_json::json!([{"effect": "temp_rate"}]));
         r.trace.station = Some("ST-3".into());
         r.trace.operator = Some("ana".into());
-        r.test_record = Some(serde_json::json!({"outcome": "PASS"}));
+        r.output_unit = Some(OutputUnit::parse("mV"));
+        let unit = crate::store::test_record::Unit {
+            acceptance: None,
+            status: UnitStatus::Error,
+            reason: "the recording holds no dwell",
+            uncompensated_mg: None,
+        };
+        r.test_record = Some(crate::store::test_record::build(&r, &unit));
+        assert_eq!(
+            r.finding_effects().unwrap(),
+            vec![crate::diagnose::EffectId::TempRate]
+        );
         let named = r.to_row();
         // every column, each once, in the table's order
         let names: Vec<String> = named.iter().map(|c| c.0.clone()).collect();

@@ -135,12 +135,10 @@ impl History {
                 third.push(format!("worst verification |dg| {dg:.4} mg"));
             }
             if let Some(v) = r.diagnosis_verdict.map(|v| v.to_string()) {
-                let effects: Vec<&str> = r
-                    .findings
-                    .as_ref()
-                    .and_then(|f| f.as_array())
-                    .map(|a| a.iter().filter_map(|f| f["effect"].as_str()).collect())
-                    .unwrap_or_default();
+                let effects: Vec<String> = match r.finding_effects() {
+                    Ok(ids) => ids.iter().map(|e| e.as_str().to_string()).collect(),
+                    Err(e) => vec![format!("findings unreadable: {e}")],
+                };
                 third.push(format!(
                     "diagnosis {v}{}",
                     if effects.is_empty() {

@@ -1,7 +1,10 @@
 //! One record of the store: what a run of `fit`, `verify`, `diagnose`, `batch` (one per
 //! unit) or `demo` (one per model) made of one unit, with where it came from (the run
 //! id, the tool's version and commit, the command and its options, the input's SHA-256).
+use super::test_record::TestRecord;
+use crate::data::output_unit::OutputUnit;
 use crate::diagnose::contract::Verdict as DiagnosisVerdict;
+use crate::diagnose::EffectId;
 use crate::error::{ErrorKind, HostError, Result};
 use firmware_core::model::{COEFF_NAMES, N_COEFFS};
 use serde::ser::SerializeStruct;
@@ -329,7 +332,7 @@ pub struct Record {
     /// Its SHA-256 (None: a batch unit whose file could not be read).
     pub input_sha256: Option<String>,
     /// The recording's output unit (`V`, `mV`, ...).
-    pub output_unit: Option<String>,
+    pub output_unit: Option<OutputUnit>,
     /// The model in the blob.
     pub model: Option<String>,
     /// The coefficients at T0.
@@ -350,7 +353,7 @@ pub struct Record {
     pub trace: Trace,
     /// The unit's test record for the line's systems (see [`super::test_record`]).
     #[serde(skip)]
-    pub test_record: Option<serde_json::Value>,
+    pub test_record: Option<TestRecord>,
 }
 
 impl Record {
@@ -402,6 +405,30 @@ impl Record {
         self.diagnosis_verdict = Some(contract.verdict);
         self.findings = Some(v["findings"].clone());
         Ok(())
+    }
+
+    /// The catalogue ids of the stored findings, read by serde (the other fields of a
+    /// finding are not needed here, so a record of an older contract still reads).
+    pub fn finding_effects(&self) -> Result<Vec<EffectId>> {
+        /// The one field read of a stored finding.
+        #[derive(serde::Deserialize)]
+        struct Named {
+            effect: EffectId,
+        }
+        match &self.findings {
+            None => Ok(Vec::new()),
+            Some(v) => Vec::<Named>::deserialize(v)
+                .map(|n| n.into_iter().map(|n| n.effect).collect())
+                .map_err(|e| {
+                    HostError::new(
+                        ErrorKind::Store,
+                        format!(
+                            "run {}: its stored findings are not the diagnosis contract's: {e}",
+                            self.run_id
+                        ),
+                    )
+                }),
+        }
     }
 
     /// Fill the acceptance from a verdict and its reason.

@@ -118,6 +118,11 @@ pub struct Phase {
     pub measurements: BTreeMap<String, Measurement>,
 }
 
+/// The verification phase's name.
+const VERIFY: &str = "verify";
+/// The measurement of the uncompensated worst |dg| (verification phase), mg.
+const UNCOMPENSATED: &str = "worst_dg_uncompensated_mg";
+
 /// A unit's test record.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TestRecord {
@@ -139,6 +144,19 @@ pub struct TestRecord {
     pub metadata: BTreeMap<String, serde_json::Value>,
     /// The phases.
     pub phases: Vec<Phase>,
+}
+
+impl TestRecord {
+    /// The uncompensated worst |dg| its verification phase measured, mg (what a batch
+    /// run again after a crash puts back in its summary).
+    pub fn uncompensated_mg(&self) -> Option<f64> {
+        self.phases
+            .iter()
+            .find(|p| p.name == VERIFY)?
+            .measurements
+            .get(UNCOMPENSATED)?
+            .measured_value
+    }
 }
 
 fn measurement(name: &str, v: Option<f64>, units: &str, limit: Option<f64>) -> Measurement {
@@ -181,7 +199,11 @@ pub struct Unit<'a> {
 /// The test record of the unit `u` whose store record is `r`.
 pub fn build(r: &Record, u: &Unit<'_>) -> TestRecord {
     let ms = |t: &str| super::clock::parse(t, false).map_or(0, |us| us.div_euclid(1000));
-    let unit = r.output_unit.clone().unwrap_or_else(|| "unit".into());
+    let unit = r
+        .output_unit
+        .as_ref()
+        .map_or("unit", |u| u.as_str())
+        .to_string();
     let mut fit = vec![measurement("t0_c", r.at_t0.map(|a| a.t0_c), "C", None)];
     for (k, n) in COEFF_NAMES.iter().enumerate() {
         let u = if k < firmware_core::model::U0_INDEX[0] {
@@ -221,7 +243,7 @@ pub fn build(r: &Record, u: &Unit<'_>) -> TestRecord {
                     "dwells",
                     outside_limit,
                 ),
-                measurement("worst_dg_uncompensated_mg", u.uncompensated_mg, "mg", None),
+                measurement(UNCOMPENSATED, u.uncompensated_mg, "mg", None),
             ];
             let code = match a.acceptance {
                 Verdict::Pass => None,
@@ -242,7 +264,7 @@ pub fn build(r: &Record, u: &Unit<'_>) -> TestRecord {
             } else {
                 Outcome::Fail
             };
-            Some(phase("verify", o, m))
+            Some(phase(VERIFY, o, m))
         }
         None => None,
     };

@@ -100,7 +100,7 @@ fn what_a_discovered_term_corrects() {
 #[test]
 fn test_record_outcomes() {
     // the OpenHTF-like test record's spellings
-    use host_fit::store::test_record::{MeasurementOutcome, Outcome};
+    use host_fit::store::test_document::{MeasurementOutcome, Outcome};
     round_trip::<Outcome>(&["PASS", "FAIL", "ERROR"]);
     round_trip::<MeasurementOutcome>(&["PASS", "FAIL", "UNSET"]);
 }
@@ -141,6 +141,15 @@ fn diagnosis_contract() {
         "explained",
         "partly_explained",
         "unexplained",
+    ]);
+    round_trip::<host_fit::diagnose::search::Termination>(&[
+        "candidates_used_up",
+        "research_rounds_spent",
+        "at_floor",
+        "not_located",
+        "nothing_passed",
+        "library_rounds_spent",
+        "library_nothing_passed",
     ]);
     round_trip::<host_fit::diagnose::quality::NoteKind>(&[
         "spikes",

@@ -263,6 +263,13 @@ fn an_effect_outside_the_catalogue_is_unexplained_and_located() {
         c.text()
     );
     assert_eq!(c.verdict, Verdict::Unexplained, "{}", c.text());
+    // neither phase found anything: the library's ended with nothing passing
+    assert_eq!(
+        d.search_ended.library,
+        host_fit::diagnose::search::Termination::LibraryNothingPassed,
+        "{:?}",
+        d.search_ended
+    );
     let u = c.unexplained.as_ref().unwrap();
     assert_eq!(u.located[0].axis, ["x", "y", "z"][axis], "{}", c.text());
     // the time spans on that axis: the residual steps by the shift's sign between the

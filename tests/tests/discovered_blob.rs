@@ -9,6 +9,7 @@ use firmware_core::compensate::{Compensator, Method};
 use host_fit::blind::designs::{positions_of, Design, PositionSet, Power};
 use host_fit::blob::{build_blob, build_blob_with_terms};
 use host_fit::data::recording::Recording;
+use host_fit::diagnose::search::Termination;
 use host_fit::diagnose::{diagnose, EffectId};
 use host_fit::simulate::{simulate, PerAxis, SimConfig};
 use std::path::Path;
@@ -78,6 +79,20 @@ fn a_cubic_response_is_found_flashed_and_compensated_by_the_firmware() {
         .collect();
     assert_eq!(found.len(), 1, "{}", d.contract().text());
     assert_eq!(found[0].term.as_deref(), Some("a_y^3"));
+    // the catalogue's search left a rest it could not name; the library's phase found
+    // the term and ended with the rest at the floor
+    assert_ne!(
+        d.search_ended.catalogue,
+        Termination::AtFloor,
+        "{:?}",
+        d.search_ended
+    );
+    assert_eq!(
+        d.search_ended.library,
+        Termination::AtFloor,
+        "{:?}",
+        d.search_ended
+    );
     assert_eq!(found[0].axes, ["y"]);
     assert!(
         d.findings.iter().all(|f| f.effect == EffectId::Discovered),

@@ -537,7 +537,7 @@ fn the_trend_report_in_a_browser() {
             }
             r.lot = Some(format!("L{lot}"));
             r.input_sha256 = Some("0".repeat(64));
-            r.output_unit = Some("V".into());
+            r.output_unit = Some(host_fit::data::output_unit::OutputUnit::Volt);
             r.model = Some("poly4".into());
             r.at_t0 = Some(AtT0 {
                 t0_c: 20.0,

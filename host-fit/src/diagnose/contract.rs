@@ -105,6 +105,10 @@ pub struct Contract {
     /// the columns tried, the terms proposed (with the share of resamples choosing them),
     /// the one found (empty: the rest was at the floor).
     pub library: Vec<crate::diagnose::search::LibraryRound>,
+    /// Why the search ended: the catalogue's (`candidates_used_up`,
+    /// `research_rounds_spent`, `at_floor`, `not_located`, `nothing_passed`) and then the
+    /// library's phase (`at_floor`, `library_rounds_spent`, `library_nothing_passed`).
+    pub search_ended: crate::diagnose::search::Ended,
     /// The final model.
     #[serde(rename = "final")]
     pub final_model: FinalFigures,
@@ -301,6 +305,7 @@ impl Diagnosis<'_> {
             }),
             research: self.research.clone(),
             library: self.library.clone(),
+            search_ended: self.search_ended,
             final_model: FinalFigures {
                 temperature_model: f.spec.basis.describe(),
                 model: f

@@ -67,6 +67,8 @@ pub struct Diagnosis<'a> {
     pub research: Vec<search::Research>,
     /// The library search for discovered terms after the catalogue's, round by round.
     pub library: Vec<search::LibraryRound>,
+    /// Why the catalogue's search and the library's phase ended.
+    pub search_ended: search::Ended,
     /// What cannot be identified from this recording.
     pub not_identifiable: Vec<String>,
     /// Notes on the data.
@@ -136,6 +138,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         .collect();
     let research = found.research;
     let library = found.library;
+    let search_ended = found.ended;
     // one line per kind of position that would identify them
     let mut kinds: Vec<(&str, Vec<&str>)> = Vec::new();
     for u in &found.unidentifiable {
@@ -194,6 +197,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         unexplained,
         research,
         library,
+        search_ended,
         not_identifiable,
         quality,
         data,

@@ -4,8 +4,8 @@
 //! when none is left to run.
 //!
 //! An iteration of the forward phase: every [`Proposer`] proposes its open candidates
-//! in their best profiled form on top of the current model (the [`Catalogue`]'s effects
-//! today; a library of discovered terms is one more proposer), [`Search::rank`] ranks
+//! in their best profiled form on top of the current model (the [`Catalogue`]'s effects),
+//! [`Search::rank`] ranks
 //! them by the quasi-BIC each fit gains, [`Search::judge`] fits the best ranked in full
 //! and judges them by the acceptance rules ([`Judgement`]), [`Search::accept`] takes the
 //! first that passes (the rivals within the ambiguity margin are named as ambiguous);
@@ -21,6 +21,16 @@
 //! phase resumes. A hysteresis, a warm-up or a temperature curvature must also beat a
 //! linear drift in time in its place ([`beats_drift`]), when added and in the backward
 //! check.
+//!
+//! When the catalogue's search is over (its reason kept as the outcome's
+//! `catalogue_ended`), the catalogue's time constants are estimated jointly and the
+//! library phase begins: while the rest stays above the floor, an iteration searches the
+//! library of discovered terms ([`discover`]: sparse, bagged) on top of the joint model
+//! and judges its proposals in turn ([`Search::library_round`]); the first that passes
+//! joins the model and the checks run again. The catalogue's effects are searched first
+//! on purpose: a short product of what the recording measures can mimic a named physics
+//! on one design (a rate term's column and a product with the temperature's rate), and
+//! the named physics is the claim that holds off the design.
 //!
 //! Every rule is a field of [`crate::model::rules::Rules`] (all scaled by the
 //! dispersion phi of the larger model, so a model still far from the data cannot buy
@@ -57,6 +67,15 @@ pub struct Scope {
     pub measured: bool,
 }
 
+/// Why each phase of the search ended (the contract's `search_ended`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Ended {
+    /// Why the catalogue's search ended.
+    pub catalogue: Termination,
+    /// Why the library's phase, and with it the search, ended.
+    pub library: Termination,
+}
+
 /// Where the search ended.
 pub struct Outcome {
     /// The joint model with the effects accepted, checked backward and for adequacy.
@@ -66,8 +85,8 @@ pub struct Outcome {
     pub ambiguous: Vec<Vec<EffectId>>,
     /// Every re-search, in order: where it looked and what it found.
     pub research: Vec<Research>,
-    /// Why it ended.
-    pub ended: Termination,
+    /// Why each phase ended.
+    pub ended: Ended,
     /// The library search after the catalogue's, round by round (empty: the rest was at
     /// the floor, or the data cannot judge time-series terms).
     pub library: Vec<LibraryRound>,
@@ -129,8 +148,21 @@ pub struct Research {
     pub found: Option<EffectId>,
 }
 
-/// Why the search ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Why the search ended (the contract's `search_ended`).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum Termination {
     /// Every candidate is in the model at its most, or named in an ambiguity: nothing
     /// is left to propose.
@@ -144,6 +176,11 @@ pub enum Termination {
     NotLocated,
     /// Where the residual is located, no candidate passed the rules.
     NothingPassed,
+    /// The library's phase added its most terms
+    /// ([`crate::model::rules::Rules::discover_max_terms`] rounds).
+    LibraryRoundsSpent,
+    /// No proposal of the library's last round passed the rules.
+    LibraryNothingPassed,
 }
 
 /// Search from `baseline` (see the module doc).
@@ -160,16 +197,22 @@ pub fn run(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
         }
         state = search.next(state);
     };
-    log::debug!("  search ended: {ended:?}");
-    // the catalogue's time constants estimated jointly before the library looks at the
-    // rest: a lag profiled before the rate beside it leaves a rest of its own making
-    state.current = profile::refine_jointly(data, &state.current);
-    let library = search.library(&mut state);
+    log::debug!(
+        "  search ended: {ended:?} (the catalogue's: {:?})",
+        state.catalogue_ended
+    );
+    let mut library = state.library;
+    library
+        .sets
+        .retain(|t| state.current.spec.extras.contains(&t.extra));
     Outcome {
         joint: state.current,
         ambiguous: state.ambiguous,
         research: state.research,
-        ended,
+        ended: Ended {
+            catalogue: state.catalogue_ended.unwrap_or(ended),
+            library: ended,
+        },
         library: library.rounds,
         term_sets: library.sets,
         unidentifiable: library.unidentifiable,
@@ -178,6 +221,7 @@ pub fn run(data: &Data, baseline: &Fit, scope: &Scope) -> Outcome {
 
 /// What the library search leaves: its rounds, the discovered terms found as sets, the
 /// terms the design cannot identify.
+#[derive(Default)]
 struct LibraryOutcome {
     rounds: Vec<LibraryRound>,
     sets: Vec<TermSet>,
@@ -237,6 +281,8 @@ enum Phase {
     Forward,
     /// A look where the joint model's residual is located.
     Research,
+    /// Rounds of the library of discovered terms, after the catalogue's search.
+    Library,
 }
 
 /// An effect a re-search found, with the located rows it was judged on: the backward
@@ -263,8 +309,16 @@ pub struct State {
     regions: Vec<Region>,
     /// What the next iteration does.
     phase: Phase,
-    /// Set when an iteration ends the search.
+    /// Set when an iteration ends the phase it is in (the catalogue's, or the search in
+    /// the library's phase).
     ended: Option<Termination>,
+    /// Why the catalogue's search ended, once the library's phase has begun.
+    catalogue_ended: Option<Termination>,
+    /// The library's rounds so far, its term sets and what it cannot identify.
+    library: LibraryOutcome,
+    /// Library candidates judged and refused (or dropped by the checks): not judged
+    /// again.
+    rejected: Vec<Candidate>,
 }
 
 impl State {
@@ -330,12 +384,24 @@ impl<'a> Search<'_, 'a> {
             regions: Vec::new(),
             phase: Phase::Forward,
             ended: None,
+            catalogue_ended: None,
+            library: LibraryOutcome::default(),
+            rejected: Vec::new(),
         }
     }
 
-    /// Why the search is over, when it is: an iteration ended it, or the forward phase
-    /// has ended (the checks run) with every candidate used up or every re-search spent.
+    /// Why the search is over, when it is: an iteration of the library's phase ended it.
     pub fn terminate(&self, state: &State) -> Option<Termination> {
+        match state.phase {
+            Phase::Library => state.ended,
+            Phase::Forward | Phase::Research => None,
+        }
+    }
+
+    /// Why the catalogue's search is over, when it is: an iteration ended it, or the
+    /// forward phase has ended (the checks run) with every candidate used up or every
+    /// re-search spent.
+    fn catalogue_over(&self, state: &State) -> Option<Termination> {
         if state.ended.is_some() {
             return state.ended;
         }
@@ -350,11 +416,31 @@ impl<'a> Search<'_, 'a> {
         None
     }
 
+    /// The catalogue's search is over: its time constants estimated jointly (a lag
+    /// profiled before the rate beside it leaves a rest of its own making), then the
+    /// library's phase.
+    fn begin_library(&self, state: &mut State, reason: Termination) {
+        state.catalogue_ended = Some(reason);
+        state.ended = None;
+        state.current = profile::refine_jointly(self.data, &state.current);
+        state.phase = Phase::Library;
+    }
+
     /// One iteration (see the module doc): a forward round (propose, fit, judge, accept;
-    /// when none passes or none is left, the backward and adequacy checks), or a look
-    /// where the residual is located (its effect accepted and checked).
+    /// when none passes or none is left, the backward and adequacy checks), a look where
+    /// the residual is located (its effect accepted and checked), or, once the
+    /// catalogue's search is over, a round of the library's phase.
     pub fn next(&self, mut state: State) -> State {
+        if state.phase != Phase::Library {
+            if let Some(reason) = self.catalogue_over(&state) {
+                self.begin_library(&mut state, reason);
+                return state;
+            }
+        }
         match state.phase {
+            Phase::Library => {
+                state.ended = self.library_round(&mut state);
+            }
             Phase::Forward => {
                 let ranked = self.rank(&state, self.propose(&state));
                 match self.judge(&state, ranked) {
@@ -860,93 +946,87 @@ pub fn keep_adequate(data: &Data, mut current: Fit) -> Fit {
 
 /// The library search (see [`Search::library`]).
 impl Search<'_, '_> {
-    /// After the catalogue's search: while the rest stays above the floor, the library of
-    /// discovered terms is searched ([`discover`]) and its proposals judged in turn by
-    /// every acceptance rule a catalogue effect meets, and by reproduction on both
-    /// halves; the first that passes joins the model (its decay's time constant
-    /// profiled), the joint model is checked backward (an effect the term explains better
-    /// is dropped) and the library is searched again, at most
-    /// [`crate::model::rules::Rules::discover_max_terms`] times. Time-series terms need
-    /// the same data the catalogue's time-series effects need.
-    fn library(&self, state: &mut State) -> LibraryOutcome {
+    /// One round of the library's phase (see the module doc), or why the phase is over:
+    /// the rest at the floor, [`crate::model::rules::Rules::discover_max_terms`] rounds
+    /// run, or no proposal passed. The library of discovered terms is searched
+    /// ([`discover`]) on top of the joint model and its proposals judged in turn by every
+    /// acceptance rule a catalogue effect meets, and by reproduction on both halves; the
+    /// first that passes joins the model (its decay's time constant profiled) and the
+    /// joint model is checked backward (an effect the term explains better is dropped).
+    /// Time-series terms need the same data the catalogue's time-series effects need.
+    fn library_round(&self, state: &mut State) -> Option<Termination> {
         let data = self.data;
         let rules = &data.rules;
-        let mut out = LibraryOutcome {
-            rounds: Vec::new(),
-            sets: Vec::new(),
-            unidentifiable: Vec::new(),
-        };
+        if state.library.rounds.len() >= rules.discover_max_terms {
+            return Some(Termination::LibraryRoundsSpent);
+        }
+        if normalized_rms(data, &state.current) <= rules.at_floor_rms {
+            return Some(Termination::AtFloor);
+        }
         let reach = Reach {
             temperature: self.scope.temperature,
             time: self.scope.measured,
             rate: self.scope.dynamics,
         };
-        let mut rejected: Vec<Candidate> = Vec::new();
-        while out.rounds.len() < rules.discover_max_terms
-            && normalized_rms(data, &state.current) > rules.at_floor_rms
-        {
-            let order = match state.current.spec.basis {
-                crate::model::basis::Basis::Poly { order } => order,
-                crate::model::basis::Basis::Pwl { .. } => 1,
-            };
-            let found = discover(data, &state.current, order, reach);
-            if out.unidentifiable.is_empty() {
-                out.unidentifiable = found.unidentifiable.clone();
-            }
-            let mut round = LibraryRound {
-                tried: found.tried,
-                proposed: found
-                    .proposals
-                    .iter()
-                    .map(|p| ProposedTerm {
-                        term: p.candidate.term.to_string(),
-                        axis: firmware_core::model::AXES[p.candidate.axis],
-                        inclusion: p.inclusion,
-                    })
-                    .collect(),
-                found: None,
-            };
-            let mut step = None;
-            for p in found.proposals {
-                let pick = simplest(&p);
-                if rejected.contains(&pick.proposal.candidate) {
-                    continue;
-                }
-                match self.judged_term(&state.current, &pick.proposal) {
-                    Some(fit) => {
-                        step = Some((pick, fit));
-                        break;
-                    }
-                    None => rejected.push(pick.proposal.candidate.clone()),
-                }
-            }
-            let Some((pick, fit)) = step else {
-                out.rounds.push(round);
-                break;
-            };
-            let Some(extra) = fit.spec.extras.last().cloned() else {
-                out.rounds.push(round);
-                break;
-            };
-            round.found = Some(extra.form().to_string());
-            state.current = reorder(data, &fit, self.scope.max_order);
-            state.current = checked(data, state.current.clone(), &state.regions);
-            let kept = state.current.spec.extras.contains(&extra);
-            if kept && !pick.others.is_empty() {
-                out.sets.push(TermSet {
-                    extra,
-                    others: pick.others,
-                    named: pick.named,
-                });
-            } else if !kept {
-                round.found = None;
-                rejected.push(pick.proposal.candidate.clone());
-            }
-            out.rounds.push(round);
+        let order = match state.current.spec.basis {
+            crate::model::basis::Basis::Poly { order } => order,
+            crate::model::basis::Basis::Pwl { .. } => 1,
+        };
+        let found = discover(data, &state.current, order, reach);
+        if state.library.unidentifiable.is_empty() {
+            state.library.unidentifiable = found.unidentifiable.clone();
         }
-        out.sets
-            .retain(|t| state.current.spec.extras.contains(&t.extra));
-        out
+        let mut round = LibraryRound {
+            tried: found.tried,
+            proposed: found
+                .proposals
+                .iter()
+                .map(|p| ProposedTerm {
+                    term: p.candidate.term.to_string(),
+                    axis: firmware_core::model::AXES[p.candidate.axis],
+                    inclusion: p.inclusion,
+                })
+                .collect(),
+            found: None,
+        };
+        let mut step = None;
+        for p in found.proposals {
+            let pick = simplest(&p);
+            if state.rejected.contains(&pick.proposal.candidate) {
+                continue;
+            }
+            match self.judged_term(&state.current, &pick.proposal) {
+                Some(fit) => {
+                    step = Some((pick, fit));
+                    break;
+                }
+                None => state.rejected.push(pick.proposal.candidate.clone()),
+            }
+        }
+        let Some((pick, fit)) = step else {
+            state.library.rounds.push(round);
+            return Some(Termination::LibraryNothingPassed);
+        };
+        let Some(extra) = fit.spec.extras.last().cloned() else {
+            state.library.rounds.push(round);
+            return Some(Termination::LibraryNothingPassed);
+        };
+        round.found = Some(extra.form().to_string());
+        state.current = reorder(data, &fit, self.scope.max_order);
+        state.current = checked(data, state.current.clone(), &state.regions);
+        let kept = state.current.spec.extras.contains(&extra);
+        if kept && !pick.others.is_empty() {
+            state.library.sets.push(TermSet {
+                extra,
+                others: pick.others,
+                named: pick.named,
+            });
+        } else if !kept {
+            round.found = None;
+            state.rejected.push(pick.proposal.candidate.clone());
+        }
+        state.library.rounds.push(round);
+        None
     }
 
     /// A proposal of the library search at its profiled time constant, fitted in full,

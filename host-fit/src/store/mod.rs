@@ -68,6 +68,7 @@ pub mod record;
 pub mod resume;
 pub mod schema;
 pub mod sqlite;
+pub mod test_document;
 pub mod test_record;
 pub mod trend;
 

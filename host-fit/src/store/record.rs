@@ -1,7 +1,7 @@
 //! One record of the store: what a run of `fit`, `verify`, `diagnose`, `batch` (one per
 //! unit) or `demo` (one per model) made of one unit, with where it came from (the run
 //! id, the tool's version and commit, the command and its options, the input's SHA-256).
-use super::test_record::TestRecord;
+use super::test_document::TestRecord;
 use crate::data::output_unit::OutputUnit;
 use crate::diagnose::contract::Verdict as DiagnosisVerdict;
 use crate::diagnose::EffectId;

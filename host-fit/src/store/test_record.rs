@@ -20,9 +20,11 @@
 //!   acceptance limits, the dwells outside the valid range, the uncompensated |dg|).
 use super::record::Record;
 use super::record::UnitStatus;
+pub use super::test_document::{
+    Detail, Measurement, MeasurementOutcome, Outcome, Phase, TestRecord, UNCOMPENSATED, VERIFY,
+};
 use crate::acceptance::{Acceptance, OutsideRange, Verdict};
 use firmware_core::model::COEFF_NAMES;
-use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// Where a unit's test record is written: `OUT/STEM.test-record.json`.
@@ -32,132 +34,6 @@ pub fn path(out: &std::path::Path, stem: &str) -> std::path::PathBuf {
 
 /// The schema's name and version.
 pub const SCHEMA: &str = "host-fit-test-record/1";
-
-/// A test's or a phase's outcome (OpenHTF's names).
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Serialize,
-    Deserialize,
-    strum::Display,
-    strum::EnumString,
-    strum::IntoStaticStr,
-    strum::EnumIter,
-)]
-#[serde(rename_all = "SCREAMING_SNAKE_CASE")]
-#[strum(serialize_all = "SCREAMING_SNAKE_CASE")]
-pub enum Outcome {
-    /// Accepted.
-    Pass,
-    /// Over a limit, or not judged.
-    Fail,
-    /// Not processed.
-    Error,
-}
-
-/// A measurement's outcome (OpenHTF's names).
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Serialize,
-    Deserialize,
-    strum::Display,
-    strum::EnumString,
-    strum::IntoStaticStr,
-    strum::EnumIter,
-)]
-#[serde(rename_all = "SCREAMING_SNAKE_CASE")]
-#[strum(serialize_all = "SCREAMING_SNAKE_CASE")]
-pub enum MeasurementOutcome {
-    /// Within its limits (or measured, where it has none).
-    Pass,
-    /// Outside its limits.
-    Fail,
-    /// Not measured.
-    Unset,
-}
-
-/// Why an outcome is what it is.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Detail {
-    /// `OVER_LIMIT`, `NOT_JUDGED`, `OUTSIDE_RANGE`, `PROCESSING_ERROR`.
-    pub code: String,
-    /// In words.
-    pub description: String,
-}
-
-/// One measurement.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Measurement {
-    /// Its name.
-    pub name: String,
-    /// The value (null: not measured).
-    pub measured_value: Option<f64>,
-    /// Its units (`mg`, `C`, `V/g`, ...).
-    pub units: String,
-    /// The limits, as text (`x <= 0.3`); none for a measurement kept for the record.
-    pub validators: Vec<String>,
-    /// Its outcome.
-    pub outcome: MeasurementOutcome,
-}
-
-/// One phase of the test.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Phase {
-    /// `fit` or `verify`.
-    pub name: String,
-    /// Its outcome.
-    pub outcome: Outcome,
-    /// Its measurements, by name.
-    pub measurements: BTreeMap<String, Measurement>,
-}
-
-/// The verification phase's name.
-const VERIFY: &str = "verify";
-/// The measurement of the uncompensated worst |dg| (verification phase), mg.
-const UNCOMPENSATED: &str = "worst_dg_uncompensated_mg";
-
-/// A unit's test record.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct TestRecord {
-    /// [`SCHEMA`].
-    pub schema: String,
-    /// The unit's serial.
-    pub dut_id: String,
-    /// The station.
-    pub station_id: Option<String>,
-    /// When the run started, ms since 1970 (UTC).
-    pub start_time_millis: i64,
-    /// When the unit was done, ms since 1970 (UTC).
-    pub end_time_millis: i64,
-    /// The test's outcome.
-    pub outcome: Outcome,
-    /// Why.
-    pub outcome_details: Vec<Detail>,
-    /// Where it came from.
-    pub metadata: BTreeMap<String, serde_json::Value>,
-    /// The phases.
-    pub phases: Vec<Phase>,
-}
-
-impl TestRecord {
-    /// The uncompensated worst |dg| its verification phase measured, mg (what a batch
-    /// run again after a crash puts back in its summary).
-    pub fn uncompensated_mg(&self) -> Option<f64> {
-        self.phases
-            .iter()
-            .find(|p| p.name == VERIFY)?
-            .measurements
-            .get(UNCOMPENSATED)?
-            .measured_value
-    }
-}
 
 fn measurement(name: &str, v: Option<f64>, units: &str, limit: Option<f64>) -> Measurement {
     let outcome = match (v, limit) {
@@ -199,17 +75,13 @@ pub struct Unit<'a> {
 /// The test record of the unit `u` whose store record is `r`.
 pub fn build(r: &Record, u: &Unit<'_>) -> TestRecord {
     let ms = |t: &str| super::clock::parse(t, false).map_or(0, |us| us.div_euclid(1000));
-    let unit = r
-        .output_unit
-        .as_ref()
-        .map_or("unit", |u| u.as_str())
-        .to_string();
+    let unit = r.output_unit.as_ref().map_or("unit", |u| u.as_str());
     let mut fit = vec![measurement("t0_c", r.at_t0.map(|a| a.t0_c), "C", None)];
     for (k, n) in COEFF_NAMES.iter().enumerate() {
         let u = if k < firmware_core::model::U0_INDEX[0] {
             format!("{unit}/g")
         } else {
-            unit.clone()
+            unit.to_string()
         };
         fit.push(measurement(n, r.at_t0.map(|a| a.values[k]), &u, None));
         fit.push(measurement(

@@ -25,10 +25,13 @@ const REFERENCE_BOUND_MG: f64 = 0.002;
 /// `temp_rate`, `hysteresis` + `temp_rate`) within this (mg) and no worse than the plain
 /// `fit` blob. Not the aim of 0.05 mg for both: the hysteresis + rate unit reaches it
 /// (0.045 mg) since the flight's rate estimator keeps the diagnosed `r` (it was 0.139 mg
-/// with `r` refitted beside the hysteresis), the lag + rate unit does not (0.084 mg: its
-/// `r` comes out 1.6 % high on x beside a lag 0.7 % short, and in flight at 6 C/min that
-/// is the error). This bound holds what is reached.
-const PAIR_FLIGHT_BOUND_MG: f64 = 0.1;
+/// with `r` refitted beside the hysteresis); the lag + rate unit flies at 0.059 mg (0.084
+/// before the host crossed the production test's power-off along the sensor's bend,
+/// `model::regressors::Cubic`: its lag came out 0.7 % short and its `r` 1.6 % high; on a
+/// noiseless twin it now flies at 0.005 mg), where the rate term alone flies at 0.049 mg:
+/// what is left is the flight's 2-s rate estimator and the noise of `r`. This bound holds
+/// what is reached.
+const PAIR_FLIGHT_BOUND_MG: f64 = 0.075;
 /// "No worse than the `fit` blob" up to this (mg): where `fit` itself takes the dynamic
 /// route (a lagging unit's dwells still settle) both blobs carry the same lag and tie.
 const TIE_MG: f64 = 0.001;

@@ -1,7 +1,9 @@
 //! The in-flight state machines of the physics terms (physics-catalogue.md), written once:
 //! the firmware steps them over its samples, and host-fit's diagnosis steps the very same
 //! code over a recording's rows to build its regressors, so what is flashed is what was
-//! fitted, on any clock.
+//! fitted, on any clock (one exception: across a recording's unlogged gap the host
+//! carries the lag along the sensor's bend, which it sees in the rows on both sides;
+//! host-fit's `model::regressors::Cubic`).
 //!
 //! # Time
 //! Every time constant is in seconds and every step is told how long it was (the MCU's
@@ -44,8 +46,9 @@
 //! ([`Machines::power_on`]; the host at the end of each power-off a recording states)
 //! restarts the warm-up clock only: the element's temperature, its hysteresis state and
 //! the temperature's rate are the unit's physics, not its power's, and the next step
-//! bridges the gap with the real time elapsed. The host does the same at the first row of
-//! a recording and at each stated power-on. (What a power-off during a fast temperature
+//! bridges the gap with the real time elapsed, the sensor's temperature taken as straight
+//! across it. The host does the same at the first row of a recording and at each stated
+//! power-on, but for the lag, which its fits carry along the sensor's bend across a gap. (What a power-off during a fast temperature
 //! change does to an MCU that loses its state cannot be known: its lag starts again at
 //! the sensor's temperature.)
 use crate::real::Real;

@@ -364,7 +364,16 @@ fn every_record_names_its_station_chamber_tilter_and_operator() {
     run(
         "TS",
         "from-flags",
-        &["--chamber", "CH-9", "--operator", "o.petrenko"],
+        &[
+            "--station",
+            "ST-09",
+            "--chamber",
+            "CH-9",
+            "--tilter",
+            "TL-1",
+            "--operator",
+            "o.petrenko",
+        ],
     );
     let all = store(&db).all().unwrap();
     assert_eq!(all.len(), 4);
@@ -387,9 +396,9 @@ fn every_record_names_its_station_chamber_tilter_and_operator() {
         Some("m.kovalenko"),
     ];
     let flags = [
-        Some("ST-04"),
+        Some("ST-09"),
         Some("CH-9"),
-        Some("TL-7"),
+        Some("TL-1"),
         Some("o.petrenko"),
     ];
     assert_eq!(traces, vec![env, env, flags, flags], "{all:?}");

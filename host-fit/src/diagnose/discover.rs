@@ -1,4 +1,4 @@
-//! The sparse search over the library of discovered terms ([`crate::diagnose::library`]),
+//! The sparse search over the library of discovered terms ([`crate::model::library`]),
 //! in the spirit of SINDy (Brunton et al. 2016) with the stability of ensembles (Fasel
 //! et al. 2022; stability selection, Meinshausen and Buhlmann 2010): every library column
 //! is projected against the current model's columns in the floor's weights (what the

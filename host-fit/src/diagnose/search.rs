@@ -22,8 +22,8 @@
 //! linear drift in time in its place ([`beats_drift`]), when added and in the backward
 //! check.
 //!
-//! When the catalogue's search is over (its reason kept as the outcome's
-//! `catalogue_ended`), the catalogue's time constants are estimated jointly and the
+//! When the catalogue's search is over (its reason kept, the outcome's
+//! `ended.catalogue`), the catalogue's time constants are estimated jointly and the
 //! library phase begins: while the rest stays above the floor, an iteration searches the
 //! library of discovered terms ([`discover`]: sparse, bagged) on top of the joint model
 //! and judges its proposals in turn ([`Search::library_round`]); the first that passes
@@ -176,8 +176,9 @@ pub enum Termination {
     NotLocated,
     /// Where the residual is located, no candidate passed the rules.
     NothingPassed,
-    /// The library's phase added its most terms
-    /// ([`crate::model::rules::Rules::discover_max_terms`] rounds).
+    /// The library's phase ran its most rounds
+    /// ([`crate::model::rules::Rules::discover_max_terms`], a round whose term the checks
+    /// dropped counted too).
     LibraryRoundsSpent,
     /// No proposal of the library's last round passed the rules.
     LibraryNothingPassed,
@@ -944,7 +945,7 @@ pub fn keep_adequate(data: &Data, mut current: Fit) -> Fit {
     }
 }
 
-/// The library search (see [`Search::library`]).
+/// The library search (see [`Search::library_round`]).
 impl Search<'_, '_> {
     /// One round of the library's phase (see the module doc), or why the phase is over:
     /// the rest at the floor, [`crate::model::rules::Rules::discover_max_terms`] rounds

@@ -1,7 +1,9 @@
 //! The regressors of the in-flight effects, made by stepping firmware-core's own state
 //! machines (`firmware_core::inflight`) over the recording's rows on its own clock (each
 //! row's time step, the stated power-ons), with the firmware's discretisation, so the
-//! diagnosis fits exactly what the firmware will apply on any row spacing; plus the
+//! diagnosis fits what the firmware will apply on any row spacing, except across an
+//! unlogged gap: there the lag is carried along the sensor's bend ([`Cubic`]), which the
+//! host sees in the rows on both sides and the firmware in flight cannot; plus the
 //! recording's restart events.
 use crate::data::recording::Recording;
 use crate::model::rules::Rules;
@@ -56,8 +58,8 @@ pub fn events(rec: &Recording, rules: &Rules) -> Events {
 /// the stated power-ons ([`Recording::clock`]) through firmware-core's [`Clock`], so the
 /// machine starts and steps at the rows where the firmware's would (a power-on steps at
 /// its row, across the gap, as `Compensator::power_on` makes the firmware do).
-/// `on(tick, temp)` is called at a start or a step and returns the machine's output,
-/// held between steps.
+/// `on(tick, row, temp)` is called at a start or a step and returns the machine's
+/// output, held between steps.
 fn drive(rec: &Recording, mut on: impl FnMut(Tick<f64>, usize, f64) -> f64) -> Vec<f64> {
     let mut clock = Clock::<f64>::default();
     let mut held = 0.0;
@@ -82,9 +84,13 @@ fn drive(rec: &Recording, mut on: impl FnMut(Tick<f64>, usize, f64) -> f64) -> V
 /// stated power-on, or [`GAP_STEPS`] times the recording's median step: within a few
 /// logged rows the sensor's temperature is as straight as the rows show it, and the
 /// chamber's and the case's time constants (minutes) bend it only over longer stretches.
+/// These are the numerical method's constants, not judgements of the data, so they are
+/// not [`Rules`]; and lower than the warm-up's restart gap ([`events`]: ten median steps
+/// and more than a minute), since a straight crossing errs on any bent stretch while a
+/// restart is a claim about the unit.
 const GAP_CROSSING_MIN_S: f64 = 60.0;
 /// See [`GAP_CROSSING_MIN_S`]: a step of this many median steps is a gap, not the
-/// logger's own pace (a logger that writes every 5 minutes is crossed straight).
+/// logger's own pace.
 const GAP_STEPS: f64 = 5.0;
 /// The sensor's slope at each end of a gap is fitted over the rows within this (s) of
 /// the end: a few of the twin's slowest rows (0.1 Hz at rest), short beside the case's
@@ -94,17 +100,25 @@ const GAP_SLOPE_WINDOW_S: f64 = 120.0;
 /// for a straight input, and over 10 s a cubic of the case's bend is straight to well
 /// under the sensor's noise.
 const GAP_PIECE_S: f64 = 10.0;
+/// At most this many pieces per gap: a stretch of days (recordings joined weeks apart)
+/// is crossed in longer pieces, the lag having long forgotten its start.
+const GAP_MAX_PIECES: f64 = 1000.0;
 
 /// The sensor's temperature across an unlogged gap, as the host estimates it: the cubic
 /// (Hermite) through the straight lines the rows beside each end show (fitted over
 /// [`GAP_SLOPE_WINDOW_S`], each taken at its rows' mean time, where a line's value and
 /// slope are a smooth curve's to second order; at the gap's end itself its slope would
-/// be off by the curve's bend over half the window). The firmware in flight steps a power-on's gap straight (it has
-/// no rows after it yet); the host has the recording's rows on both sides, and a gap
+/// be off by the curve's bend over half the window; a side with fewer than three rows
+/// there takes the chord across the gap, and with both sides so the crossing is
+/// straight). The firmware in flight steps a power-on's gap straight (it has no rows
+/// after it yet); the host has the recording's rows on both sides, and a gap
 /// met while the case still settles after a ramp bends: crossed straight, the lag's
 /// element temperature after it is wrong by a share of the bend, which a fit takes out
 /// of the lag's time constant and the terms beside it (a rate term on one twin: its
-/// time constant 0.7 % short, its `r` 1.6 % high).
+/// time constant 0.7 % short, its `r` 1.6 % high). Only the lag is carried along it:
+/// the rate estimator and the hysteresis's direction see the gap's chord as the
+/// firmware does (the rate's low-pass forgets it within a minute or two, and a
+/// direction changes only with the temperature's net travel).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Cubic {
     /// The knots: the mean times of the rows before and after the gap, s.
@@ -156,7 +170,17 @@ pub fn gap_crossings(rec: &Recording) -> Vec<Option<Cubic>> {
             if !crossed {
                 return None;
             }
-            let (a, b) = (line_near(rec, k - 1, false), line_near(rec, k, true));
+            let rows = &rec.rows;
+            let chord = (rows[k].temp_c - rows[k - 1].temp_c) / span;
+            let end = |j: usize| Line {
+                t_s: rows[j].t_s,
+                value_c: rows[j].temp_c,
+                slope_c_per_s: chord,
+            };
+            let (a, b) = match (line_near(rec, k - 1, false), line_near(rec, k, true)) {
+                (None, None) => return None,
+                (a, b) => (a.unwrap_or_else(|| end(k - 1)), b.unwrap_or_else(|| end(k))),
+            };
             Some(Cubic {
                 knots_s: [a.t_s, b.t_s],
                 values_c: [a.value_c, b.value_c],
@@ -168,9 +192,9 @@ pub fn gap_crossings(rec: &Recording) -> Vec<Option<Cubic>> {
 }
 
 /// The line through the sensor's rows within [`GAP_SLOPE_WINDOW_S`] of row `k`, before
-/// it or (`after`) after it, by least squares; with fewer than three rows there (a
-/// slope of two noisy rows is noise) the row itself, flat.
-fn line_near(rec: &Recording, k: usize, after: bool) -> Line {
+/// it or (`after`) after it, by least squares; None with fewer than three rows there (a
+/// slope of two noisy rows is noise).
+fn line_near(rec: &Recording, k: usize, after: bool) -> Option<Line> {
     let rows = &rec.rows;
     let t0 = rows[k].t_s;
     let near = |j: &usize| (rows[*j].t_s - t0).abs() <= GAP_SLOPE_WINDOW_S;
@@ -180,11 +204,7 @@ fn line_near(rec: &Recording, k: usize, after: bool) -> Line {
         (0..=k).rev().take_while(near).collect()
     };
     if side.len() < 3 {
-        return Line {
-            t_s: t0,
-            value_c: rows[k].temp_c,
-            slope_c_per_s: 0.0,
-        };
+        return None;
     }
     let n = side.len() as f64;
     let mt = side.iter().map(|&j| rows[j].t_s - t0).sum::<f64>() / n;
@@ -193,32 +213,29 @@ fn line_near(rec: &Recording, k: usize, after: bool) -> Line {
         let dt = rows[j].t_s - t0 - mt;
         (sxy + dt * (rows[j].temp_c - my), sxx + dt * dt)
     });
-    Line {
+    (sxx > 0.0).then(|| Line {
         t_s: t0 + mt,
         value_c: my,
-        slope_c_per_s: if sxx > 0.0 { sxy / sxx } else { 0.0 },
-    }
+        slope_c_per_s: sxy / sxx,
+    })
 }
 
 /// Per row, each axis's element temperature through the lag of time constants
-/// `taus[axis] = [tau1, tau2]` (tau2 = 0: one pole), as the firmware steps it; an
-/// unlogged gap crossed along its [`Cubic`] (the element's physics ran on through it).
+/// `taus[axis] = [tau1, tau2]` (tau2 = 0: one pole), as the firmware steps it, except
+/// that an unlogged gap is crossed along its [`Cubic`] (the element's physics ran on
+/// through it), from the last stepped row.
 pub fn lagged(rec: &Recording, taus: &[[f64; 2]; 3]) -> [Vec<f64>; 3] {
     let crossings = gap_crossings(rec);
     std::array::from_fn(|axis| {
         let (mut lag, mut x) = (Lag::<f64>::default(), 0.0);
         let [t1, t2] = taus[axis];
         drive(rec, |tick, k, t| {
-            // a step that spans exactly the gap (no held row before it)
-            let cubic = crossings
-                .get(k)
-                .copied()
-                .flatten()
-                .filter(|c| matches!(tick, Tick::Step(h) if (h - c.span_s).abs() <= 1e-9 * h));
+            let cubic = crossings.get(k).copied().flatten();
             let out = match (tick, cubic) {
                 (Tick::Step(h), Some(c)) => {
                     // straight pieces along the cubic, the last ending at this row
-                    let n = (h / GAP_PIECE_S).ceil().max(1.0);
+                    // from the last stepped row (a held row before the gap is spanned)
+                    let n = (h / GAP_PIECE_S).ceil().clamp(1.0, GAP_MAX_PIECES);
                     let piece = h / n;
                     let (mut from, mut out) = (x, t);
                     for i in 1..=(n as usize) {
@@ -376,5 +393,59 @@ mod tests {
         assert!(straight > 0.2, "straight {straight:.4} C off");
         // long after the gap both forget it; the cubic's row stays near the truth
         assert!((lag[0][rec.rows.len() - 1] - truth(3000.0)).abs() < 0.01);
+    }
+
+    /// A recording of `temp(t)` at the times `times`, with `header` lines before the
+    /// columns.
+    fn recording_of(header: &str, times: &[f64], temp: impl Fn(f64) -> f64) -> Recording {
+        let mut csv = format!("{header}t_s,position,temp_c,ux_v,uy_v,uz_v\n");
+        for &t in times {
+            csv.push_str(&format!("{t:.1},TP1,{:.6},0.0,0.0,1.0\n", temp(t)));
+        }
+        Recording::from_reader(
+            std::path::Path::new("g.csv"),
+            csv.as_bytes(),
+            Positions::default(),
+        )
+        .unwrap()
+    }
+
+    /// On a straight ramp a crossing is exact however few rows a side has: a side with
+    /// fewer than three rows takes the chord (a flat end would bend a straight ramp),
+    /// and a logger too slow for any line crosses straight, as the firmware does.
+    #[test]
+    fn a_side_with_few_rows_takes_the_chord() {
+        let ramp = |t: f64| 0.01 * t;
+        // rows every 10 s up to 110 s, the power-off, then two rows only
+        let mut times: Vec<f64> = (0..12).map(|i| 10.0 * f64::from(i)).collect();
+        times.extend([720.0, 730.0]);
+        let rec = recording_of("# power_off_s=120-720\n", &times, ramp);
+        let k = rec.rows.len() - 2;
+        let c = gap_crossings(&rec)[k].expect("crossed");
+        for t in [200.0, 400.0, 650.0] {
+            assert!((c.at(t) - ramp(t)).abs() < 1e-9, "{t}: {}", c.at(t));
+        }
+        // the lag through the ramp: tau * slope behind it once settled, exactly
+        let lag = lagged(&rec, &[[60.0, 0.0]; 3]);
+        let want = ramp(730.0) - 0.01 * 60.0 * (1.0 - (-730.0_f64 / 60.0).exp());
+        assert!(
+            (lag[0][k + 1] - want).abs() < 1e-6,
+            "{} {want}",
+            lag[0][k + 1]
+        );
+        // a logger writing every 5 minutes: no side has three rows within the window
+        let slow: Vec<f64> = (0..20).map(|i| 300.0 * f64::from(i)).collect();
+        let rec = recording_of("# power_off_s=3100-3300\n", &slow, ramp);
+        assert!(gap_crossings(&rec).iter().all(Option::is_none));
+    }
+
+    /// A stretch of years between two rows is crossed in at most a thousand pieces.
+    #[test]
+    fn a_very_long_gap_is_crossed_in_few_pieces() {
+        let mut times: Vec<f64> = (0..30).map(|i| 10.0 * f64::from(i)).collect();
+        times.extend((0..30).map(|i| 1e9 + 10.0 * f64::from(i)));
+        let rec = recording_of("", &times, |t| if t < 1e6 { 10.0 } else { 20.0 });
+        let lag = lagged(&rec, &[[600.0, 0.0]; 3]);
+        assert!((lag[0][30] - 20.0).abs() < 1e-6, "{}", lag[0][30]);
     }
 }

@@ -257,6 +257,7 @@ impl Record {
         b.text("operator", self.trace.operator.as_deref());
         b.text(
             "test_record",
+            // a TestRecord always serialises (string keys, strings, numbers; NaN as null)
             self.test_record
                 .as_ref()
                 .and_then(|t| serde_json::to_string(t).ok())

@@ -407,8 +407,9 @@ impl Record {
         Ok(())
     }
 
-    /// The catalogue ids of the stored findings, read by serde (the other fields of a
-    /// finding are not needed here, so a record of an older contract still reads).
+    /// The catalogue ids of the stored findings, read by serde (only the ids: a record of
+    /// an older contract reads while its effect names are this build's; a name this
+    /// build does not know is an error, and a batch run again recomputes that unit).
     pub fn finding_effects(&self) -> Result<Vec<EffectId>> {
         /// The one field read of a stored finding.
         #[derive(serde::Deserialize)]

@@ -1,6 +1,9 @@
 //! The test record's document as types (OpenHTF's shape: the test's outcome with its
 //! details, metadata, phases of named measurements with their limits and outcomes), as
-//! the store keeps it in a record and [`super::test_record`] builds and writes it.
+//! the store keeps it in a record and [`super::test_record`] builds and writes it. The
+//! store reads its documents back as these types, so a change to them is a change of the
+//! store's schema: it comes with a migration ([`super::schema`]) that rewrites the stored
+//! documents, or every record holding an older one would stop reading.
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 

@@ -1,7 +1,8 @@
 //! The dynamic route: a recording through temperature changes (a continuous sweep, the
 //! tilter turning while the chamber heats and cools) fitted as the 12 temperature models
 //! jointly with the unit's thermal lag (one pole in seconds on the recording's own
-//! `t_s`, through firmware-core's lag state machine, as the blob will run it) and a
+//! `t_s`, through firmware-core's lag state machine, as the blob will run it but across
+//! an unlogged gap, crossed along the sensor's bend: `model::regressors::Cubic`) and a
 //! temperature-rate term where the data carry it. It reuses the diagnosis's machinery
 //! (floor-weighted windows of every dwell, contiguous held-out blocks of time, profiled
 //! time constants) restricted to the terms the firmware compensates in flight: each term

@@ -1,6 +1,7 @@
-//! `cargo xtask fuzz --seconds N`: every cargo-fuzz target for N seconds (nightly); the
-//! committed seed corpus is read, new inputs go to target/fuzz-corpus/ (the repository
-//! stays clean), and any crash artefact fails the step.
+//! `cargo xtask fuzz --seconds N`: every cargo-fuzz target for N seconds of one core's
+//! fuzzing, spread over the machine's cores (nightly); the committed seed corpus is read,
+//! new inputs go to target/fuzz-corpus/ (the repository stays clean), and any crash
+//! artefact fails the step.
 use std::path::Path;
 use std::process::Command;
 
@@ -20,6 +21,37 @@ pub const FIRMWARE_TARGETS: [&str; 2] = ["blob_decode", "compensate"];
 /// stay: a panic, an overflow or a failed property is still a crash.
 const SANITIZER: [&str; 2] = ["--sanitizer", "none"];
 
+/// Fuzzing workers per target: libFuzzer's fork mode (`cargo fuzz run --jobs`) on every
+/// core, at most four. One libFuzzer process keeps one core busy while the other waits;
+/// the same executions in half the wall time on a 2-core CI machine.
+fn workers() -> u64 {
+    std::thread::available_parallelism()
+        .map(|n| n.get() as u64)
+        .unwrap_or(1)
+        .clamp(1, 4)
+}
+
+/// The wall time of `core_seconds` of fuzzing on `workers` cores (at least a second).
+fn wall_seconds(core_seconds: u64, workers: u64) -> u64 {
+    core_seconds.div_ceil(workers.max(1)).max(1)
+}
+
+/// The executions libFuzzer reports last: `Done N runs` (one process) or the last
+/// status line `#N: cov: ...` (fork mode, where the jobs' runs are summed).
+fn executions(stderr: &str) -> String {
+    stderr
+        .lines()
+        .rev()
+        .find_map(|l| {
+            if let Some(done) = l.strip_prefix("Done ") {
+                return done.split_whitespace().next().map(String::from);
+            }
+            let n = l.strip_prefix('#')?.split(':').next()?;
+            (l.contains(" cov: ") && n.chars().all(|c| c.is_ascii_digit())).then(|| n.to_string())
+        })
+        .unwrap_or_else(|| "?".to_string())
+}
+
 /// The cargo features target `t` needs (the host's readers need host-fit).
 fn features(t: &str) -> &'static [&'static str] {
     if FIRMWARE_TARGETS.contains(&t) {
@@ -31,7 +63,7 @@ fn features(t: &str) -> &'static [&'static str] {
 
 /// `cargo xtask fuzz [--seconds N] [TARGET..]`.
 pub struct Options {
-    /// Seconds per target (default 60).
+    /// Seconds of one core's fuzzing per target (default 60), spread over the cores.
     pub seconds: u64,
     /// The targets named, or all of them.
     pub targets: Vec<&'static str>,
@@ -64,7 +96,8 @@ impl Options {
     }
 }
 
-/// Run every target, one step each; prints the executions per target.
+/// Run every target for `seconds` of one core's fuzzing, on every core, one step each;
+/// prints the executions per target.
 pub fn fuzz(steps: &mut crate::Steps, seconds: u64, targets: &[&str]) {
     if steps
         .prepare("fuzz: cargo-fuzz", crate::setup::cargo_fuzz)
@@ -76,9 +109,11 @@ pub fn fuzz(steps: &mut crate::Steps, seconds: u64, targets: &[&str]) {
         return;
     }
     let mut lines = Vec::new();
+    let jobs = workers();
+    let wall = wall_seconds(seconds, jobs);
     for &t in targets {
         let name = format!("fuzz {t}");
-        if let Ok(line) = steps.step(&name, || target(t, seconds)) {
+        if let Ok(line) = steps.step(&name, || target(t, wall, jobs)) {
             lines.push(line);
         }
     }
@@ -87,9 +122,9 @@ pub fn fuzz(steps: &mut crate::Steps, seconds: u64, targets: &[&str]) {
     }
 }
 
-/// One target for `seconds`: its executions, or the crash (panic message and input
-/// printed, so a CI log is enough to reproduce it).
-fn target(t: &str, seconds: u64) -> Result<String, String> {
+/// One target for `seconds` on `jobs` workers: its executions, or the crash (panic
+/// message and input printed, so a CI log is enough to reproduce it).
+fn target(t: &str, seconds: u64, jobs: u64) -> Result<String, String> {
     let root = crate::root();
     let work = root.join("target/fuzz-corpus").join(t);
     let _ = std::fs::create_dir_all(&work);
@@ -101,6 +136,7 @@ fn target(t: &str, seconds: u64) -> Result<String, String> {
         .args(["+nightly", "fuzz", "run"])
         .args(SANITIZER)
         .args(features(t))
+        .args(["--jobs", &jobs.to_string()])
         .arg(t)
         .arg(&work)
         .arg(root.join("fuzz/corpus").join(t))
@@ -112,17 +148,14 @@ fn target(t: &str, seconds: u64) -> Result<String, String> {
         .output()
         .map_err(|e| format!("could not start cargo +nightly fuzz: {e}"))?;
     let err = String::from_utf8_lossy(&out.stderr);
-    let runs = err
-        .lines()
-        .rev()
-        .filter_map(|l| l.strip_prefix("Done "))
-        .find_map(|l| l.split_whitespace().next())
-        .unwrap_or("?")
-        .to_string();
+    let runs = executions(&err);
     let crashes = std::fs::read_dir(&artifacts)
         .map(|d| d.count())
         .unwrap_or(0);
-    let line = format!("{t}: {runs} executions in {seconds} s, {crashes} crash artefacts");
+    let line = format!(
+        "{t}: {runs} executions in {seconds} s on {jobs} worker{}, {crashes} crash artefacts",
+        if jobs == 1 { "" } else { "s" }
+    );
     if out.status.success() && crashes == 0 {
         return Ok(line);
     }
@@ -170,7 +203,7 @@ fn escape(bytes: &[u8]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{features, Options, TARGETS};
+    use super::{executions, features, wall_seconds, Options, TARGETS};
 
     #[test]
     fn options_name_targets_and_seconds() {
@@ -186,5 +219,21 @@ mod tests {
         assert_eq!(features("positions"), ["--features", "host"]);
         assert!(features("blob_decode").is_empty() && features("compensate").is_empty());
         assert!(Options::parse(&a(&["nope"])).is_err_and(|e| e.contains("`nope`")));
+    }
+
+    #[test]
+    fn fork_mode_spreads_the_seconds_and_its_executions_are_read() {
+        // 60 s of one core on 2 workers is 30 s of wall time; a remainder rounds up
+        assert_eq!(wall_seconds(60, 2), 30);
+        assert_eq!(wall_seconds(10, 3), 4);
+        assert_eq!(wall_seconds(1, 4), 1);
+        assert_eq!(wall_seconds(5, 0), 5);
+        // one process: `Done N runs`
+        let one = "#1024 pulse cov: 3\nDone 1633337 runs in 11 second(s)\n";
+        assert_eq!(executions(one), "1633337");
+        // fork mode: the last status line (no `Done`)
+        let fork = "INFO: -fork=2: 5 seed inputs\n#584271: cov: 253 ft: 299 corp: 5\n#3355078: cov: 368 ft: 634 corp: 127 exec/s: 132705\nINFO: fuzzed for 12 seconds, wrapping up soon\nINFO: exiting: 0 time: 12s\n";
+        assert_eq!(executions(fork), "3355078");
+        assert_eq!(executions("nothing here"), "?");
     }
 }

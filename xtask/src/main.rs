@@ -123,7 +123,8 @@ commands:
   bench store               only the record store's figures (from a batch of 64 units)
                             -> target/bench/store.md
   fuzz [--seconds N] [TARGET..]
-                            cargo-fuzz targets (default all, 60 s each)
+                            cargo-fuzz targets (default all, 60 s of one core each,
+                            spread over the machine's cores)
   cross                     firmware-core built for thumbv7em-none-eabihf
   embedded                  the firmware test under QEMU (bit-exact against the host)
   book                      the manual under docs/ built with mdbook -> target/book/, every

@@ -51,7 +51,8 @@ impl Tier {
         }
     }
 
-    /// Seconds of fuzzing per target, unless XTASK_FUZZ_SECONDS says otherwise.
+    /// Seconds of one core's fuzzing per target (spread over the cores: half of it in
+    /// wall time on two), unless XTASK_FUZZ_SECONDS says otherwise.
     fn fuzz_seconds(self) -> u64 {
         match self {
             Tier::Default => 10,
@@ -160,8 +161,8 @@ pub fn test(s: &mut Steps, tier: Tier) {
     drop(cluster);
     crate::cross::cross(s);
     crate::embedded::embedded(s);
-    // the fuzz run: XTASK_FUZZ_SECONDS per target (by default 10 s on the firmware's
-    // targets, 60 s on all four in the full tier)
+    // the fuzz run: XTASK_FUZZ_SECONDS of one core per target (by default 10 s on the
+    // firmware's targets, 60 s on all four in the full tier), spread over the cores
     let secs = std::env::var("XTASK_FUZZ_SECONDS")
         .ok()
         .and_then(|v| v.parse().ok())

@@ -3,6 +3,7 @@
 use crate::blind::Class;
 use crate::fit::pipeline::ModelKind;
 use crate::fit::route::Route;
+use crate::store::record::Trace;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use firmware_core::compensate::ErrorModel;
 use std::path::PathBuf;
@@ -235,21 +236,43 @@ pub struct RecordArgs {
     /// The unit's lot, recorded with the run (`batch`: default the folder's name).
     #[arg(long)]
     pub lot: Option<String>,
-    /// The station (bench computer) recorded with the run.
-    #[arg(long, env = "HOSTFIT_STATION")]
-    pub station: Option<String>,
-    /// The climatic chamber the unit ran in.
-    #[arg(long, env = "HOSTFIT_CHAMBER")]
-    pub chamber: Option<String>,
-    /// The tilter (rate table, dividing head) the unit ran on.
-    #[arg(long, env = "HOSTFIT_TILTER")]
-    pub tilter: Option<String>,
-    /// The operator (default: the login name, USER).
-    #[arg(long, env = "HOSTFIT_OPERATOR")]
-    pub operator: Option<String>,
+    /// Where and by whom (`--station`, `--chamber`, `--tilter`, `--operator`, ...).
+    #[command(flatten)]
+    pub trace: TraceArgs,
     /// How the tool was run (filled by the command line; not an option).
     #[arg(skip)]
     pub invocation: Option<crate::store::Invocation>,
+}
+
+/// Where and by whom: one flag per field of [`Trace`] (`--NAME`, its environment variable
+/// and help from [`Trace::FIELDS`]), so that a field added to the record's type is a flag
+/// without a line here.
+#[derive(Debug, Clone, Default)]
+pub struct TraceArgs(pub Trace);
+
+impl clap::FromArgMatches for TraceArgs {
+    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        Ok(TraceArgs(Trace::from_fields(|n| {
+            m.try_get_one::<String>(n).ok().flatten().cloned()
+        })))
+    }
+
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
+}
+
+impl Args for TraceArgs {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        Trace::FIELDS.iter().fold(cmd, |c, f| {
+            c.arg(clap::Arg::new(f.name).long(f.name).env(f.env).help(f.help))
+        })
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
 }
 
 /// `temp-fit`.

@@ -111,12 +111,9 @@ where
 /// else the login name.
 fn trace(a: &RecordArgs) -> Trace {
     let login = || crate::store::location::environment().login.clone();
-    Trace {
-        station: a.station.clone(),
-        chamber: a.chamber.clone(),
-        tilter: a.tilter.clone(),
-        operator: a.operator.clone().or_else(login),
-    }
+    let mut t = a.trace.0.clone();
+    t.operator = t.operator.or_else(login);
+    t
 }
 
 /// Where to record, when `--db` is given.

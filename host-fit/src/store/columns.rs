@@ -106,17 +106,14 @@ pub fn columns() -> Vec<Column> {
         ("worst_dg_mg", Real),
         ("diagnosis_verdict", Text),
         ("findings", Text),
-        // schema version 2: traceability and the unit's test record
-        ("station", Text),
-        ("chamber", Text),
-        ("tilter", Text),
-        ("operator", Text),
+        // schema version 2: the unit's test record (and the trace's columns, below)
         ("test_record", Text),
     ];
     head.iter()
         .map(|(n, t)| column(n, *t))
         .chain(coefficient_columns().iter().map(|n| column(n, Real)))
         .chain(tail.iter().map(|(n, t)| column(n, *t)))
+        .chain(Trace::names().iter().map(|n| column(n, Text)))
         .collect()
 }
 
@@ -251,10 +248,6 @@ impl Record {
             "findings",
             self.findings.as_ref().map(|f| f.to_string()).as_deref(),
         );
-        b.text("station", self.trace.station.as_deref());
-        b.text("chamber", self.trace.chamber.as_deref());
-        b.text("tilter", self.trace.tilter.as_deref());
-        b.text("operator", self.trace.operator.as_deref());
         b.text(
             "test_record",
             // a TestRecord always serialises (string keys, strings, numbers; NaN as null)
@@ -263,6 +256,9 @@ impl Record {
                 .and_then(|t| serde_json::to_string(t).ok())
                 .as_deref(),
         );
+        for (n, v) in self.trace.fields() {
+            b.text(&n, v.as_deref());
+        }
         b.0
     }
 
@@ -350,12 +346,7 @@ impl Record {
                 None => None,
             },
             findings: json("findings")?,
-            trace: Trace {
-                station: row.text("station"),
-                chamber: row.text("chamber"),
-                tilter: row.text("tilter"),
-                operator: row.text("operator"),
-            },
+            trace: Trace::from_fields(|n| row.text(n)),
             test_record: typed(row, "test_record")?,
         })
     }

@@ -113,19 +113,14 @@ impl History {
                     _ => String::new(),
                 }
             ));
-            let t = &r.trace;
-            if t.station.is_some()
-                || t.chamber.is_some()
-                || t.tilter.is_some()
-                || t.operator.is_some()
-            {
-                s.push(format!(
-                    "    station {}, chamber {}, tilter {}, operator {}",
-                    opt(t.station.as_deref()),
-                    opt(t.chamber.as_deref()),
-                    opt(t.tilter.as_deref()),
-                    opt(t.operator.as_deref())
-                ));
+            if !r.trace.is_empty() {
+                let fields: Vec<String> = r
+                    .trace
+                    .fields()
+                    .iter()
+                    .map(|(n, v)| format!("{n} {}", opt(v.as_deref())))
+                    .collect();
+                s.push(format!("    {}", fields.join(", ")));
             }
             let mut third = Vec::new();
             if let Some(j) = &r.judged {

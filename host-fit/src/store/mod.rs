@@ -70,6 +70,7 @@ pub mod schema;
 pub mod sqlite;
 pub mod test_document;
 pub mod test_record;
+pub mod trace;
 pub mod trend;
 
 pub use db::{record_columns, Filter, Order, Store, Target, Writer, FLUSH_AFTER};

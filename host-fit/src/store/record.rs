@@ -2,6 +2,7 @@
 //! unit) or `demo` (one per model) made of one unit, with where it came from (the run
 //! id, the tool's version and commit, the command and its options, the input's SHA-256).
 use super::test_document::TestRecord;
+pub use super::trace::Trace;
 use crate::data::output_unit::OutputUnit;
 use crate::diagnose::contract::Verdict as DiagnosisVerdict;
 use crate::diagnose::EffectId;
@@ -149,22 +150,6 @@ impl From<crate::acceptance::Verdict> for UnitStatus {
             Verdict::NotJudged => UnitStatus::NotJudged,
         }
     }
-}
-
-/// Where and by whom a unit was calibrated: the station (the bench computer), the
-/// chamber and the tilter it ran in, and the operator. From `--station`, `--chamber`,
-/// `--tilter`, `--operator`, else `HOSTFIT_STATION`, `HOSTFIT_CHAMBER`, `HOSTFIT_TILTER`,
-/// `HOSTFIT_OPERATOR` (the operator else the login name, `USER`).
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Trace {
-    /// The station.
-    pub station: Option<String>,
-    /// The climatic chamber.
-    pub chamber: Option<String>,
-    /// The tilter (rate table, dividing head).
-    pub tilter: Option<String>,
-    /// The operator.
-    pub operator: Option<String>,
 }
 
 /// How the tool was run: the command and every option with its value (the defaults

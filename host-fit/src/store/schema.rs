@@ -13,10 +13,16 @@
 //! plant backs its store up first); a newer one is refused with its version named.
 use super::columns::SqlType;
 use super::record::Command;
+use super::trace::Trace;
 use firmware_core::model::COEFF_NAMES;
 
-/// The schema version this host-fit writes and reads.
-pub const SCHEMA_VERSION: i64 = 2;
+/// The schema version this host-fit writes and reads: 2, or the newest a traceability
+/// field needs ([`Trace::FIELDS`]: a new field brings its own migration).
+pub const SCHEMA_VERSION: i64 = if Trace::newest_column() > 2 {
+    Trace::newest_column()
+} else {
+    2
+};
 
 /// `PRAGMA application_id` of an SQLite record store, and the key of the PostgreSQL
 /// advisory lock migrations take: "ATCR" (accelerometer temperature calibration records).
@@ -148,25 +154,50 @@ CREATE INDEX runs_by_time ON runs (time_utc, id);
     )
 }
 
+/// The traceability columns version `v` adds (text), as `ALTER TABLE` statements.
+fn trace_columns(d: Dialect, v: i64) -> String {
+    let text = d.ty(SqlType::Text);
+    Trace::FIELDS
+        .iter()
+        .filter(|f| f.since == v)
+        .map(|f| format!("ALTER TABLE runs ADD COLUMN {} {text};\n", f.name))
+        .collect()
+}
+
 /// Version 2: traceability (station, chamber, tilter, operator), the unit's test
 /// record, and an index by lot (a batch resumed after a crash finds its units by it).
 fn version_2(d: Dialect) -> String {
-    let text = d.ty(SqlType::Text);
-    let added = ["station", "chamber", "tilter", "operator", "test_record"]
-        .iter()
-        .map(|c| format!("ALTER TABLE runs ADD COLUMN {c} {text};\n"))
-        .collect::<String>();
     format!(
-        "{added}CREATE INDEX runs_by_lot ON runs (lot, id);
+        "{}ALTER TABLE runs ADD COLUMN test_record {};
+CREATE INDEX runs_by_lot ON runs (lot, id);
 DROP VIEW latest_calibrations;
 {}",
+        trace_columns(d, 2),
+        d.ty(SqlType::Text),
+        latest_view()
+    )
+}
+
+/// Version 3 on: the traceability fields added since ([`Trace::FIELDS`]), and the
+/// view made again (PostgreSQL expands its `*` when it is made).
+fn trace_version(d: Dialect, v: i64) -> String {
+    format!(
+        "{}DROP VIEW latest_calibrations;\n{}",
+        trace_columns(d, v),
         latest_view()
     )
 }
 
 /// The migrations of a dialect: the i-th brings a store from version i to i + 1.
 pub fn migrations(d: Dialect) -> Vec<String> {
-    vec![version_1(d), version_2(d)]
+    let mut m = vec![version_1(d), version_2(d)];
+    // versions 3 on, while there are any (the range may be empty)
+    m.extend(
+        (3..)
+            .take_while(|v| *v <= SCHEMA_VERSION)
+            .map(|v| trace_version(d, v)),
+    );
+    m
 }
 
 /// What opening a store may do to its schema.

@@ -287,15 +287,16 @@ mod tests {
         // opened by this host-fit it is refused with the command that upgrades it
         let e = prepare(&mut c, &p, Mode::Create, &steps).unwrap_err();
         assert!(e.message.contains("store migrate"), "{e}");
-        // a broken version 3 changes nothing: the store stays at version 1
+        // a broken next version changes nothing: the store stays at version 1
         let mut broken = steps.clone();
         broken.push("ALTER TABLE runs ADD COLUMN x TEXT; SELECT * FROM no_such_table;".into());
         let e = prepare(&mut c, &p, Mode::Migrate, &broken).unwrap_err();
-        assert!(e.message.contains("version 3 failed"), "{e}");
+        let next = schema::SCHEMA_VERSION + 1;
+        assert!(e.message.contains(&format!("version {next} failed")), "{e}");
         assert_eq!(version(&c, &p).unwrap().0, 1);
         // migrated: the record is kept, the new columns are there
         prepare(&mut c, &p, Mode::Migrate, &steps).unwrap();
-        assert_eq!(version(&c, &p).unwrap().0, 2);
+        assert_eq!(version(&c, &p).unwrap().0, schema::SCHEMA_VERSION);
         let n: i64 = c
             .query_row("SELECT count(*) FROM runs WHERE station IS NULL", [], |r| {
                 r.get(0)
@@ -304,7 +305,8 @@ mod tests {
         assert_eq!(n, 1);
         // and an older host-fit (version 1) refuses it, naming the version
         let e = prepare(&mut c, &p, Mode::Existing, &steps[..1]).unwrap_err();
-        assert!(e.message.contains("schema version 2"), "{e}");
+        let now = format!("schema version {}", schema::SCHEMA_VERSION);
+        assert!(e.message.contains(&now), "{e}");
     }
 
     #[test]

@@ -72,6 +72,37 @@ pub struct Unit<'a> {
     pub uncompensated_mg: Option<f64>,
 }
 
+/// The test record's metadata of the store record `r`: the run, the tool, the
+/// recording, the blob, and where and by whom (every field of the trace but the station,
+/// which is the record's `station_id`).
+fn metadata(r: &Record) -> BTreeMap<String, serde_json::Value> {
+    use serde_json::json as j;
+    [
+        ("test_name", j!("accelerometer temperature calibration")),
+        ("run_id", j!(r.run_id.to_string())),
+        ("command", j!(r.command.name())),
+        ("lot", j!(r.lot)),
+        ("host_fit_version", j!(r.version)),
+        ("host_fit_commit", j!(r.commit)),
+        ("recording", j!(r.input)),
+        ("recording_sha256", j!(r.input_sha256)),
+        ("output_unit", j!(r.output_unit)),
+        ("model", j!(r.model)),
+        ("blob_crc32", j!(r.blob_crc().map(|c| format!("{c:#010x}")))),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    // where and by whom, every field but the station (the record's `station_id`)
+    .chain(
+        r.trace
+            .fields()
+            .into_iter()
+            .filter(|(n, _)| n != "station")
+            .map(|(n, v)| (n, j!(v))),
+    )
+    .collect()
+}
+
 /// The test record of the unit `u` whose store record is `r`.
 pub fn build(r: &Record, u: &Unit<'_>) -> TestRecord {
     let ms = |t: &str| super::clock::parse(t, false).map_or(0, |us| us.div_euclid(1000));
@@ -158,26 +189,7 @@ pub fn build(r: &Record, u: &Unit<'_>) -> TestRecord {
     };
     let mut phases = vec![phase("fit", fit_outcome, fit)];
     phases.extend(verify);
-    use serde_json::json as j;
-    let meta: BTreeMap<String, serde_json::Value> = [
-        ("test_name", j!("accelerometer temperature calibration")),
-        ("run_id", j!(r.run_id.to_string())),
-        ("command", j!(r.command.name())),
-        ("lot", j!(r.lot)),
-        ("operator", j!(r.trace.operator)),
-        ("chamber", j!(r.trace.chamber)),
-        ("tilter", j!(r.trace.tilter)),
-        ("host_fit_version", j!(r.version)),
-        ("host_fit_commit", j!(r.commit)),
-        ("recording", j!(r.input)),
-        ("recording_sha256", j!(r.input_sha256)),
-        ("output_unit", j!(r.output_unit)),
-        ("model", j!(r.model)),
-        ("blob_crc32", j!(r.blob_crc().map(|c| format!("{c:#010x}")))),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect();
+    let meta = metadata(r);
     TestRecord {
         schema: SCHEMA.into(),
         dut_id: r.serial.clone(),

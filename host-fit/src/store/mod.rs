@@ -9,7 +9,7 @@
 //! calibrated again keeps every record, and the view `latest_calibrations` (a query, no
 //! flag that an update could lose) names each unit's newest calibration.
 //!
-//! # Schema (version 2; see [`schema`] for where each backend keeps its version)
+//! # Schema (version [`schema::SCHEMA_VERSION`]; see [`schema`] for where each backend keeps its version)
 //!
 //! Table `runs`, one row per record:
 //!
@@ -33,7 +33,7 @@
 //! | `acceptance`, `reason` | TEXT | `pass`, `fail` or `error` (a batch unit that could not be processed) against the acceptance specification, and why |
 //! | `worst_dg_mg` | REAL | the worst compensated \|dg\| over the verification dwells, mg |
 //! | `diagnosis_verdict`, `findings` | TEXT, TEXT (JSON) | the diagnosis' verdict and findings, as in its JSON contract |
-//! | `station`, `chamber`, `tilter`, `operator` | TEXT | where and by whom (version 2; see [`record::Trace`]) |
+//! | `station`, `chamber`, `tilter`, `operator`, ... | TEXT | where and by whom: every field of [`trace::Trace`], each added by the version its table names |
 //! | `test_record` | TEXT (JSON) | the unit's test record for the line's systems (version 2, batch units; see [`test_record`]) |
 //!
 //! The columns are defined once, in [`columns`]; PostgreSQL spells the types its way

@@ -7,7 +7,8 @@
 use serde::{Deserialize, Serialize};
 
 /// Where and by whom a unit was calibrated: the station (the bench computer), the
-/// chamber and the tilter it ran in, and the operator. From the flags (`--station` ...),
+/// chamber and the tilter it ran in, the fixture it was clamped in, and the operator.
+/// From the flags (`--station` ...),
 /// else their environment variables (`HOSTFIT_STATION` ...); the operator else the
 /// login name (`USER`).
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -20,6 +21,9 @@ pub struct Trace {
     pub tilter: Option<String>,
     /// The operator.
     pub operator: Option<String>,
+    /// The fixture (the adapter plate the unit is clamped in on the tilter): a
+    /// `fixture_error` the diagnosis names belongs to it, and is trended by it.
+    pub fixture: Option<String>,
 }
 
 /// One field of [`Trace`]: how the command line and the store know it.
@@ -62,6 +66,12 @@ impl Trace {
             env: "HOSTFIT_OPERATOR",
             help: "The operator (default: the login name, USER).",
             since: 2,
+        },
+        Field {
+            name: "fixture",
+            env: "HOSTFIT_FIXTURE",
+            help: "The fixture (adapter plate) the unit was clamped in on the tilter.",
+            since: 3,
         },
     ];
 

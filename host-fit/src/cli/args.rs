@@ -767,3 +767,34 @@ pub enum Command {
     /// backends (`copy`).
     Store(StoreArgs),
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// clap's own consistency check of the whole grammar: a traceability field named as
+    /// another option of a command (`--out`, `--db`) would fail it.
+    #[test]
+    fn the_grammar_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    /// Every field of the trace is a flag of a recording command, read into its field.
+    #[test]
+    fn every_trace_field_is_a_flag() {
+        let mut args = vec!["host-fit".to_string(), "fit".into(), "r.csv".into()];
+        args.extend(["--out".to_string(), "r.blob".into()]);
+        for f in Trace::FIELDS {
+            args.push(format!("--{}", f.name));
+            args.push(format!("{}-flag", f.name));
+        }
+        let cli = Cli::try_parse_from(&args).unwrap();
+        let Command::Fit(a) = cli.command else {
+            panic!("not fit")
+        };
+        for (n, v) in a.record.trace.0.fields() {
+            assert_eq!(v, Some(format!("{n}-flag")));
+        }
+    }
+}

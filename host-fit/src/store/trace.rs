@@ -35,8 +35,9 @@ pub struct Field {
     pub env: &'static str,
     /// The flag's help.
     pub help: &'static str,
-    /// The schema version that added its column (a new field: the next version; its
-    /// migration adds the column to an older store, [`super::schema::migrations`]).
+    /// The schema version that added its column: a new field takes the next version,
+    /// never one a store may already be at (that store would never get the column); the
+    /// version's migration adds it ([`super::schema::migrations`]).
     pub since: i64,
 }
 
@@ -144,7 +145,18 @@ mod tests {
         listed.dedup();
         assert_eq!(listed.len(), Trace::FIELDS.len(), "a field listed twice");
         assert_eq!(listed, serde_names, "Trace::FIELDS must list every field");
+        let all: Vec<String> = crate::store::columns::columns()
+            .into_iter()
+            .map(|c| c.name)
+            .collect();
         for f in Trace::FIELDS {
+            // a plain SQL name (the migration writes it unquoted), no other column's
+            assert!(
+                f.name.chars().all(|c| c.is_ascii_lowercase() || c == '_'),
+                "{f:?}"
+            );
+            let n = all.iter().filter(|c| *c == f.name).count();
+            assert!(n == 1 && f.name != "id", "{f:?}: {n} columns of its name");
             assert_eq!(f.env, format!("HOSTFIT_{}", f.name.to_uppercase()));
             // version 1 had no traceability; a field is added by a migration
             assert!(f.since >= 2 && !f.help.is_empty(), "{f:?}");

@@ -8,9 +8,8 @@ use serde::{Deserialize, Serialize};
 
 /// Where and by whom a unit was calibrated: the station (the bench computer), the
 /// chamber and the tilter it ran in, the fixture it was clamped in, and the operator.
-/// From the flags (`--station` ...),
-/// else their environment variables (`HOSTFIT_STATION` ...); the operator else the
-/// login name (`USER`).
+/// From the flags (`--station` ...), else their environment variables (`HOSTFIT_STATION`
+/// ...); the operator else the login name (`USER`).
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Trace {
     /// The station.
@@ -22,7 +21,8 @@ pub struct Trace {
     /// The operator.
     pub operator: Option<String>,
     /// The fixture (the adapter plate the unit is clamped in on the tilter): a
-    /// `fixture_error` the diagnosis names belongs to it, and is trended by it.
+    /// `fixture_error` the diagnosis names may be the fixture's, and the record says which
+    /// one it was (the trend does not group by it).
     pub fixture: Option<String>,
 }
 

@@ -121,8 +121,10 @@ fn slow_disturbances_without_a_power_on_are_not_called_warm_up() {
 /// by a direction switch or a long decay about as well as by the trend itself, so each
 /// must beat a linear drift of the same coefficients in its place. Before that rule (and
 /// with held-out chunks that no longer leave a whole stop to extrapolation) the scale
-/// ageing was named `hysteresis`, the residual brought to the floor. A real hysteresis,
-/// and a real warm-up, on the same profiles are still named.
+/// ageing was named `hysteresis`, the residual brought to the floor. Since scale drifts
+/// joined the term library the ageing scale may be explained, by `a_x*t` only; the
+/// drifting bias is not, and the bare trend `t` is never named. A real hysteresis, and a
+/// real warm-up, on the same profiles are still named.
 #[test]
 fn a_trend_in_time_is_not_called_hysteresis_or_warm_up() {
     use host_fit::blind::profiles::Profile;
@@ -161,7 +163,24 @@ fn a_trend_in_time_is_not_called_hysteresis_or_warm_up() {
             "{name}: {}",
             c.text()
         );
-        assert_ne!(c.verdict, Verdict::Explained, "{name}: {}", c.text());
+        // a scale that drifts turns with the force: the library's scale drift on x may
+        // explain it (the drifting bias never: the bare trend is never proposed)
+        let drift = c.findings.iter().any(|f| {
+            f.effect == EffectId::Discovered
+                && f.term.as_deref() == Some("a_x*t")
+                && f.axes == ["x"]
+        });
+        let by_drift = name.starts_with("scale") && drift;
+        assert!(
+            by_drift || c.verdict != Verdict::Explained,
+            "{name}: {}",
+            c.text()
+        );
+        assert!(
+            c.findings.iter().all(|f| f.term.as_deref() != Some("t")),
+            "{name}: the bare trend named: {}",
+            c.text()
+        );
     }
     let mut hyst = cold_first(43);
     hyst.effects.hysteresis = Some(x(1e-4));

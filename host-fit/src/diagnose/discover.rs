@@ -388,7 +388,8 @@ pub fn discover(data: &Data, current: &Fit, order: usize, reach: library::Reach)
     let mut proposals: Vec<Proposal> = screened
         .iter()
         .zip(inclusion)
-        .filter(|(_, share)| *share >= rules.discover_inclusion)
+        // the bare trend only rivals a scale drift: never proposed as physics
+        .filter(|(s, share)| *share >= rules.discover_inclusion && !library::is_trend(&s.cand.term))
         .map(|(s, share)| Proposal {
             candidate: s.cand.clone(),
             drop: s.drop,

@@ -53,7 +53,8 @@ pub struct Finding {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub corrects: Option<Corrects>,
     /// For a discovered term: the library terms this design cannot tell from it (`term
-    /// on axis`); it is named as the simplest of them (fewest factors).
+    /// on axis`); it is named as the simplest of them (fewest factors, then fewest
+    /// structural unknowns such as a decay's time constant).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub equivalent: Vec<String>,
 }

@@ -105,8 +105,8 @@ pub struct TermSet {
     /// The others of its set.
     pub others: Vec<Candidate>,
     /// Whether it is named: it is the simplest of the set (fewer factors than every
-    /// other), so the finding names it and lists the others; else the set is reported
-    /// as ambiguous, none named.
+    /// other, or as few and fewer structural unknowns), so the finding names it and lists
+    /// the others; else the set is reported as ambiguous, none named.
     pub named: bool,
 }
 
@@ -229,25 +229,34 @@ struct LibraryOutcome {
     unidentifiable: Vec<Unidentifiable>,
 }
 
-/// The simplest of a proposal and the library terms the design cannot tell from it
-/// (fewest factors): it is the one judged, the others go with it; `named` when it is the
-/// only one that simple (Occam: a set of equally simple terms is not a choice).
+/// The simplest of a proposal and the library terms the design cannot tell from it, none
+/// when the bare trend `t` is among them ([`crate::model::library::is_trend`])
+/// (fewest factors, then fewest structural unknowns: a decay's time constant is one more
+/// number the data must give, as the information criterion counts it): it is the one
+/// judged, the others go with it; `named` when it is the only one that simple (Occam: a
+/// set of equally simple terms is not a choice). So a drift `a_y*t` is named over a decay
+/// of the same force whose time constant is longer than the test (`a_y*decay(power_on,
+/// 102min)` over ten hours: all but straight).
 struct Simplest {
     proposal: Proposal,
     others: Vec<Candidate>,
     named: bool,
 }
 
-fn simplest(p: &Proposal) -> Simplest {
+fn simplest(p: &Proposal) -> Option<Simplest> {
     let mut all = vec![p.candidate.clone()];
     all.extend(p.equivalents.iter().cloned());
-    let least = all.iter().map(|c| c.term.factors()).min().unwrap_or(0);
-    let simplest: Vec<usize> = (0..all.len())
-        .filter(|&i| all[i].term.factors() == least)
-        .collect();
+    // a term the design cannot tell from the bare trend `t` (a drifting bias, or a slow
+    // disturbance's arc) is not judged: the trend only rivals a scale drift
+    if all.iter().any(|c| crate::model::library::is_trend(&c.term)) {
+        return None;
+    }
+    let size = |c: &Candidate| (c.term.factors(), usize::from(c.term.tau_s().is_some()));
+    let least = all.iter().map(size).min().unwrap_or((0, 0));
+    let simplest: Vec<usize> = (0..all.len()).filter(|&i| size(&all[i]) == least).collect();
     let pick = simplest.first().copied().unwrap_or(0);
     let chosen = all.remove(pick);
-    Simplest {
+    Some(Simplest {
         proposal: Proposal {
             candidate: chosen,
             equivalents: Vec::new(),
@@ -255,7 +264,7 @@ fn simplest(p: &Proposal) -> Simplest {
         },
         others: all,
         named: simplest.len() == 1,
-    }
+    })
 }
 
 /// A source of candidate extensions of the current model.
@@ -992,7 +1001,9 @@ impl Search<'_, '_> {
         };
         let mut step = None;
         for p in found.proposals {
-            let pick = simplest(&p);
+            let Some(pick) = simplest(&p) else {
+                continue;
+            };
             if state.rejected.contains(&pick.proposal.candidate) {
                 continue;
             }
@@ -1072,5 +1083,58 @@ impl Search<'_, '_> {
             && adequate_term(data, &full, current, axis);
         log::debug!("  library {term} on {axis}: {j:?} accepted {ok}");
         ok.then_some(full)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::library::{Event, Timed};
+
+    fn cand(powers: [u8; 3], timed: Vec<Timed>) -> Candidate {
+        Candidate {
+            term: LibTerm {
+                powers,
+                abs: None,
+                timed,
+            },
+            axis: 1,
+        }
+    }
+
+    fn proposal(first: Candidate, equivalents: Vec<Candidate>) -> Proposal {
+        Proposal {
+            candidate: first,
+            drop: 1.0,
+            inclusion: 1.0,
+            equivalents,
+        }
+    }
+
+    /// Of terms the design cannot tell apart, the one with fewest factors is named,
+    /// then the one with fewest structural unknowns (a decay's time constant); a tie
+    /// names none; a set with the bare trend in it is not judged.
+    #[test]
+    fn the_simplest_has_fewest_factors_then_fewest_unknowns() {
+        let drift = cand([0, 1, 0], vec![Timed::Hours]);
+        let decay = cand([0, 1, 0], vec![Timed::Decay(Event::PowerOn, 6120.0)]);
+        // the decay proposed first, the drift among its equivalents: the drift is named
+        let s = simplest(&proposal(decay.clone(), vec![drift.clone()])).unwrap();
+        assert!(s.named);
+        assert_eq!(s.proposal.candidate, drift);
+        assert_eq!(s.others, vec![decay.clone()]);
+        // fewer factors wins over fewer unknowns
+        let cube = cand([0, 3, 0], vec![]);
+        let s = simplest(&proposal(cube.clone(), vec![decay.clone()])).unwrap();
+        assert!(s.named);
+        assert_eq!(s.proposal.candidate, decay);
+        // as many factors and unknowns: a set, not a choice
+        let other = cand([1, 0, 0], vec![Timed::Hours]);
+        let s = simplest(&proposal(drift.clone(), vec![other])).unwrap();
+        assert!(!s.named);
+        // a drift the design cannot tell from the bare trend: not judged at all
+        let trend = cand([0, 0, 0], vec![Timed::Hours]);
+        assert!(simplest(&proposal(drift.clone(), vec![trend.clone()])).is_none());
+        assert!(simplest(&proposal(trend, vec![decay])).is_none());
     }
 }

@@ -316,9 +316,10 @@ fn f32_at(bytes: &[u8], off: usize) -> f32 {
 #[derive(Clone, Copy, Debug)]
 pub struct BlobView<'a> {
     bytes: &'a [u8],
-    /// The physics section, as a fixed-size array: the per-sample path reads it at
-    /// constant offsets, without bounds checks.
-    physics: Option<&'a [u8; PHYSICS_BYTES]>,
+    /// Where the physics section starts (0: none; validated to hold [`PHYSICS_BYTES`]).
+    /// An offset, not a reference: the view stays 32 bytes on a 64-bit host, which keeps
+    /// the C interface's compensator within its 256 bytes there too.
+    physics: u16,
     kind: ModelKind,
     rows: u8,
     clamp: bool,
@@ -438,18 +439,18 @@ impl<'a> BlobView<'a> {
         if !text.iter().all(|&b| serial_byte(b)) || padding.iter().any(|&b| b != 0) {
             return Err(Error::Malformed);
         }
-        let physics = if has_physics {
-            let section = bytes.get(l.physics..).ok_or(Error::Malformed)?;
-            Some(
-                section
-                    .first_chunk::<PHYSICS_BYTES>()
-                    .ok_or(Error::Malformed)?,
-            )
-        } else {
-            None
-        };
         // every offset is below the total length, itself below MAX_BLOB_LEN (u16)
         let off = |v: usize| u16::try_from(v).map_err(|_| Error::Malformed);
+        let physics = if has_physics {
+            let section = bytes.get(l.physics..).ok_or(Error::Malformed)?;
+            let _ = section
+                .first_chunk::<PHYSICS_BYTES>()
+                .ok_or(Error::Malformed)?;
+            // after the header and the table, never 0
+            off(l.physics)?
+        } else {
+            0
+        };
         Ok(BlobView {
             bytes,
             physics,
@@ -646,11 +647,18 @@ impl Source for BlobView<'_> {
     }
     #[inline]
     fn has_physics(&self) -> bool {
-        self.physics.is_some()
+        self.physics != 0
     }
     #[inline]
     fn physics(&self) -> Option<Physics<f32>> {
-        let p = self.physics?;
+        if self.physics == 0 {
+            return None;
+        }
+        // validated to be there: the checks cannot fail, and cost a compare per sample
+        let p = self
+            .bytes
+            .get(usize::from(self.physics)..)?
+            .first_chunk::<PHYSICS_BYTES>()?;
         Some(Physics::from_word_fn(|i| {
             f32_at(p, 4usize.saturating_mul(i))
         }))

@@ -47,7 +47,9 @@
 //! restarts the warm-up clock only: the element's temperature, its hysteresis state and
 //! the temperature's rate are the unit's physics, not its power's, and the next step
 //! bridges the gap with the real time elapsed, the sensor's temperature taken as straight
-//! across it. The host does the same at the first row of a recording and at each stated
+//! across it. After a start and after a power-on the rate is taken as 0 until its
+//! estimator has averaged [`RATE_SETTLE_TAUS`] time constants ([`rate_settled`]): its
+//! low-passes then hold one reading, whose noise they would otherwise read as a rate. The host does the same at the first row of a recording and at each stated
 //! power-on, but for the lag, which its fits carry along the sensor's bend across a gap. (What a power-off during a fast temperature
 //! change does to an MCU that loses its state cannot be known: its lag starts again at
 //! the sensor's temperature.)
@@ -120,6 +122,36 @@ pub struct Clock<R> {
     force: bool,
     /// Seconds since the last step (or since power-on, before the start).
     pending: R,
+}
+
+/// After a start or a power-on the rate estimator's low-passes hold one reading, off the
+/// temperature's mean by that reading's noise (a quantised sensor: up to a quantum), and
+/// as they settle onto the mean that offset would be read as a rate: its integral is the
+/// offset, however it is spread. So the rate is taken as 0 until the estimator has
+/// averaged this many of its time constants (the low-pass's share of the offset left
+/// `e^-5` = 0.7 %, the zero-lag one's 3 %), and at most [`RATE_SETTLE_MAX_S`].
+pub const RATE_SETTLE_TAUS: f32 = 5.0;
+
+/// The longest the rate is held at 0 after a start or a power-on, s: five time
+/// constants of the flight's estimator (4 s, host-fit's `FLIGHT_RATE_TAU_S`). A slower
+/// estimator (the 30-60 s a chamber's data prefer) would be held for minutes, losing a
+/// rate that is really there, while its start's offset is spread over its own time
+/// constant and is as much smaller per second.
+pub const RATE_SETTLE_MAX_S: f32 = 20.0;
+
+/// Whether the rate estimator of time constant `tau_s` (negative: zero-lag, of `|tau_s|`)
+/// has settled `age_s` seconds (stepped) after a start or a power-on
+/// ([`RATE_SETTLE_TAUS`] time constants, at most [`RATE_SETTLE_MAX_S`]; a time constant
+/// of 0, the plain difference, at once). The boundary is half a [`MIN_STEP_S`] early:
+/// the age is a sum of steps, which in f32 and in f64, or from 10 ms and from 100 ms
+/// samples, rounds either side of a whole number of 0.1-s steps, and half a step away
+/// from it they agree (steps of other lengths, a logger's rows, may still fall within
+/// the rounding of the boundary: then the f32 and f64 paths may settle one step apart).
+#[inline]
+pub fn rate_settled<R: Real>(age_s: R, tau_s: R) -> bool {
+    let need = R::from_f32(RATE_SETTLE_TAUS) * tau_s.abs();
+    let most = R::from_f32(RATE_SETTLE_MAX_S);
+    age_s + R::from_f32(0.5 * MIN_STEP_S) >= if need < most { need } else { most }
 }
 
 impl<R: Real> Clock<R> {
@@ -226,32 +258,52 @@ impl<R: Real> Lag<R> {
     }
 }
 
-/// `temp_rate`: the rate of the temperature, C/s, as the change of its low-pass (time
-/// constant tau_r) over the step divided by the step's duration: for a ramp of slope
-/// `s` it is exactly `s` once the low-pass has settled, whatever the step.
+/// `temp_rate`: the rate of the temperature, C/s, as the change over the step divided by
+/// the step's duration of its low-pass `L1` (time constant tau_r), or, zero-lag, of
+/// `2 L1 - L2` (`L2` the low-pass of `L1`, the same tau_r). Either is exactly `s` for a
+/// ramp of slope `s` once settled, whatever the step. The low-pass's rate trails the
+/// temperature's by tau_r (an error of `tau_r` times the second derivative); the
+/// zero-lag one does not (its error is of the order of `tau_r^2` times the third) at the
+/// price of up to twice the low-pass's noise at high frequencies: what a fast flight
+/// needs of an estimator smoothed over seconds.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Rate<R> {
     lp: LowPass<R>,
+    /// The low-pass of `lp`'s output (the zero-lag estimator's `L2`).
+    lp2: LowPass<R>,
 }
 
 impl<R: Real> Rate<R> {
     /// Settled (rate 0).
     pub fn start(&mut self) {
         self.lp.start();
+        self.lp2.start();
     }
 
-    /// Step over a temperature change `dx` in `h` seconds; returns the rate, C/s
-    /// (`(dx + e1 - e0) / h`, written as `(dx (1 - b) - a e0) / h` so that no two
-    /// nearly equal numbers are subtracted); 0 over no time (a forced step).
+    /// Step over a temperature change `dx` in `h` seconds; returns the rate, C/s; 0 over
+    /// no time (a forced step). The low-pass's: `(dx + e1 - e0) / h`, written as
+    /// `(dx (1 - b) - a e0) / h` (`dL1 / h`) so that no two nearly equal numbers are
+    /// subtracted. Zero-lag: the change of `2 L1 - L2` is `2 dL1 - dL2`, with
+    /// `dL2 = dL1 + e2' - e2 = dL1 (1 - b) - a e2` (`L1` taken as linear over the step, as
+    /// the two-pole lag takes its first stage): `(dL1 (1 + b) + a e2) / h`. Both states
+    /// are stepped either way, so the time per sample does not depend on the choice.
+    // The negated comparison is the point: a NaN step takes the degenerate branch.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     #[inline]
-    pub fn step(&mut self, k: Step<R>, dx: R, h: R) -> R {
+    pub fn step(&mut self, k: Step<R>, dx: R, h: R, zero_lag: bool) -> R {
         let e0 = self.lp.e;
         self.lp.step(k, dx);
-        if h > R::ZERO {
-            (dx * (R::ONE - k.b) - k.a * e0) / h
+        let dl1 = dx * (R::ONE - k.b) - k.a * e0;
+        let e2 = self.lp2.e;
+        self.lp2.step(k, dl1);
+        if !(h > R::ZERO) {
+            return R::ZERO;
+        }
+        if zero_lag {
+            (dl1 * (R::ONE + k.b) + k.a * e2) / h
         } else {
-            R::ZERO
+            dl1 / h
         }
     }
 }
@@ -395,10 +447,12 @@ pub struct Machines<R> {
     /// `decay(power_on,TAU)`; only with the `terms` feature: flash and state).
     #[cfg(feature = "terms")]
     since_on: Elapsed<R>,
-    /// A power-on of the sensor is pending ([`Machines::power_on`]) this many seconds
-    /// before the next sample; negative: none (no flag beside it: the compensator's
-    /// state stays within its 256 bytes on a 64-bit host too).
-    on_s: R,
+    /// Not negative: a power-on of the sensor is pending ([`Machines::power_on`]) this
+    /// many seconds before the next sample. Negative: none is, and this is `-1` minus
+    /// the seconds stepped since the start or the last power-on, how long the rate
+    /// estimator has averaged ([`rate_settled`]). One number for both, no flag beside it:
+    /// the compensator's state stays within its 256 bytes on a 64-bit host too.
+    power: R,
 }
 
 impl<R: Real> Default for Machines<R> {
@@ -414,7 +468,7 @@ impl<R: Real> Default for Machines<R> {
             offset: [R::ZERO; 3],
             #[cfg(feature = "terms")]
             since_on: Elapsed::default(),
-            on_s: -R::ONE,
+            power: -R::ONE,
         }
     }
 }
@@ -437,7 +491,7 @@ impl<R: Real> Machines<R> {
                 self.lag.start();
                 self.rate.start();
                 self.dir.start(power_on_direction(p, x, t0), x);
-                self.on_s = -R::ONE;
+                self.power = -R::ONE;
                 #[cfg(feature = "terms")]
                 self.since_on.set(since_on);
                 let w = self.warm.start(Step::new(since_on, p.warmup_tau_s));
@@ -447,11 +501,21 @@ impl<R: Real> Machines<R> {
                 let dx = x - self.x;
                 self.x = x;
                 self.lag.step(Step::new(h, p.lag_tau_s), dx);
-                let rate = self.rate.step(Step::new(h, p.rate_tau_s), dx, h);
+                let rate =
+                    self.rate
+                        .step(Step::new(h, p.rate_tau_s.abs()), dx, h, p.rate_zero_lag());
+                let on_s = self.power;
+                let powered_on = on_s >= R::ZERO;
+                // across a power-on the estimator starts averaging again
+                self.power = if powered_on { -R::ONE } else { on_s - h };
+                let rate = if rate_settled(self.rate_age_s(), p.rate_tau_s) {
+                    rate
+                } else {
+                    R::ZERO
+                };
                 let dir = self.dir.step(p.hysteresis_threshold_c, x);
-                let w = if self.on_s >= R::ZERO {
-                    let on = self.on_s;
-                    self.on_s = -R::ONE;
+                let w = if powered_on {
+                    let on = on_s;
                     #[cfg(feature = "terms")]
                     self.since_on.set(on);
                     self.warm.start(Step::new(on, p.warmup_tau_s))
@@ -491,8 +555,19 @@ impl<R: Real> Machines<R> {
     pub fn power_on(&mut self, since_s: R) {
         if self.clock.started() {
             // a negative or NaN time is no time: the warm-up at full weight, as before
-            self.on_s = if since_s > R::ZERO { since_s } else { R::ZERO };
+            self.power = if since_s > R::ZERO { since_s } else { R::ZERO };
             self.clock.force_step();
+        }
+    }
+
+    /// Seconds stepped since the start or the last power-on, as of the last step (0 while
+    /// a power-on is pending): how long the rate estimator has averaged.
+    #[inline]
+    pub fn rate_age_s(&self) -> R {
+        if self.power < R::ZERO {
+            -R::ONE - self.power
+        } else {
+            R::ZERO
         }
     }
 
@@ -572,14 +647,50 @@ mod tests {
 
     #[test]
     fn rate_of_a_ramp_is_its_slope_at_any_spacing() {
-        for (h, tau) in [(0.1, 5.0), (1.0, 30.0), (10.0, 5.0), (3.3, 0.0)] {
-            let mut r = Rate::<f64>::default();
-            r.start();
-            let mut last = 0.0;
-            for _ in 0..2000 {
-                last = r.step(step(h, tau), 0.02 * h, h);
+        for zero_lag in [false, true] {
+            for (h, tau) in [(0.1, 5.0), (1.0, 30.0), (10.0, 5.0), (3.3, 0.0)] {
+                let mut r = Rate::<f64>::default();
+                r.start();
+                let mut last = 0.0;
+                for _ in 0..2000 {
+                    last = r.step(step(h, tau), 0.02 * h, h, zero_lag);
+                }
+                assert!(
+                    (last - 0.02).abs() < 1e-12,
+                    "zero-lag {zero_lag}, h {h} tau {tau}: {last}"
+                );
             }
-            assert!((last - 0.02).abs() < 1e-12, "h {h} tau {tau}: {last}");
+        }
+    }
+
+    /// On a temperature accelerating at `c` C/s^2 (`T = c t^2 / 2`) the low-pass's rate
+    /// trails the true rate `c t` by `c tau`; the zero-lag one meets it (the step's own
+    /// error aside: within `c h` here), at 10 Hz and at 1 kHz.
+    #[test]
+    fn the_zero_lag_rate_does_not_trail_an_accelerating_temperature() {
+        let (tau, c) = (2.0, 1e-3);
+        for h in [0.1, 0.001] {
+            let (mut lp, mut zl) = (Rate::<f64>::default(), Rate::<f64>::default());
+            lp.start();
+            zl.start();
+            let n = (60.0 / h) as usize;
+            let (mut last_lp, mut last_zl) = (0.0, 0.0);
+            for k in 1..=n {
+                let t = k as f64 * h;
+                let dx = c * (t * t - (t - h) * (t - h)) / 2.0;
+                last_lp = lp.step(step(h, tau), dx, h, false);
+                last_zl = zl.step(step(h, tau), dx, h, true);
+            }
+            // the rate at the step's middle, where a difference over the step is exact
+            let truth = c * (n as f64 * h - h / 2.0);
+            assert!(
+                (last_lp - (truth - c * tau)).abs() < 1e-3 * c * tau,
+                "h {h}: low-pass {last_lp} against {truth}"
+            );
+            assert!(
+                (last_zl - truth).abs() < c * h + 1e-9,
+                "h {h}: zero-lag {last_zl} against {truth}"
+            );
         }
     }
 
@@ -649,8 +760,10 @@ mod tests {
         assert_eq!(c.tick(0.001), Tick::Hold);
     }
 
-    /// A power cycle of the sensor restarts the warm-up clock at the power-on, and only
-    /// it: the lag, the rate and the hysteresis run on, the next step spanning the gap.
+    /// A power cycle of the sensor restarts the warm-up clock at the power-on, and the
+    /// rate's settling: the lag, the rate's estimator and the hysteresis run on, the next
+    /// step spanning the gap; the rate reads 0 until the estimator has averaged
+    /// [`RATE_SETTLE_TAUS`] time constants again, then as if there had been no power-on.
     #[test]
     fn a_power_on_restarts_the_warm_up_only() {
         let p = Physics::<f64> {
@@ -675,9 +788,61 @@ mod tests {
         a.sample(&p, 26.0, 301.0, 20.0);
         b.sample(&p, 26.0, 301.0, 20.0);
         assert_eq!(a.model_temperature(), b.model_temperature());
-        assert_eq!(a.offset()[..2], b.offset()[..2]);
+        assert_eq!(a.offset()[1], b.offset()[1]);
+        assert_eq!(a.offset()[0], 0.0);
+        assert!(b.offset()[0] > 0.0);
         assert!((a.offset()[2] - (-0.3f64).exp()).abs() < 1e-12);
         assert!((b.offset()[2] - (-0.9f64).exp()).abs() < 1e-9);
+        // the estimator (10 s) settles after five of its time constants, at most
+        // RATE_SETTLE_MAX_S: 19 s on it has not, 20 s on it has
+        for k in 1..=40 {
+            for m in [&mut a, &mut b] {
+                m.sample(&p, 26.0 + 0.01 * k as f64, 1.0, 20.0);
+            }
+            assert_eq!(a.offset()[0] == b.offset()[0], k >= 20, "{k} s after");
+        }
+        assert!(a.offset()[0] > 0.0);
+    }
+
+    /// The rate's age counts the seconds stepped since the start or a power-on on any
+    /// step length (a power-on pending: 0); the rate settles after
+    /// [`RATE_SETTLE_TAUS`] time constants, a plain difference at once.
+    #[test]
+    fn the_rate_settles_on_the_clock_after_a_start_or_a_power_on() {
+        let p = Physics::<f32> {
+            rate: [1.0, 0.0, 0.0],
+            rate_tau_s: -4.0,
+            ..Physics::neutral()
+        };
+        for h in [0.001f32, 0.01, 0.1, 1.0] {
+            let mut m = Machines::<f32>::default();
+            m.sample(&p, 20.0, 0.0, 20.0);
+            assert_eq!(m.rate_age_s(), 0.0);
+            for _ in 0..(12.0 / h).round() as usize {
+                m.sample(&p, 20.0, h, 20.0);
+            }
+            // held between steps of at least MIN_STEP_S: within one step of 12 s
+            let age = m.rate_age_s();
+            assert!(
+                age <= 12.001 && age > 12.0 - h.max(MIN_STEP_S) - 1e-3,
+                "{h}: {age}"
+            );
+            m.power_on(5.0);
+            assert_eq!(m.rate_age_s(), 0.0, "{h}: pending");
+            m.sample(&p, 20.0, h, 20.0);
+            assert_eq!(m.rate_age_s(), 0.0, "{h}: across the power-on");
+        }
+        assert!(!rate_settled(19.9f32, 4.0) && rate_settled(19.99f32, 4.0));
+        assert!(
+            rate_settled(20.0f32, -4.0),
+            "the zero-lag estimator's time constant"
+        );
+        assert!(rate_settled(0.0f32, 0.0));
+        assert!(!rate_settled(f32::NAN, 0.0), "a NaN age is never settled");
+        assert!(
+            !rate_settled(19.9f32, 60.0) && rate_settled(19.99f32, 60.0),
+            "at most 20 s"
+        );
     }
 
     /// The time since power-on in f32: a day of 0.1 s steps summed with the compensation
@@ -735,15 +900,22 @@ mod tests {
     }
 
     /// The machines in f32 at 10 Hz, 100 Hz and 1 kHz against f64 at 10 Hz, on a fast
-    /// warming and cooling with a 900 s lag, a 10 s rate and a 1800 s warm-up: the model
+    /// warming and cooling with a 900 s lag, a 10 s rate (and a 2 s zero-lag one: the
+    /// flight's is 4 s, the shorter the noisier) and a 1800 s warm-up: the model
     /// temperature within 2e-3 C and the rate within 1e-5 C/s at every step of the
     /// reference (held between steps: compared at the reference's step times).
     #[test]
     fn f32_machines_follow_f64_at_every_rate() {
+        for rate_tau_s in [10.0, -2.0] {
+            f32_machines_follow_f64_with(rate_tau_s);
+        }
+    }
+
+    fn f32_machines_follow_f64_with(rate_tau_s: f64) {
         let p64 = Physics::<f64> {
             lag_tau_s: 900.0,
             rate: [1.0, 0.0, 0.0],
-            rate_tau_s: 10.0,
+            rate_tau_s,
             hysteresis: [0.0, 1.0, 0.0],
             hysteresis_threshold_c: 0.5,
             hysteresis_initial: -1.0,
@@ -789,7 +961,7 @@ mod tests {
                     );
                 }
             }
-            eprintln!("{hz} Hz: model temperature within {worst_t:.2e} C, rate within {worst_r:.2e} C/s of f64");
+            eprintln!("{hz} Hz, rate tau {rate_tau_s} s: model temperature within {worst_t:.2e} C, rate within {worst_r:.2e} C/s of f64");
             assert!(
                 worst_t < 2e-3,
                 "{hz} Hz: model temperature off by {worst_t} C"

@@ -138,7 +138,8 @@ physics_terms! {
     /// `temp_rate`: offset per C/s of the temperature rate, per axis (output units).
     rate: axes [R; 3] = 0.0;
     /// Time constant of the low-pass whose change is the rate, s (0 = the plain
-    /// difference of successive steps).
+    /// difference of successive steps); negative: the zero-lag estimator of the same
+    /// time constant `|rate_tau_s|` ([`crate::inflight::Rate`], [`Physics::rate_zero_lag`]).
     rate_tau_s: one R = 0.0;
     /// `hysteresis`: offsets split `+-h/2` by the direction of the last change, per axis.
     hysteresis: axes [R; 3] = 0.0;
@@ -170,13 +171,21 @@ impl<R: Real> Physics<R> {
         self.validate_ranges()
     }
 
+    /// Whether the rate is estimated without lag (a negative `rate_tau_s`): the change
+    /// of `2 L1 - L2`, `L1` the temperature's low-pass and `L2` the low-pass of `L1`, both
+    /// of time constant `|rate_tau_s|`. A blob with it set is refused by a firmware that
+    /// predates it (a negative time constant is out of its range), never misread.
+    pub fn rate_zero_lag(&self) -> bool {
+        self.rate_tau_s < R::ZERO
+    }
+
     /// The range checks of [`Physics::validate`] (values known to be finite): time
-    /// constants and the threshold not negative, the initial direction -1, 0 or +1.
+    /// constants (but the rate's, whose sign chooses its estimator) and the threshold not
+    /// negative, the initial direction -1, 0 or +1.
     pub fn validate_ranges(&self) -> Result<(), Error> {
         let z = R::ZERO;
         let initial = self.hysteresis_initial;
         if self.lag_tau_s < z
-            || self.rate_tau_s < z
             || self.warmup_tau_s < z
             || self.hysteresis_threshold_c < z
             || !(initial == z || initial == R::ONE || initial == -R::ONE)
@@ -719,7 +728,9 @@ mod tests {
             p.validate()
         };
         assert_eq!(bad(&|p| p.lag_tau_s = -1.0), Err(Error::BadRange));
-        assert_eq!(bad(&|p| p.rate_tau_s = -1.0), Err(Error::BadRange));
+        // a negative rate time constant is the zero-lag estimator, a NaN is refused
+        assert_eq!(bad(&|p| p.rate_tau_s = -1.0), Ok(()));
+        assert_eq!(bad(&|p| p.rate_tau_s = f64::NAN), Err(Error::NonFinite));
         assert_eq!(bad(&|p| p.warmup_tau_s = -1.0), Err(Error::BadRange));
         assert_eq!(
             bad(&|p| p.hysteresis_threshold_c = -0.1),

@@ -391,8 +391,8 @@ fn content_checks_behind_a_valid_crc() {
     let bytes = encode(&p);
     assert!(BlobView::new(&bytes).is_ok());
     let section = bytes.len() - 4 - 80;
-    for (word, value) in [(0, -1.0), (4, -5.0), (19, -1.0), (8, -0.5), (9, 0.5)] {
-        // lag, rate and warm-up time constants negative; threshold negative; an initial
+    for (word, value) in [(0, -1.0), (19, -1.0), (8, -0.5), (9, 0.5)] {
+        // lag and warm-up time constants negative; threshold negative; an initial
         // direction that is none of -1, 0, +1
         let mut b = bytes.clone();
         put(&mut b, section + 4 * word, value);
@@ -402,6 +402,18 @@ fn content_checks_behind_a_valid_crc() {
             "word {word}"
         );
     }
+    // the rate's time constant negative is the zero-lag estimator, read as such
+    let mut b = bytes.clone();
+    put(&mut b, section + 4 * 4, -5.0);
+    let b = reseal(b);
+    let view = BlobView::new(&b).expect("a negative rate time constant is valid");
+    let read = view
+        .to_blob()
+        .calibration
+        .physics
+        .expect("the physics section");
+    assert!(read.rate_zero_lag());
+    assert_eq!(read.rate_tau_s, -5.0);
 }
 
 fn physics() -> Physics<f32> {

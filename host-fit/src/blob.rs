@@ -195,7 +195,8 @@ pub struct PhysicsTerms {
     pub lag_tau_s: f32,
     /// `temp_rate`: offset per C/s, per axis.
     pub rate: [f32; 3],
-    /// The rate estimator's low-pass time constant, s.
+    /// The rate estimator's low-pass time constant, s (negative: the zero-lag estimator
+    /// of time constant `|rate_tau_s|`).
     pub rate_tau_s: f32,
     /// `hysteresis`: the offset split, per axis.
     pub hysteresis: [f32; 3],
@@ -242,9 +243,13 @@ impl PhysicsTerms {
             "in-flight terms (time constants in seconds; the firmware steps them on its own sample period):".to_string(),
             format!("  thermal_lag      tau {}", tau(self.lag_tau_s)),
             format!(
-                "  temp_rate        r {} per C/s, rate low-pass tau {}",
+                "  temp_rate        r {} per C/s, rate {}",
                 v(self.rate),
-                tau(self.rate_tau_s)
+                if self.rate_tau_s < 0.0 {
+                    format!("zero-lag estimator tau {}", tau(-self.rate_tau_s))
+                } else {
+                    format!("low-pass tau {}", tau(self.rate_tau_s))
+                }
             ),
             format!(
                 "  hysteresis       h {}, threshold {} C, direction at power-on {}",

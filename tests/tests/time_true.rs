@@ -8,7 +8,7 @@
 //! cooling both ways, a second power cycle, 24 attitudes over the sphere held 40 s, at
 //! an MCU rate).
 use host_fit::simulate::{PerAxis, SimConfig, Warmup};
-use tests::time_true::{noiseless_flight, production, s, table, verify, write};
+use tests::time_true::{in_flight, noiseless_flight, production, s, table, verify, write};
 use tests::{cli, cli_json};
 
 /// The stated bounds (mg): a diagnosed blob through firmware-core on its own recording
@@ -22,16 +22,14 @@ const FLIGHT_BOUND_MG: f64 = 0.06;
 /// See [`OWN_BOUND_MG`].
 const REFERENCE_BOUND_MG: f64 = 0.002;
 /// In flight, a unit with two coupled effects (a pair of the table: `thermal_lag` +
-/// `temp_rate`, `hysteresis` + `temp_rate`) within this (mg) and no worse than the plain
-/// `fit` blob. Not the aim of 0.05 mg for both: the hysteresis + rate unit reaches it
-/// (0.045 mg) since the flight's rate estimator keeps the diagnosed `r` (it was 0.139 mg
-/// with `r` refitted beside the hysteresis); the lag + rate unit flies at 0.059 mg (0.084
+/// `temp_rate`, `hysteresis` + `temp_rate`) within this (mg), the aim, and no worse than
+/// the plain `fit` blob. The hysteresis + rate unit reaches it since the flight's rate
+/// estimator keeps the diagnosed `r` (it was 0.139 mg with `r` refitted beside the
+/// hysteresis); the lag + rate unit since that estimator is the zero-lag one (0.059 mg
+/// with a 2-s low-pass, which trails the rate by 2 s where the case turns a ramp; 0.084
 /// before the host crossed the production test's power-off along the sensor's bend,
-/// `model::regressors::Cubic`: its lag came out 0.7 % short and its `r` 1.6 % high; on a
-/// noiseless twin it now flies at 0.005 mg), where the rate term alone flies at 0.049 mg:
-/// what is left is the flight's 2-s rate estimator and the noise of `r`. This bound holds
-/// what is reached.
-const PAIR_FLIGHT_BOUND_MG: f64 = 0.075;
+/// `model::regressors::Cubic`).
+const PAIR_FLIGHT_BOUND_MG: f64 = 0.05;
 /// "No worse than the `fit` blob" up to this (mg): where `fit` itself takes the dynamic
 /// route (a lagging unit's dwells still settle) both blobs carry the same lag and tie.
 const TIE_MG: f64 = 0.001;
@@ -138,7 +136,8 @@ fn ten_hundred_and_thousand_hertz_compensate_alike() {
     let p = b.calibration.physics.as_mut().unwrap();
     assert!(p.lag_tau_s > 400.0 && p.lag_tau_s < 600.0, "{p:?}");
     p.rate = [0.02, 0.0, -0.012];
-    p.rate_tau_s = 2.0;
+    // the flight's estimator (zero-lag over 4 s), what `diagnose --out` flashes
+    p.rate_tau_s = -4.0;
     p.warmup = [2e-4, 0.0, -1.5e-4];
     p.warmup_tau_s = 900.0;
     let mut buf = [0u8; firmware_core::blob::MAX_BLOB_LEN];
@@ -230,4 +229,44 @@ fn blobs_record_the_output_unit() {
         let (_, out, _) = cli(&["inspect", s(&b)]);
         assert!(out.contains("K in mV per g, U0 in mV"), "{out}");
     }
+}
+
+/// The rate units over seeds 1-7 of the production twin (noise only differs), each
+/// diagnosed blob in flight: the rate alone within the aim of 0.05 mg on every seed, the
+/// lag + rate unit on all but one (seed 4: the diagnosis's table at the cold end, see
+/// docs/diagnosis.md); the hysteresis + rate unit is printed, not held (the split of `r`
+/// and the hysteresis on chamber ramps limits it to 0.045-0.066 mg).
+#[test]
+#[ignore = "full tier (cargo xtask test --full): 21 diagnoses and flights, 3 CPU-minutes"]
+fn rate_units_fly_within_the_aim_over_seeds() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut failed = Vec::new();
+    for (effect, need) in [
+        ("temp_rate", Some(7)),
+        ("thermal_lag+temp_rate", Some(6)),
+        ("hysteresis+temp_rate", None),
+    ] {
+        let mut line = Vec::new();
+        for seed in 1..=7u64 {
+            let (rec, _) = write(d, "p", &production(effect, seed));
+            let blob = d.join("d.blob");
+            let _ = cli_json(&["diagnose", s(&rec), "--out", s(&blob), "--json", "--force"]);
+            let (f, pos) = write(d, "f", &in_flight(production(effect, seed)));
+            line.push(verify(&f, pos.as_deref(), &blob).0);
+        }
+        let within = line.iter().filter(|w| **w <= 0.05).count();
+        let text: Vec<String> = line.iter().map(|w| format!("{w:.3}")).collect();
+        println!(
+            "{effect}: {} mg, {within} of 7 within 0.05 mg",
+            text.join(" ")
+        );
+        if need.is_some_and(|n| within < n) {
+            failed.push(format!(
+                "{effect}: {within} of 7 within 0.05 mg ({})",
+                text.join(" ")
+            ));
+        }
+    }
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
 }

@@ -203,43 +203,51 @@ impl Flashed {
     }
 }
 
-/// The rate estimator's time constant the blob carries at most, s: chosen for flight, not
-/// for the chamber (`r` is refitted with it). `r` is the unit's physics, an offset per C/s
-/// of its temperature's rate; the estimator only measures that rate. The one that fits a
-/// chamber recording best smooths its 10-s rows of a quantised sensor over tens of
-/// seconds, which in flight lags a fast change by as much (the twin's flight, warming and
-/// cooling at 5-8 C/min: 0.44 mg at the chamber's 40 s, 0.045 mg at 2 s). The price is
-/// noise: the mean of the estimate over a held attitude of D seconds is the change of its
-/// low-pass over the hold over D, whose noise is about sigma sqrt(h / tau) / D (sigma the
-/// sensor's 0.027 C, h the 0.1 s step: 1.5e-4 C/s over 40 s at 2 s, times `r`); each
-/// sample's, about sigma h / tau / h = sigma / tau (0.013 C/s at 2 s, 0.0007 C/s at 40 s).
-pub const FLIGHT_RATE_TAU_S: f64 = 2.0;
+/// The rate estimator the blob carries, s: the zero-lag estimator of this time constant
+/// (flashed as `rate_tau_s = -4`), chosen for flight, not for the chamber (the other
+/// coefficients are refitted with it, `r` held). `r` is the unit's physics, an offset per
+/// C/s of its temperature's rate; the estimator only measures that rate. The low-pass
+/// estimator that fits a chamber recording best smooths its 10-s rows of a quantised
+/// sensor over tens of seconds, which in flight lags a fast change by as much (the twin's
+/// flight, warming and cooling at 5-8 C/min: 0.44 mg at the chamber's 40 s); a 2-s
+/// low-pass still trails by 2 s, `r` times 2 s times the temperature's acceleration as
+/// the case's 120-s time constant turns a ramp: 0.049 mg on the rate alone, 0.059 mg
+/// beside a lag. The zero-lag estimator (`2 L1 - L2` of two low-passes,
+/// `firmware_core::inflight::Rate`) does not trail: its error is of the order of `tau^2`
+/// times the temperature's third derivative. Its price is noise, up to twice the
+/// low-pass's, which a longer time constant pays back: the mean of the estimate over a
+/// held attitude of D seconds is the change of its smoothed temperature over the hold
+/// over D, about sigma sqrt(h / tau) / D (sigma the sensor's 0.027 C, h the 0.1 s step:
+/// 1.1e-4 C/s over 40 s at 4 s, times `r`); each sample's, about sigma / tau (0.007 C/s at
+/// 4 s). Measured with `tests/tests/time_true.rs`'s twins (docs/diagnosis.md): zero-lag
+/// over 2 s the rate unit flew at 0.037 mg, the lag + rate unit at 0.038 mg, but the
+/// chamber recording at 1 Hz of a unit with 3x the nominal rate term was compensated at
+/// worst to 0.063 mg (its noise); over 4 s 0.035, 0.030 and 0.048 mg; over 8 s 0.035,
+/// 0.046 and 0.042 mg (the corners' `tau^2` error returning; measured with the settling
+/// after a power-on capped at 25.5 s, an earlier form of it).
+pub const FLIGHT_RATE_TAU_S: f64 = 4.0;
 
-/// `f` with its rate estimator at [`FLIGHT_RATE_TAU_S`] at most, `r` held and every other
-/// coefficient refitted with it (`f` itself without a rate term, or when the refit is
-/// not determined). `r` is not refitted with the flight's estimator: on a chamber
-/// recording of a quantised sensor the fast estimator's noise dilutes the regression
-/// (the window means of a 2-s estimate scatter by a tenth of a 1 C/min ramp), so a
-/// refit shrinks `r`, by about 1 % alone and by 3-4 % beside a hysteresis, which takes
-/// the rest on the ramps (where the direction and the rate's sign agree); in flight at
-/// 6 C/min that missing part of `r` is 0.1 mg. The `r` the diagnosis estimated with the
+/// `f` with its rate estimator the flight's ([`FLIGHT_RATE_TAU_S`], zero-lag), `r` held
+/// and every other coefficient refitted with it (`f` itself without a rate term, or when
+/// the refit is not determined). `r` is not refitted with the flight's estimator: on a
+/// chamber recording of a quantised sensor the fast estimator's noise dilutes the
+/// regression (the window means of a 2-s estimate scattered by a tenth of a 1 C/min ramp),
+/// so a refit shrinks `r`, by about 1 % alone and by 3-4 % beside a hysteresis, which
+/// takes the rest on the ramps (where the direction and the rate's sign agree); in flight
+/// at 6 C/min that missing part of `r` is 0.1 mg. The `r` the diagnosis estimated with the
 /// estimator the data preferred is the unit's; the rest (the tables, a lag's or a
 /// hysteresis's coefficients) is refitted around it.
 fn rate_for_flight(data: &Data, f: Fit) -> Fit {
+    let flight = -FLIGHT_RATE_TAU_S;
     let at = f
         .spec
         .extras
         .iter()
-        .position(|e| matches!(e, Extra::Rate { tau_s } if *tau_s > FLIGHT_RATE_TAU_S));
+        .position(|e| matches!(e, Extra::Rate { tau_s } if *tau_s != flight));
     let Some(i) = at else {
         return f;
     };
-    let spec = f.spec.replaced(
-        i,
-        Extra::Rate {
-            tau_s: FLIGHT_RATE_TAU_S,
-        },
-    );
+    let spec = f.spec.replaced(i, Extra::Rate { tau_s: flight });
     let held: Vec<usize> = (0..f.labels.len())
         .filter(|&j| f.labels[j].extra() == Some(i))
         .collect();

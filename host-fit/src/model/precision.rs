@@ -142,9 +142,10 @@ impl PhysicsTerm {
                 p.lag_tau_s
             ),
             PhysicsTerm::Rate => format!(
-                "the temperature-rate term ({:.3e} output units per C/s, estimator {:.0} s)",
+                "the temperature-rate term ({:.3e} output units per C/s, {}estimator {:.0} s)",
                 p.rate.iter().fold(0.0f64, |m, v| m.max(v.abs())),
-                p.rate_tau_s
+                if p.rate_zero_lag() { "zero-lag " } else { "" },
+                p.rate_tau_s.abs()
             ),
             PhysicsTerm::Hysteresis => "the hysteresis term".into(),
             PhysicsTerm::K2 => "the K2 term".into(),

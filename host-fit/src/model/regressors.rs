@@ -8,7 +8,7 @@
 use crate::data::recording::Recording;
 use crate::model::rules::Rules;
 use firmware_core::inflight::{
-    power_on_direction, Clock, Direction, Lag, Rate, Step, Tick, Warmup,
+    power_on_direction, rate_settled, Clock, Direction, Lag, Rate, Step, Tick, Warmup,
 };
 use firmware_core::temperature::Physics;
 
@@ -58,11 +58,12 @@ pub fn events(rec: &Recording, rules: &Rules) -> Events {
 /// the stated power-ons ([`Recording::clock`]) through firmware-core's [`Clock`], so the
 /// machine starts and steps at the rows where the firmware's would (a power-on steps at
 /// its row, across the gap, as `Compensator::power_on` makes the firmware do).
-/// `on(tick, row, temp)` is called at a start or a step and returns the machine's
-/// output, held between steps.
-fn drive(rec: &Recording, mut on: impl FnMut(Tick<f64>, usize, f64) -> f64) -> Vec<f64> {
+/// `on(tick, age, row, temp)` is called at a start or a step (`age`: the seconds stepped
+/// since the start or the last power-on, as `Machines::rate_age_s` counts them) and
+/// returns the machine's output, held between steps.
+fn drive(rec: &Recording, mut on: impl FnMut(Tick<f64>, f64, usize, f64) -> f64) -> Vec<f64> {
     let mut clock = Clock::<f64>::default();
-    let mut held = 0.0;
+    let (mut held, mut age, mut powered_on) = (0.0, 0.0, false);
     rec.rows
         .iter()
         .zip(rec.clock())
@@ -70,10 +71,21 @@ fn drive(rec: &Recording, mut on: impl FnMut(Tick<f64>, usize, f64) -> f64) -> V
         .map(|(k, (r, c))| {
             if c.power_on_s.is_some() && clock.started() {
                 clock.force_step();
+                powered_on = true;
             }
             let tick = clock.tick(c.dt_s);
+            // the age as `Machines` keeps it: 0 at the start and across a power-on
+            match tick {
+                Tick::Start(_) => age = 0.0,
+                Tick::Step(_) if powered_on => {
+                    age = 0.0;
+                    powered_on = false;
+                }
+                Tick::Step(h) => age += h,
+                Tick::Hold => {}
+            }
             if tick != Tick::Hold {
-                held = on(tick, k, r.temp_c);
+                held = on(tick, age, k, r.temp_c);
             }
             held
         })
@@ -229,7 +241,7 @@ pub fn lagged(rec: &Recording, taus: &[[f64; 2]; 3]) -> [Vec<f64>; 3] {
     std::array::from_fn(|axis| {
         let (mut lag, mut x) = (Lag::<f64>::default(), 0.0);
         let [t1, t2] = taus[axis];
-        drive(rec, |tick, k, t| {
+        drive(rec, |tick, _, k, t| {
             let cubic = crossings.get(k).copied().flatten();
             let out = match (tick, cubic) {
                 (Tick::Step(h), Some(c)) => {
@@ -261,12 +273,23 @@ pub fn lagged(rec: &Recording, taus: &[[f64; 2]; 3]) -> [Vec<f64>; 3] {
     })
 }
 
-/// Per row, the firmware's rate estimate (C/s) with low-pass time constant `tau_s`.
+/// Per row, the firmware's rate estimate (C/s; 0 until it has settled after the start
+/// and after each stated power-on, `firmware_core::inflight::rate_settled`) with
+/// low-pass time constant `tau_s`
+/// (negative: the zero-lag estimator of time constant `|tau_s|`, as the blob's
+/// `rate_tau_s` says it, `firmware_core::temperature::Physics::rate_zero_lag`).
 pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
     let (mut m, mut x) = (Rate::<f64>::default(), 0.0);
-    drive(rec, |tick, _, t| {
+    drive(rec, |tick, age_s, _, t| {
         let out = match tick {
-            Tick::Step(h) => m.step(Step::new(h, tau_s), t - x, h),
+            Tick::Step(h) => {
+                let r = m.step(Step::new(h, tau_s.abs()), t - x, h, tau_s < 0.0);
+                if rate_settled(age_s, tau_s) {
+                    r
+                } else {
+                    0.0
+                }
+            }
             _ => {
                 m.start();
                 0.0
@@ -287,7 +310,7 @@ pub fn directions(rec: &Recording, threshold_c: f64, initial: f64) -> Vec<f64> {
         hysteresis_initial: initial,
         ..Physics::neutral()
     };
-    drive(rec, |tick, _, t| match tick {
+    drive(rec, |tick, _, _, t| match tick {
         Tick::Step(_) => m.step(threshold_c, t),
         _ => {
             m.start(power_on_direction(&p, t, rec.t0_c), t);
@@ -437,6 +460,49 @@ mod tests {
         let slow: Vec<f64> = (0..20).map(|i| 300.0 * f64::from(i)).collect();
         let rec = recording_of("# power_off_s=3100-3300\n", &slow, ramp);
         assert!(gap_crossings(&rec).iter().all(Option::is_none));
+    }
+
+    /// The rate regressor is the firmware's: on a ramp logged every 2 s with a stated
+    /// power-off, row by row what `Machines` gives through the same clock, 0 for five
+    /// time constants after the start and after the power-on, then the ramp's slope
+    /// (within 5 % at once, to 1e-6 after 100 s).
+    #[test]
+    fn the_rate_regressor_settles_as_the_firmware_does() {
+        let ramp = |t: f64| -10.0 + 0.02 * t;
+        let times: Vec<f64> = (0..400)
+            .map(|i| 2.0 * f64::from(i))
+            .filter(|t| !(300.0..400.0).contains(t))
+            .collect();
+        let rec = recording_of("# power_off_s=300-400\n", &times, ramp);
+        let tau = -4.0;
+        let host = rates(&rec, tau);
+        let p = Physics::<f64> {
+            rate: [1.0, 0.0, 0.0],
+            rate_tau_s: tau,
+            ..Physics::neutral()
+        };
+        let mut m = firmware_core::inflight::Machines::<f64>::default();
+        for (k, (r, c)) in rec.rows.iter().zip(rec.clock()).enumerate() {
+            if let Some(on) = c.power_on_s {
+                m.power_on(on);
+            }
+            m.sample(&p, r.temp_c, c.dt_s, 20.0);
+            assert_eq!(host[k], m.offset()[0], "row {k} at {} s", r.t_s);
+            let since = if r.t_s < 300.0 { r.t_s } else { r.t_s - 400.0 };
+            if since < 19.0 {
+                assert_eq!(host[k], 0.0, "{} s: not settled", r.t_s);
+            } else if since > 21.0 {
+                // the filters start settled, off the ramp's steady state: what is left of
+                // that at five time constants (zero-lag: (1 + 5) e^-5 of it), then none
+                let tol = if since < 100.0 { 0.05 } else { 1e-6 };
+                assert!(
+                    (host[k] - 0.02).abs() < tol * 0.02,
+                    "{} s: {}",
+                    r.t_s,
+                    host[k]
+                );
+            }
+        }
     }
 
     /// A stretch of years between two rows is crossed in at most a thousand pieces.

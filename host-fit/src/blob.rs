@@ -243,13 +243,9 @@ impl PhysicsTerms {
             "in-flight terms (time constants in seconds; the firmware steps them on its own sample period):".to_string(),
             format!("  thermal_lag      tau {}", tau(self.lag_tau_s)),
             format!(
-                "  temp_rate        r {} per C/s, rate {}",
+                "  temp_rate        r {} per C/s, rate by the {}",
                 v(self.rate),
-                if self.rate_tau_s < 0.0 {
-                    format!("zero-lag estimator tau {}", tau(-self.rate_tau_s))
-                } else {
-                    format!("low-pass tau {}", tau(self.rate_tau_s))
-                }
+                crate::model::flashed::rate_estimator(f64::from(self.rate_tau_s))
             ),
             format!(
                 "  hysteresis       h {}, threshold {} C, direction at power-on {}",

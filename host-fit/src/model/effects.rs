@@ -232,10 +232,12 @@ impl Extra {
                     }
                 )
             }
-            Extra::Rate { tau_s } if *tau_s < 0.0 => {
-                format!("rate by the zero-lag estimator of {:.0} s", -tau_s)
+            Extra::Rate { tau_s } => {
+                format!(
+                    "rate by the {}",
+                    crate::model::flashed::rate_estimator(*tau_s)
+                )
             }
-            Extra::Rate { tau_s } => format!("rate through a {tau_s:.0} s low-pass"),
             Extra::Hysteresis {
                 threshold_c,
                 initial,

@@ -142,10 +142,9 @@ impl PhysicsTerm {
                 p.lag_tau_s
             ),
             PhysicsTerm::Rate => format!(
-                "the temperature-rate term ({:.3e} output units per C/s, {}estimator {:.0} s)",
+                "the temperature-rate term ({:.3e} output units per C/s, {})",
                 p.rate.iter().fold(0.0f64, |m, v| m.max(v.abs())),
-                if p.rate_zero_lag() { "zero-lag " } else { "" },
-                p.rate_tau_s.abs()
+                crate::model::flashed::rate_estimator(p.rate_tau_s)
             ),
             PhysicsTerm::Hysteresis => "the hysteresis term".into(),
             PhysicsTerm::K2 => "the K2 term".into(),

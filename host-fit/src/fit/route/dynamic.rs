@@ -87,14 +87,10 @@ fn describe(f: &Fit) -> String {
         if let Extra::Lag { taus } = e {
             s.push_str(&format!(" + thermal_lag {:.0} s", taus[0][0]));
         } else if let Extra::Rate { tau_s } = e {
-            if *tau_s < 0.0 {
-                s.push_str(&format!(
-                    " + temp_rate (zero-lag estimator {:.0} s)",
-                    -tau_s
-                ));
-            } else {
-                s.push_str(&format!(" + temp_rate (estimator {tau_s:.0} s)"));
-            }
+            s.push_str(&format!(
+                " + temp_rate ({})",
+                crate::model::flashed::rate_estimator(*tau_s)
+            ));
         }
     }
     s

@@ -245,7 +245,7 @@ impl PhysicsTerms {
             format!(
                 "  temp_rate        r {} per C/s, rate by the {}",
                 v(self.rate),
-                crate::model::flashed::rate_estimator(f64::from(self.rate_tau_s))
+                crate::model::effects::rate_estimator(f64::from(self.rate_tau_s))
             ),
             format!(
                 "  hysteresis       h {}, threshold {} C, direction at power-on {}",

@@ -233,10 +233,7 @@ impl Extra {
                 )
             }
             Extra::Rate { tau_s } => {
-                format!(
-                    "rate by the {}",
-                    crate::model::flashed::rate_estimator(*tau_s)
-                )
+                format!("rate by the {}", rate_estimator(*tau_s))
             }
             Extra::Hysteresis {
                 threshold_c,
@@ -274,5 +271,28 @@ impl Extra {
                 }
             ),
         }
+    }
+}
+
+/// The rate estimator a blob's `rate_tau_s` names, in words: `zero-lag estimator of 4 s`
+/// for a negative time constant (`firmware_core::temperature::Physics::rate_zero_lag`),
+/// else `4 s low-pass` (the one place that reads the sign for a person).
+pub fn rate_estimator(tau_s: f64) -> String {
+    if tau_s < 0.0 {
+        format!("zero-lag estimator of {:.0} s", -tau_s)
+    } else {
+        format!("{tau_s:.0} s low-pass")
+    }
+}
+
+#[cfg(test)]
+mod rate_estimator_tests {
+    use super::*;
+
+    /// The sign of a blob's rate time constant names the estimator, in words.
+    #[test]
+    fn the_rate_estimator_is_named_by_its_sign() {
+        assert_eq!(rate_estimator(-4.0), "zero-lag estimator of 4 s");
+        assert_eq!(rate_estimator(40.0), "40 s low-pass");
     }
 }

@@ -227,17 +227,6 @@ impl Flashed {
 /// after a power-on capped at 25.5 s, an earlier form of it).
 pub const FLIGHT_RATE_TAU_S: f64 = 4.0;
 
-/// The rate estimator a blob's `rate_tau_s` names, in words: `zero-lag estimator of 4 s`
-/// for a negative time constant (`firmware_core::temperature::Physics::rate_zero_lag`),
-/// else `4 s low-pass` (the one place that reads the sign for a person).
-pub fn rate_estimator(tau_s: f64) -> String {
-    if tau_s < 0.0 {
-        format!("zero-lag estimator of {:.0} s", -tau_s)
-    } else {
-        format!("{tau_s:.0} s low-pass")
-    }
-}
-
 /// `f` with its rate estimator the flight's ([`FLIGHT_RATE_TAU_S`], zero-lag), `r` held
 /// and every other coefficient refitted with it (`f` itself without a rate term, or when
 /// the refit is not determined). `r` is not refitted with the flight's estimator: on a
@@ -395,13 +384,6 @@ fn table(data: &Data, f: &Fit) -> Vec<(f64, [f64; 12])> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The sign of a blob's rate time constant names the estimator, in words.
-    #[test]
-    fn the_rate_estimator_is_named_by_its_sign() {
-        assert_eq!(rate_estimator(-FLIGHT_RATE_TAU_S), "zero-lag estimator of 4 s");
-        assert_eq!(rate_estimator(40.0), "40 s low-pass");
-    }
 
     #[test]
     fn the_table_grid_spans_the_range_one_point_per_step_at_most_the_limit() {

@@ -144,7 +144,7 @@ impl PhysicsTerm {
             PhysicsTerm::Rate => format!(
                 "the temperature-rate term ({:.3e} output units per C/s, {})",
                 p.rate.iter().fold(0.0f64, |m, v| m.max(v.abs())),
-                crate::model::flashed::rate_estimator(p.rate_tau_s)
+                crate::model::effects::rate_estimator(p.rate_tau_s)
             ),
             PhysicsTerm::Hysteresis => "the hysteresis term".into(),
             PhysicsTerm::K2 => "the K2 term".into(),

@@ -89,7 +89,7 @@ fn describe(f: &Fit) -> String {
         } else if let Extra::Rate { tau_s } = e {
             s.push_str(&format!(
                 " + temp_rate ({})",
-                crate::model::flashed::rate_estimator(*tau_s)
+                crate::model::effects::rate_estimator(*tau_s)
             ));
         }
     }

@@ -112,6 +112,8 @@ pub fn limits(cfg: &SimConfig) -> Limits {
             .thermal_lag
             .as_ref()
             .map_or(0.0, |l| l.value.iter().copied().fold(0.0, f64::max)),
+        // the demo plans from its twin, not from a diagnosis
+        separate: Vec::new(),
     }
 }
 

@@ -12,6 +12,7 @@ use crate::error::{ErrorKind, HostError, Result};
 use crate::fit::pipeline::ModelRequest;
 use crate::fit::predict::{dwell_noise_of, sigma_of};
 use crate::fit::route::{fit_on, Flash, Route};
+use crate::model::effects::EffectId;
 use crate::simulate::config::CASE_TAU_S;
 use crate::simulate::program::Step;
 use crate::simulate::{simulate, PerAxis, SimConfig};
@@ -49,6 +50,87 @@ pub struct Limits {
     pub noise_v: f64,
     /// The unit type's thermal time constant (element behind its sensor), s.
     pub tau_s: f64,
+    /// Coupled effects a diagnosis of the type found, or could not tell apart, that a
+    /// stop-and-soak program must separate ([`to_separate`]; empty: none): such a
+    /// program then ends with the [`Separation`] return.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub separate: Vec<EffectId>,
+}
+
+/// The effects of a diagnosis (`found`, and its `ambiguous` groups) a stop-and-soak
+/// program must separate: a hysteresis with the dynamic effects found beside it (on stops
+/// reached only from below its branch is one constant after the first ramp, told from
+/// the temperature polynomial only by the cold start, and from a rate only by the ramps:
+/// the split a flight, warming and cooling both ways, pays for), or a hysteresis the
+/// diagnosis could not tell from a lag or a rate. Sorted, each once. A lag beside a rate
+/// alone asks for nothing: the stops' soaks after their ramps already separate them, and
+/// a return was not measured to help there.
+pub fn to_separate(found: &[EffectId], ambiguous: &[Vec<EffectId>]) -> Vec<EffectId> {
+    use EffectId::{Hysteresis, TempRate, ThermalLag};
+    let dynamic = [Hysteresis, ThermalLag, TempRate];
+    let mut v = Vec::new();
+    if found.contains(&Hysteresis) {
+        v.extend(found.iter().copied().filter(|e| dynamic.contains(e)));
+    }
+    for g in ambiguous {
+        let mine: Vec<EffectId> = g.iter().copied().filter(|e| dynamic.contains(e)).collect();
+        if mine.len() >= 2 && mine.contains(&Hysteresis) {
+            v.extend(mine);
+        }
+    }
+    v.sort_by_key(|e| e.as_str());
+    v.dedup();
+    v
+}
+
+/// The return that separates coupled effects ([`to_separate`]) at the end of a
+/// stop-and-soak program (which reaches every stop from below, ending at the hot end):
+/// back down to the middle stop at the chamber's fastest ramp, a soak of five of the
+/// unit's and the case's time constants (at least 30 min), the positions. That
+/// temperature is then seen from both directions after a soak: a hysteresis stays
+/// through the soak with the sign of the approach (the polynomial's does not change
+/// sign, a rate's vanishes with dT/dt), and a lag's error decays through the soak over
+/// its time constant where a rate's vanishes as the case settles.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Separation {
+    /// The effects it separates.
+    pub effects: Vec<EffectId>,
+    /// The middle stop it returns to, C.
+    pub temp_c: f64,
+    /// The ramp down to it, C/min.
+    pub ramp_c_per_min: f64,
+    /// The soak there before the positions, s.
+    pub soak_s: f64,
+}
+
+impl Separation {
+    /// One line: what it is and what it separates.
+    pub fn describe(&self) -> String {
+        let names: Vec<&str> = self.effects.iter().map(|e| e.as_str()).collect();
+        format!(
+            "a return from the hot end to {:.1} C at {} C/min, a {:.0}-min soak, the positions (separates {}{})",
+            self.temp_c,
+            self.ramp_c_per_min,
+            self.soak_s / 60.0,
+            names.join(", "),
+            if self.effects == [EffectId::Hysteresis] {
+                " from the temperature polynomial"
+            } else {
+                ""
+            }
+        )
+    }
+}
+
+/// The return a stop-and-soak program of `l` ends with, when `l` asks to separate
+/// effects (see [`Separation`]).
+pub fn separation(l: &Limits) -> Option<Separation> {
+    (!l.separate.is_empty()).then(|| Separation {
+        effects: l.separate.clone(),
+        temp_c: l.lo_c + (l.hi_c - l.lo_c) / 2.0,
+        ramp_c_per_min: l.max_ramp_c_per_min,
+        soak_s: (5.0 * settle_tau_s(l)).max(1800.0),
+    })
 }
 
 /// A candidate's kind.
@@ -113,6 +195,12 @@ pub struct Candidate {
     /// Whether that reaches the range asked for, within [`COVER_TOLERANCE_C`] of each end:
     /// only such a candidate is chosen.
     pub covers: bool,
+    /// Whether it separates the coupled effects the plan was asked to ([`Limits::separate`]:
+    /// always, when none): a stop-and-soak program with its [`Separation`] return does, a
+    /// sweep does not. At one rate each way a sweep's rate term flips sign with the
+    /// direction as a hysteresis does, and only its holds tell them apart. Only a
+    /// candidate that separates is chosen.
+    pub separates: bool,
 }
 
 /// A candidate covers the range asked for when its blob's valid range reaches within
@@ -176,7 +264,9 @@ fn visit(steps: &mut Vec<Step>, t: &mut f64, sp: f64, l: &Limits) {
     }
 }
 
-/// The calibration program of `kind` (starting soaked at the low end), and its end time.
+/// The calibration program of `kind` (starting soaked at the low end), and its end time;
+/// a stop-and-soak program ends with the [`separation`] return when `l` asks for one (a
+/// sweep needs none: it passes every temperature both ways and holds after its ramps).
 pub fn program(kind: Kind, l: &Limits) -> (Vec<Step>, f64) {
     let (mut steps, mut t) = (Vec::new(), 0.0);
     let rest = l.positions.first().map(String::as_str).unwrap_or("TP1");
@@ -192,6 +282,13 @@ pub fn program(kind: Kind, l: &Limits) -> (Vec<Step>, f64) {
                 push(&mut steps, &mut t, to, rest, soak_min * 60.0);
                 visit(&mut steps, &mut t, to, l);
                 sp = to;
+            }
+            if let Some(r) = separation(l) {
+                let ramp = (sp - r.temp_c).abs() / r.ramp_c_per_min * 60.0;
+                push(&mut steps, &mut t, sp, rest, ramp);
+                push(&mut steps, &mut t, r.temp_c, rest, r.soak_s);
+                visit(&mut steps, &mut t, r.temp_c, l);
+                sp = r.temp_c;
             }
             push(&mut steps, &mut t, sp, rest, 0.0);
         }
@@ -421,6 +518,7 @@ pub fn candidates(l: &Limits, seed: u64) -> Result<Vec<Candidate>> {
                 valid_c: p.valid_c,
                 covers: p.valid_c[0] <= l.lo_c + COVER_TOLERANCE_C
                     && p.valid_c[1] >= l.hi_c - COVER_TOLERANCE_C,
+                separates: l.separate.is_empty() || matches!(kind, Kind::StopSoak { .. }),
             })
         })
         .collect()
@@ -454,10 +552,11 @@ pub enum Target {
     Hours(f64),
 }
 
-/// The chosen candidate's index among those that cover the range asked for, or None
-/// when none of them meets the target ([`why_none`] says why).
+/// The chosen candidate's index among those that cover the range asked for (and separate
+/// what the plan was asked to), or None when none of them meets the target
+/// ([`why_none`] says why).
 pub fn choose(c: &[Candidate], target: Target) -> Option<usize> {
-    let idx = (0..c.len()).filter(|&i| c[i].covers);
+    let idx = (0..c.len()).filter(|&i| c[i].covers && c[i].separates);
     match target {
         Target::AccuracyMg(mg) => idx
             .filter(|&i| c[i].predicted_mg <= mg)
@@ -473,12 +572,21 @@ pub fn choose(c: &[Candidate], target: Target) -> Option<usize> {
 /// or the most accurate, that does), or none meets the target at all.
 pub fn why_none(c: &[Candidate], target: Target, l: &Limits) -> String {
     let range = format!("{}..{} C", l.lo_c, l.hi_c);
-    let covering = || c.iter().enumerate().filter(|(_, x)| x.covers);
+    let covering = || {
+        c.iter()
+            .enumerate()
+            .filter(|(_, x)| x.covers && x.separates)
+    };
     let shortest = covering().min_by(|a, b| a.1.hours.total_cmp(&b.1.hours));
     let best = covering().min_by(|a, b| a.1.predicted_mg.total_cmp(&b.1.predicted_mg));
     match (target, shortest, best) {
         (_, None, _) | (_, _, None) => format!(
-            "no candidate's blob covers the range asked for ({range}, within {COVER_TOLERANCE_C} C of each end: see the valid ranges)"
+            "no candidate's blob covers the range asked for ({range}, within {COVER_TOLERANCE_C} C of each end: see the valid ranges){}",
+            if l.separate.is_empty() {
+                ""
+            } else {
+                " with a program that separates the diagnosis's coupled effects (the stops and soaks)"
+            }
         ),
         (Target::Hours(h), Some((i, x)), _) => format!(
             "no plan covers {range} within {h} chamber hours: the shortest that does is {} ({}, {:.2} h, valid {} C); give --hours {:.2} or more, or a narrower --range-c",
@@ -522,8 +630,82 @@ pub fn table(c: &[Candidate], chosen: Option<usize>) -> String {
             x.predicted_mg,
             x.lag_s.map_or("none".into(), |t| format!("{t:.0}")),
             x.valid_text(),
-            if x.covers { "" } else { " (short)" }
+            match (x.covers, x.separates) {
+                (true, true) => "",
+                (false, _) => " (short)",
+                (true, false) => " (does not separate)",
+            }
         ));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use EffectId::{Hysteresis, TempRate, ThermalLag, WarmupDrift};
+
+    fn limits(separate: Vec<EffectId>) -> Limits {
+        Limits {
+            lo_c: -40.0,
+            hi_c: 70.0,
+            max_ramp_c_per_min: 3.0,
+            positions: (1..=6).map(|i| format!("TP{i}")).collect(),
+            dwell_s: 50.0,
+            move_s: 10.0,
+            rate_hz: 1.0,
+            noise_v: 2e-5,
+            tau_s: 0.0,
+            separate,
+        }
+    }
+
+    #[test]
+    fn only_a_hysteresis_beside_dynamics_asks_for_a_return() {
+        assert_eq!(
+            to_separate(&[TempRate, Hysteresis, WarmupDrift], &[]),
+            vec![Hysteresis, TempRate]
+        );
+        assert_eq!(to_separate(&[Hysteresis], &[]), vec![Hysteresis]);
+        assert!(to_separate(&[ThermalLag, TempRate], &[]).is_empty());
+        assert!(to_separate(&[TempRate], &[vec![ThermalLag, TempRate]]).is_empty());
+        assert_eq!(
+            to_separate(&[TempRate], &[vec![TempRate, Hysteresis]]),
+            vec![Hysteresis, TempRate]
+        );
+    }
+
+    /// The stop-and-soak program ends, after its hot stop, with a ramp at the fastest
+    /// rate down to the middle stop, the soak and every position there; without a
+    /// separation it ends at the hot stop; a sweep is the same either way.
+    #[test]
+    fn the_return_follows_the_hot_stop() {
+        let kind = Kind::StopSoak { soak_min: 10.0 };
+        let (plain, end0) = program(kind, &limits(Vec::new()));
+        let l = limits(vec![Hysteresis, TempRate]);
+        let (with, end1) = program(kind, &l);
+        let r = separation(&l).unwrap();
+        assert_eq!(r.temp_c, 15.0);
+        let visits = l.positions.len() as f64 * (l.dwell_s + l.move_s);
+        let ramp = 55.0 / 3.0 * 60.0;
+        assert!((end1 - end0 - (ramp + r.soak_s + visits)).abs() < 1e-9);
+        let n = plain.len() - 1;
+        assert_eq!(with[..n], plain[..n]);
+        assert_eq!(with[n].setpoint_c, 70.0);
+        assert_eq!(with[n + 1].setpoint_c, 15.0);
+        assert!((with[n + 1].time_s - with[n].time_s - ramp).abs() < 1e-9);
+        let named: Vec<&str> = with[n + 2..]
+            .iter()
+            .filter(|s| s.position != "-")
+            .map(|s| s.position.as_str())
+            .collect();
+        assert!(l.positions.iter().all(|p| named.contains(&p.as_str())));
+        assert!(with[n + 1..].iter().all(|s| s.setpoint_c == 15.0));
+        let sweep = Kind::Sweep {
+            c_per_min: 3.0,
+            hold_min: 10.0,
+            end_hold_min: 10.0,
+        };
+        assert_eq!(program(sweep, &l).0, program(sweep, &limits(Vec::new())).0);
+    }
 }

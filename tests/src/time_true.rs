@@ -213,3 +213,18 @@ pub fn noiseless_flight(
     });
     c
 }
+
+/// `diagnose --out` of a unit's production test `test`, its blob flown in the unit's
+/// flight (`unit` in flight): the worst |dg| in flight, mg, and the diagnosis's JSON.
+/// The files are written in `dir`.
+pub fn diagnosed_in_flight(
+    dir: &Path,
+    test: &SimConfig,
+    unit: SimConfig,
+) -> (f64, serde_json::Value) {
+    let (rec, _) = write(dir, "p", test);
+    let blob = dir.join("d.blob");
+    let j = cli_json(&["diagnose", s(&rec), "--out", s(&blob), "--json", "--force"]);
+    let (f, pos) = write(dir, "f", &in_flight(unit));
+    (verify(&f, pos.as_deref(), &blob).0, j)
+}

@@ -26,6 +26,7 @@ fn predicted_accuracy_covers_the_simulated_one_over_the_candidate_plans() {
         rate_hz: 1.0,
         noise_v: 2e-5,
         tau_s: 600.0,
+        separate: Vec::new(),
     };
     let dir = tempfile::tempdir().unwrap();
     let c = candidates(&l, 41).unwrap();

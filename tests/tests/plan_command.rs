@@ -490,3 +490,111 @@ fn plan_report_plots_every_candidate_and_rings_the_chosen_one() {
     assert!(err.contains("--force"), "{err}");
     assert_eq!(std::fs::read_to_string(&page).unwrap(), html);
 }
+
+/// `--from-diagnosis` of a unit with a hysteresis and a temperature-rate term (issue 27):
+/// on stops reached only from below the two are split by ramps alone, and the flight,
+/// warming and cooling both ways, pays for the split. The plan reads them from the
+/// diagnosis and each stop-and-soak candidate ends with a return from the hot end to the
+/// middle stop (the chamber's fastest ramp, a soak, the positions), its hours counted;
+/// a sweep does not separate them and is not chosen; the chosen program holds the
+/// return; a plan without the diagnosis adds nothing and may choose a sweep. The flight this buys is held by the full tier
+/// (`time_true::rate_units_fly_within_the_aim_over_seeds`).
+#[test]
+fn plan_separates_the_coupled_effects_a_diagnosis_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let unit = tests::time_true::production("hysteresis+temp_rate", 1);
+    let (rec, _) = tests::time_true::write(d, "unit", &unit);
+    let (code, diag, err) = cli(&["diagnose", s(&rec), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let found: Value = serde_json::from_str(&diag).unwrap();
+    let names: Vec<&str> = found["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|f| f["effect"].as_str())
+        .collect();
+    assert!(
+        names.contains(&"hysteresis") && names.contains(&"temp_rate"),
+        "the diagnosis found {names:?}"
+    );
+    let dj = d.join("d.json");
+    std::fs::write(&dj, &diag).unwrap();
+    let noise = found["noise_sigma_per_sample"][0]
+        .as_f64()
+        .unwrap()
+        .to_string();
+    let run = |out: &str, from: bool| {
+        let p = d.join(out);
+        let mut a = vec![
+            "plan",
+            "--tau-s",
+            "0",
+            "--hours",
+            "100",
+            "--out",
+            s(&p),
+            "--json",
+        ];
+        if from {
+            a.extend(["--from-diagnosis", s(&dj)]);
+        } else {
+            a.extend(["--noise", noise.as_str()]);
+        }
+        (cli_json(&a), p)
+    };
+    let (j, p) = run("sep.csv", true);
+    let (plain, _) = run("plain.csv", false);
+    assert_eq!(
+        j["limits"]["separate"],
+        serde_json::json!(["hysteresis", "temp_rate"])
+    );
+    assert!(plain["limits"].get("separate").is_none() && plain.get("separation").is_none());
+    // the return's hours: 55 C down at 3 C/min, the soak (five case time constants, at
+    // least 30 min), a move and a dwell per position
+    let soak_s = (5.0 * host_fit::simulate::config::CASE_TAU_S).max(MIN_SOAK_S);
+    let extra_h = (55.0 / 3.0 * 60.0 + soak_s + POSITIONS as f64 * 60.0) / 3600.0;
+    for (c, q) in j["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(plain["candidates"].as_array().unwrap())
+    {
+        let want = if c["kind"]["kind"] == "stop_soak" {
+            hours(q) + extra_h
+        } else {
+            hours(q)
+        };
+        assert!((hours(c) - want).abs() < 1e-9, "{c} against {q}");
+    }
+    let sep = j["separation"].as_str().unwrap();
+    println!("{}: {sep}", j["chosen"]["kind"]);
+    let rows = parse(&std::fs::read_to_string(&p).unwrap());
+    // only a stop-and-soak program separates them: a sweep at one rate each way flips
+    // its rate term with the direction, as a hysteresis does
+    assert_eq!(j["chosen"]["kind"]["kind"], "stop_soak", "{}", j["chosen"]);
+    for c in j["candidates"].as_array().unwrap() {
+        assert_eq!(
+            c["separates"] == true,
+            c["kind"]["kind"] == "stop_soak",
+            "{c}"
+        );
+    }
+    assert!(sep.contains("return from the hot end to 15.0 C"), "{sep}");
+    // after the last dwell at the hot end: the ramp down, the soak, every position
+    let hot = rows
+        .iter()
+        .rposition(|r| r.sp == 70.0 && r.pos == "PP6")
+        .unwrap();
+    let back: Vec<&Row> = rows[hot + 1..].iter().filter(|r| r.sp == 15.0).collect();
+    let named = back
+        .iter()
+        .filter(|r| r.pos != "-" && r.pos != "TP1")
+        .count();
+    assert!(
+        named >= POSITIONS - 1,
+        "{named} dwells at 15 C after the hot end"
+    );
+    let soaked = back[1].t - back[0].t;
+    assert!((soaked - soak_s).abs() < 1e-6, "soak {soaked} s");
+}

@@ -8,7 +8,9 @@
 //! cooling both ways, a second power cycle, 24 attitudes over the sphere held 40 s, at
 //! an MCU rate).
 use host_fit::simulate::{PerAxis, SimConfig, Warmup};
-use tests::time_true::{in_flight, noiseless_flight, production, s, table, verify, write};
+use tests::time_true::{
+    diagnosed_in_flight, noiseless_flight, production, s, table, verify, write,
+};
 use tests::{cli, cli_json};
 
 /// The stated bounds (mg): a diagnosed blob through firmware-core on its own recording
@@ -249,23 +251,13 @@ fn rate_units_fly_within_the_aim_over_seeds() {
     ] {
         let mut line = Vec::new();
         for seed in 1..=7u64 {
-            let (rec, _) = write(d, "p", &production(effect, seed));
-            let blob = d.join("d.blob");
-            let _ = cli_json(&["diagnose", s(&rec), "--out", s(&blob), "--json", "--force"]);
-            let (f, pos) = write(d, "f", &in_flight(production(effect, seed)));
-            line.push(verify(&f, pos.as_deref(), &blob).0);
+            let unit = production(effect, seed);
+            line.push(diagnosed_in_flight(d, &unit, unit.clone()).0);
         }
-        let within = line.iter().filter(|w| **w <= 0.05).count();
-        let text: Vec<String> = line.iter().map(|w| format!("{w:.3}")).collect();
-        println!(
-            "{effect}: {} mg, {within} of 7 within 0.05 mg",
-            text.join(" ")
-        );
+        let (within, text) = within_aim(&line);
+        println!("{effect}: {text} mg, {within} of 7 within 0.05 mg");
         if need.is_some_and(|n| within < n) {
-            failed.push(format!(
-                "{effect}: {within} of 7 within 0.05 mg ({})",
-                text.join(" ")
-            ));
+            failed.push(format!("{effect}: {within} of 7 within 0.05 mg ({text})"));
         }
     }
     assert!(failed.is_empty(), "{}", failed.join("\n"));
@@ -297,9 +289,7 @@ fn a_return_to_a_visited_stop_separates_hysteresis_from_rate() {
             positions: None,
             ..back
         });
-        let (rec, _) = write(d, "p", &c);
-        let blob = d.join("d.blob");
-        let j = cli_json(&["diagnose", s(&rec), "--out", s(&blob), "--json", "--force"]);
+        let (flown, j) = diagnosed_in_flight(d, &c, production(effect, seed));
         let found: Vec<&str> = j["findings"]
             .as_array()
             .unwrap()
@@ -310,18 +300,63 @@ fn a_return_to_a_visited_stop_separates_hysteresis_from_rate() {
             found.contains(&"hysteresis"),
             "seed {seed}: found {found:?}"
         );
-        let (f, pos) = write(d, "f", &in_flight(production(effect, seed)));
-        line.push(verify(&f, pos.as_deref(), &blob).0);
+        line.push(flown);
     }
+    let (within, text) = within_aim(&line);
+    println!("{effect} with a return to 20 C: {text} mg, {within} of 7 within 0.05 mg");
+    assert!(within >= 6, "{within} of 7 within 0.05 mg ({text})");
+}
+
+/// How many of `line`'s flights (mg) are within the aim of 0.05 mg, and the line printed.
+fn within_aim(line: &[f64]) -> (usize, String) {
     let within = line.iter().filter(|w| **w <= 0.05).count();
     let text: Vec<String> = line.iter().map(|w| format!("{w:.3}")).collect();
-    println!(
-        "{effect} with a return to 20 C: {} mg, {within} of 7 within 0.05 mg",
-        text.join(" ")
-    );
-    assert!(
-        within >= 6,
-        "{within} of 7 within 0.05 mg ({})",
-        text.join(" ")
-    );
+    (within, text.join(" "))
+}
+
+/// `plan --from-diagnosis` for a hysteresis + rate unit (issue 27): the program it writes
+/// (a stop-and-soak one ending with its return; a sweep is not chosen), run on the unit's
+/// twin, diagnosed with `--out`: the blob flies within 0.05 mg on at least 6 of the 7
+/// seeds (7 of 7 when measured, 0.018-0.036 mg). The twin starts soaked at the program's
+/// cold start after cooling there (as the production test, which cools from the room,
+/// and the flight start): a unit that had warmed to it would show no branch change until
+/// the return.
+#[test]
+#[ignore = "full tier (cargo xtask test --full): 7 diagnoses, plans and flights, 2 CPU-minutes"]
+fn the_plan_for_a_hysteresis_and_rate_unit_flies_within_the_aim() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let effect = "hysteresis+temp_rate";
+    let mut line = Vec::new();
+    for seed in 1..=7u64 {
+        let unit = production(effect, seed);
+        let (rec, _) = write(d, "p", &unit);
+        let dj = d.join("d.json");
+        std::fs::write(&dj, cli_json(&["diagnose", s(&rec), "--json"]).to_string()).unwrap();
+        let prog = d.join("program.csv");
+        let pj = cli_json(&[
+            "plan",
+            "--from-diagnosis",
+            s(&dj),
+            "--tau-s",
+            "0",
+            "--hours",
+            "100",
+            "--out",
+            s(&prog),
+            "--force",
+            "--json",
+        ]);
+        assert_eq!(pj["chosen"]["kind"]["kind"], "stop_soak", "seed {seed}");
+        let text = std::fs::read_to_string(&prog).unwrap();
+        let steps = host_fit::simulate::program::parse_program(&prog, &text).unwrap();
+        let mut c = unit.clone();
+        c.chamber.start_c = steps[0].setpoint_c;
+        c.schedule.program = steps;
+        c.effects.hysteresis_initial = Some(-1.0);
+        line.push(diagnosed_in_flight(d, &c, unit).0);
+    }
+    let (within, text) = within_aim(&line);
+    println!("{effect} on its plan: {text} mg, {within} of 7 within 0.05 mg");
+    assert!(within >= 6, "{within} of 7 within 0.05 mg ({text})");
 }

@@ -183,6 +183,9 @@ struct Planned<'a> {
     chosen: &'a crate::plan::Candidate,
     program: String,
     program_rows: usize,
+    /// How the program separates the diagnosis's coupled effects (none asked: absent).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    separation: Option<&'a str>,
 }
 
 /// The plan's options checked one by one, so the error names the option at fault.
@@ -242,15 +245,32 @@ struct UnitType {
     noise_sigma_per_sample: Option<Vec<Option<f64>>>,
     #[serde(default)]
     findings: Vec<Finding>,
+    #[serde(default)]
+    ambiguous: Vec<Ambiguous>,
 }
 
-/// The unit type's (time constant s, noise per sample) from a `diagnose --json` output:
-/// the thermal_lag finding's slowest axis, the noisiest axis; an error names the file
-/// and what it lacks.
-pub(super) fn from_diagnosis(
-    path: &std::path::Path,
-    text: &str,
-) -> Result<(Option<f64>, Option<f64>)> {
+/// An ambiguity of the diagnosis: the candidates it could not tell apart.
+#[derive(Deserialize)]
+struct Ambiguous {
+    candidates: Vec<EffectId>,
+}
+
+/// What `plan` takes of a unit type's diagnosis.
+pub(super) struct TypeFacts {
+    /// The thermal lag's time constant (the slowest axis), s.
+    pub tau_s: Option<f64>,
+    /// The noise per sample (the noisiest axis), output units.
+    pub noise: Option<f64>,
+    /// The coupled effects a stop-and-soak program must separate
+    /// ([`crate::plan::to_separate`]).
+    pub separate: Vec<EffectId>,
+}
+
+/// The unit type's time constant, noise per sample and coupled effects from a
+/// `diagnose --json` output: the thermal_lag finding's slowest axis, the noisiest axis,
+/// the findings and ambiguities a program must separate; an error names the file and
+/// what it lacks.
+pub(super) fn from_diagnosis(path: &std::path::Path, text: &str) -> Result<TypeFacts> {
     let bad = |why: &str| HostError::in_file(ErrorKind::Malformed, path, why);
     let j: UnitType =
         serde_json::from_str(text).map_err(|e| bad(&format!("not a diagnosis JSON ({e})")))?;
@@ -274,33 +294,30 @@ pub(super) fn from_diagnosis(
                 .fold(f64::NAN, f64::max)
         })
         .filter(|t| t.is_finite());
-    Ok((tau, noise))
+    let found: Vec<EffectId> = j.findings.iter().map(|f| f.effect).collect();
+    let groups: Vec<Vec<EffectId>> = j.ambiguous.into_iter().map(|g| g.candidates).collect();
+    Ok(TypeFacts {
+        tau_s: tau,
+        noise,
+        separate: crate::plan::to_separate(&found, &groups),
+    })
 }
 
-pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
-    use crate::plan::{
-        candidates, choose, program, table, verification, verification_temps, Limits, Target,
-    };
-    check_writable(&a.out, a.force)?;
-    if let Some(r) = &a.report {
-        check_writable(r, a.force)?;
-    }
-    let target = match (a.target_mg, a.hours) {
-        (Some(mg), None) => Target::AccuracyMg(mg),
-        (None, Some(h)) => Target::Hours(h),
-        _ => {
-            return Err(HostError::new(
-                ErrorKind::Invalid,
-                "give a target: --target-mg MG or --hours H",
-            ))
-        }
-    };
-    check_plan_options(&a)?;
+/// The unit type `plan` plans for: `--tau-s` and `--noise`, else the diagnosis's
+/// (`--from-diagnosis`; an error names what it lacks), and the diagnosis's coupled
+/// effects to separate.
+fn unit_type(a: &PlanArgs) -> Result<TypeFacts> {
     let (mut tau_s, mut noise) = (a.tau_s, a.noise);
+    let mut separate = Vec::new();
     if let Some(d) = &a.from_diagnosis {
         let text = std::fs::read_to_string(d)
             .map_err(|e| HostError::new(ErrorKind::Io, format!("{}: {e}", d.display())))?;
-        let (t, n) = from_diagnosis(d, &text)?;
+        let TypeFacts {
+            tau_s: t,
+            noise: n,
+            separate: s,
+        } = from_diagnosis(d, &text)?;
+        separate = s;
         let missing = |what: &str, opt: &str| {
             HostError::new(
                 ErrorKind::Insufficient,
@@ -330,6 +347,37 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
                 })?);
         }
     }
+    Ok(TypeFacts {
+        tau_s,
+        noise,
+        separate,
+    })
+}
+
+pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
+    use crate::plan::{
+        candidates, choose, program, table, verification, verification_temps, Limits, Target,
+    };
+    check_writable(&a.out, a.force)?;
+    if let Some(r) = &a.report {
+        check_writable(r, a.force)?;
+    }
+    let target = match (a.target_mg, a.hours) {
+        (Some(mg), None) => Target::AccuracyMg(mg),
+        (None, Some(h)) => Target::Hours(h),
+        _ => {
+            return Err(HostError::new(
+                ErrorKind::Invalid,
+                "give a target: --target-mg MG or --hours H",
+            ))
+        }
+    };
+    check_plan_options(&a)?;
+    let TypeFacts {
+        tau_s,
+        noise,
+        separate,
+    } = unit_type(&a)?;
     let l = Limits {
         lo_c: a.range_c.first().copied().unwrap_or(f64::NAN),
         hi_c: a.range_c.get(1).copied().unwrap_or(f64::NAN),
@@ -340,6 +388,7 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
         rate_hz: a.rate_hz,
         noise_v: noise.unwrap_or(crate::simulate::config::UNIT_NOISE_V),
         tau_s: tau_s.unwrap_or(0.0),
+        separate,
     };
     let c = candidates(&l, a.seed)?;
     let chosen = choose(&c, target);
@@ -354,6 +403,10 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
             ),
         ));
     };
+    // what separates the diagnosis's coupled effects: the chosen program's return (only
+    // a stop-and-soak program that has one is chosen then)
+    let separation =
+        crate::plan::separation(&l).map(|r| format!("the program ends with {}", r.describe()));
     let (mut steps, end) = program(c[i].kind, &l);
     let last = steps.pop().map(|s| s.setpoint_c).unwrap_or(l.lo_c);
     steps.extend(verification(&l, end, last));
@@ -376,6 +429,7 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
                 chosen: &c[i],
                 program: a.out.display().to_string(),
                 program_rows: steps.len(),
+                separation: separation.as_deref(),
             })?,
         );
     }
@@ -394,7 +448,7 @@ pub(super) fn plan(a: PlanArgs, out: &mut dyn Write) -> Result<()> {
             a.out.display(),
             steps.len(),
             a.out.display()
-        ),
+        ) + &separation.map_or(String::new(), |s| format!("\nseparating: {s}")),
     )
 }
 

@@ -442,7 +442,7 @@ pub fn needed(group: &[EffectId]) -> String {
     } else if pair(ThermalLag, TempRate) {
         "a soak after a ramp long enough to watch the error decay (lag) or vanish with dT/dt (rate), or ramps at two rates".into()
     } else if pair(Hysteresis, ThermalLag) || pair(Hysteresis, TempRate) {
-        "a temperature visited from both directions after a long soak".into()
+        "a temperature visited from both directions after a long soak (`plan --from-diagnosis` ends its stops with such a return)".into()
     } else if pair(WarmupDrift, ThermalLag) || pair(WarmupDrift, TempRate) {
         "a power cycle or handling at a steady temperature, away from any temperature change".into()
     } else {

@@ -43,7 +43,11 @@ fn candidates_table(c: &[Candidate], chosen: usize) -> String {
             x.predicted_mg,
             x.lag_s.map_or("none".into(), |t| format!("{t:.0}")),
             x.valid_text(),
-            if x.covers { "" } else { " (short of the range)" }
+            match (x.covers, x.separates) {
+                (true, true) => "",
+                (false, _) => " (short of the range)",
+                (true, false) => " (does not separate the diagnosis's coupled effects)",
+            }
         ));
     }
     h.push_str("</table>");

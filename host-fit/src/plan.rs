@@ -58,29 +58,29 @@ pub struct Limits {
 }
 
 /// The effects of a diagnosis (`found`, and its `ambiguous` groups) a stop-and-soak
-/// program must separate: a hysteresis with the dynamic effects found beside it (on stops
-/// reached only from below its branch is one constant after the first ramp, told from
-/// the temperature polynomial only by the cold start, and from a rate only by the ramps:
-/// the split a flight, warming and cooling both ways, pays for), or a hysteresis the
-/// diagnosis could not tell from a lag or a rate. Sorted, each once. A lag beside a rate
-/// alone asks for nothing: the stops' soaks after their ramps already separate them, and
-/// a return was not measured to help there.
+/// program must separate: a hysteresis found, or left ambiguous, beside a rate or a lag
+/// found or left ambiguous (on stops reached only from below the hysteresis's branch is
+/// one constant after the first ramp, told from the temperature polynomial only by the
+/// cold start, and from a rate only by the ramps: the split a flight, warming and cooling
+/// both ways, pays for). Sorted, each once; empty otherwise. A hysteresis alone, and a lag
+/// beside a rate alone, ask for nothing: a return was not measured to help there (the
+/// stops' soaks after their ramps already separate a lag from a rate).
 pub fn to_separate(found: &[EffectId], ambiguous: &[Vec<EffectId>]) -> Vec<EffectId> {
     use EffectId::{Hysteresis, TempRate, ThermalLag};
     let dynamic = [Hysteresis, ThermalLag, TempRate];
-    let mut v = Vec::new();
-    if found.contains(&Hysteresis) {
-        v.extend(found.iter().copied().filter(|e| dynamic.contains(e)));
-    }
-    for g in ambiguous {
-        let mine: Vec<EffectId> = g.iter().copied().filter(|e| dynamic.contains(e)).collect();
-        if mine.len() >= 2 && mine.contains(&Hysteresis) {
-            v.extend(mine);
-        }
-    }
+    let mut v: Vec<EffectId> = found
+        .iter()
+        .chain(ambiguous.iter().flatten())
+        .copied()
+        .filter(|e| dynamic.contains(e))
+        .collect();
     v.sort_by_key(|e| e.as_str());
     v.dedup();
-    v
+    if v.contains(&Hysteresis) && v.len() >= 2 {
+        v
+    } else {
+        Vec::new()
+    }
 }
 
 /// The return that separates coupled effects ([`to_separate`]) at the end of a
@@ -108,16 +108,11 @@ impl Separation {
     pub fn describe(&self) -> String {
         let names: Vec<&str> = self.effects.iter().map(|e| e.as_str()).collect();
         format!(
-            "a return from the hot end to {:.1} C at {} C/min, a {:.0}-min soak, the positions (separates {}{})",
+            "a return from the hot end to {:.1} C at {} C/min, a {:.0}-min soak, the positions (separates {})",
             self.temp_c,
             self.ramp_c_per_min,
             self.soak_s / 60.0,
-            names.join(", "),
-            if self.effects == [EffectId::Hysteresis] {
-                " from the temperature polynomial"
-            } else {
-                ""
-            }
+            names.join(", ")
         )
     }
 }
@@ -266,7 +261,7 @@ fn visit(steps: &mut Vec<Step>, t: &mut f64, sp: f64, l: &Limits) {
 
 /// The calibration program of `kind` (starting soaked at the low end), and its end time;
 /// a stop-and-soak program ends with the [`separation`] return when `l` asks for one (a
-/// sweep needs none: it passes every temperature both ways and holds after its ramps).
+/// sweep is left as it is, and then not chosen: see [`Candidate::separates`]).
 pub fn program(kind: Kind, l: &Limits) -> (Vec<Step>, f64) {
     let (mut steps, mut t) = (Vec::new(), 0.0);
     let rest = l.positions.first().map(String::as_str).unwrap_or("TP1");
@@ -569,7 +564,8 @@ pub fn choose(c: &[Candidate], target: Target) -> Option<usize> {
 
 /// Why no candidate was chosen for `target` over the range of `l`: none covers the range,
 /// none that covers it does so within the hours or the accuracy asked (with the shortest,
-/// or the most accurate, that does), or none meets the target at all.
+/// or the most accurate, that does), or none meets the target at all; with effects to
+/// separate, of the stop-and-soak candidates alone.
 pub fn why_none(c: &[Candidate], target: Target, l: &Limits) -> String {
     let range = format!("{}..{} C", l.lo_c, l.hi_c);
     let covering = || {
@@ -579,17 +575,22 @@ pub fn why_none(c: &[Candidate], target: Target, l: &Limits) -> String {
     };
     let shortest = covering().min_by(|a, b| a.1.hours.total_cmp(&b.1.hours));
     let best = covering().min_by(|a, b| a.1.predicted_mg.total_cmp(&b.1.predicted_mg));
+    // with effects to separate, only the stops and soaks are candidates
+    let plans = if l.separate.is_empty() {
+        "plan".to_string()
+    } else {
+        let names: Vec<&str> = l.separate.iter().map(|e| e.as_str()).collect();
+        format!(
+            "stop-and-soak plan (the only ones that separate {})",
+            names.join(", ")
+        )
+    };
     match (target, shortest, best) {
         (_, None, _) | (_, _, None) => format!(
-            "no candidate's blob covers the range asked for ({range}, within {COVER_TOLERANCE_C} C of each end: see the valid ranges){}",
-            if l.separate.is_empty() {
-                ""
-            } else {
-                " with a program that separates the diagnosis's coupled effects (the stops and soaks)"
-            }
+            "no {plans} has a blob that covers the range asked for ({range}, within {COVER_TOLERANCE_C} C of each end: see the valid ranges)"
         ),
         (Target::Hours(h), Some((i, x)), _) => format!(
-            "no plan covers {range} within {h} chamber hours: the shortest that does is {} ({}, {:.2} h, valid {} C); give --hours {:.2} or more, or a narrower --range-c",
+            "no {plans} covers {range} within {h} chamber hours: the shortest that does is {} ({}, {:.2} h, valid {} C); give --hours {:.2} or more, or a narrower --range-c",
             Candidate::label(i),
             x.kind.describe(),
             x.hours,
@@ -597,7 +598,7 @@ pub fn why_none(c: &[Candidate], target: Target, l: &Limits) -> String {
             (x.hours * 100.0).ceil() / 100.0
         ),
         (Target::AccuracyMg(mg), _, Some((i, x))) => format!(
-            "no plan that covers {range} is predicted within {mg} mg: the most accurate that does is {} ({}, predicted {:.4} mg, {:.2} h)",
+            "no {plans} that covers {range} is predicted within {mg} mg: the most accurate that does is {} ({}, predicted {:.4} mg, {:.2} h)",
             Candidate::label(i),
             x.kind.describe(),
             x.predicted_mg,
@@ -608,7 +609,7 @@ pub fn why_none(c: &[Candidate], target: Target, l: &Limits) -> String {
 
 /// The table of candidates (the chosen one marked), each with its label, hours,
 /// prediction, lag and the valid range of its blob (`short` where it does not cover the
-/// range asked for).
+/// range asked for, `does not separate` where it does not separate the effects asked).
 pub fn table(c: &[Candidate], chosen: Option<usize>) -> String {
     let w = c
         .iter()
@@ -666,12 +667,16 @@ mod tests {
             to_separate(&[TempRate, Hysteresis, WarmupDrift], &[]),
             vec![Hysteresis, TempRate]
         );
-        assert_eq!(to_separate(&[Hysteresis], &[]), vec![Hysteresis]);
+        assert!(to_separate(&[Hysteresis], &[]).is_empty());
         assert!(to_separate(&[ThermalLag, TempRate], &[]).is_empty());
         assert!(to_separate(&[TempRate], &[vec![ThermalLag, TempRate]]).is_empty());
         assert_eq!(
             to_separate(&[TempRate], &[vec![TempRate, Hysteresis]]),
             vec![Hysteresis, TempRate]
+        );
+        assert_eq!(
+            to_separate(&[Hysteresis], &[vec![ThermalLag, TempRate]]),
+            vec![Hysteresis, TempRate, ThermalLag]
         );
     }
 

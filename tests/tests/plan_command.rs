@@ -497,8 +497,8 @@ fn plan_report_plots_every_candidate_and_rings_the_chosen_one() {
 /// diagnosis and each stop-and-soak candidate ends with a return from the hot end to the
 /// middle stop (the chamber's fastest ramp, a soak, the positions), its hours counted;
 /// a sweep does not separate them and is not chosen; the chosen program holds the
-/// return; a plan without the diagnosis adds nothing and may choose a sweep. The flight this buys is held by the full tier
-/// (`time_true::rate_units_fly_within_the_aim_over_seeds`).
+/// return; a plan without the diagnosis adds nothing. The flight this buys is held by
+/// the full tier (`time_true::the_plan_for_a_hysteresis_and_rate_unit_flies_within_the_aim`).
 #[test]
 fn plan_separates_the_coupled_effects_a_diagnosis_found() {
     let dir = tempfile::tempdir().unwrap();
@@ -597,4 +597,22 @@ fn plan_separates_the_coupled_effects_a_diagnosis_found() {
     );
     let soaked = back[1].t - back[0].t;
     assert!((soaked - soak_s).abs() < 1e-6, "soak {soaked} s");
+    // the text output says so too
+    let text = d.join("text.csv");
+    let (code, out, err) = cli(&[
+        "plan",
+        "--from-diagnosis",
+        s(&dj),
+        "--tau-s",
+        "0",
+        "--hours",
+        "100",
+        "--out",
+        s(&text),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("separating: the program ends with a return from the hot end to 15.0 C"),
+        "{out}"
+    );
 }

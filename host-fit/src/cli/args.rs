@@ -555,7 +555,9 @@ pub struct PlanArgs {
     pub tau_s: Option<f64>,
     /// An earlier `diagnose --json` of a unit of the type: its thermal_lag finding's
     /// time constant (the slowest axis) and its noise per sample (the noisiest axis) are
-    /// used where --tau-s and --noise are not given.
+    /// used where --tau-s and --noise are not given; a hysteresis found beside a rate or a
+    /// lag ends every stop-and-soak program with a return that separates them, and no
+    /// sweep is chosen (docs/chamber-program.md).
     #[arg(long)]
     pub from_diagnosis: Option<PathBuf>,
     /// Also write an HTML page plotting every candidate's predicted accuracy against

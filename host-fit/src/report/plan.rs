@@ -63,21 +63,28 @@ pub fn html(c: &[Candidate], chosen: usize, target: Target, l: &Limits) -> Resul
             "stops and soaks".into(),
             PALETTE[1],
             Marker::Square,
-            &|x| x.covers && stop(x),
+            &|x| x.covers && x.separates && stop(x),
         ),
         series_of(
             c,
             "continuous sweeps".into(),
             PALETTE[2],
             Marker::Triangle,
-            &|x| x.covers && !stop(x),
+            &|x| x.covers && x.separates && !stop(x),
         ),
         series_of(
             c,
-            format!("blob short of {}..{} C (not chosen)", l.lo_c, l.hi_c),
+            if l.separate.is_empty() {
+                format!("blob short of {}..{} C (not chosen)", l.lo_c, l.hi_c)
+            } else {
+                format!(
+                    "blob short of {}..{} C, or not separating the diagnosis's effects (not chosen)",
+                    l.lo_c, l.hi_c
+                )
+            },
             FLOOR,
             Marker::Cross,
-            &|x| !x.covers,
+            &|x| !x.covers || !x.separates,
         ),
     ]
     .into_iter()

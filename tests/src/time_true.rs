@@ -228,3 +228,51 @@ pub fn diagnosed_in_flight(
     let (f, pos) = write(dir, "f", &in_flight(unit));
     (verify(&f, pos.as_deref(), &blob).0, j)
 }
+
+/// The effects a `diagnose --json` found, by name, in its order.
+pub fn found(j: &serde_json::Value) -> Vec<String> {
+    j["findings"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|f| f["effect"].as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// The production test of `unit` replaced by `plan`'s continuous sweep at `c_per_min`
+/// with holds of `hold_min` at each end, on the default chamber and tilter (-40..70 C,
+/// the 12 positions, 50-s dwells, 10-s moves); the unit starts soaked at the cold end
+/// after cooling there (hysteresis branch -1), its power-offs where the unit's schedule
+/// has them.
+pub fn on_plan_sweep(unit: &SimConfig, c_per_min: f64, hold_min: f64) -> SimConfig {
+    use host_fit::plan::{program, Kind, Limits};
+    let l = Limits {
+        lo_c: -40.0,
+        hi_c: 70.0,
+        max_ramp_c_per_min: 3.0,
+        positions: ["TP1", "TP2", "TP3", "TP4", "TP5", "TP6"]
+            .iter()
+            .chain(&["PP1", "PP2", "PP3", "PP4", "PP5", "PP6"])
+            .map(|p| p.to_string())
+            .collect(),
+        dwell_s: 50.0,
+        move_s: 10.0,
+        rate_hz: 1.0,
+        noise_v: 2e-5,
+        tau_s: 0.0,
+        separate: Vec::new(),
+    };
+    let kind = Kind::Sweep {
+        c_per_min,
+        hold_min,
+        end_hold_min: hold_min,
+    };
+    let (steps, _) = program(kind, &l);
+    let mut c = unit.clone();
+    c.chamber.start_c = l.lo_c;
+    c.schedule.program = steps;
+    c.effects.hysteresis_initial = Some(-1.0);
+    c
+}

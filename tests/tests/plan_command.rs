@@ -508,14 +508,9 @@ fn plan_separates_the_coupled_effects_a_diagnosis_found() {
     let (code, diag, err) = cli(&["diagnose", s(&rec), "--json"]);
     assert_eq!(code, 0, "{err}");
     let found: Value = serde_json::from_str(&diag).unwrap();
-    let names: Vec<&str> = found["findings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter_map(|f| f["effect"].as_str())
-        .collect();
+    let names = tests::time_true::found(&found);
     assert!(
-        names.contains(&"hysteresis") && names.contains(&"temp_rate"),
+        names.iter().any(|n| n == "hysteresis") && names.iter().any(|n| n == "temp_rate"),
         "the diagnosis found {names:?}"
     );
     let dj = d.join("d.json");

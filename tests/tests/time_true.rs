@@ -9,7 +9,8 @@
 //! an MCU rate).
 use host_fit::simulate::{PerAxis, SimConfig, Warmup};
 use tests::time_true::{
-    diagnosed_in_flight, noiseless_flight, production, s, table, verify, write,
+    diagnosed_in_flight, found, noiseless_flight, on_plan_sweep, production, s, table, verify,
+    write,
 };
 use tests::{cli, cli_json};
 
@@ -305,6 +306,65 @@ fn a_return_to_a_visited_stop_separates_hysteresis_from_rate() {
     let (within, text) = within_aim(&line);
     println!("{effect} with a return to 20 C: {text} mg, {within} of 7 within 0.05 mg");
     assert!(within >= 6, "{within} of 7 within 0.05 mg ({text})");
+}
+
+/// A power cycle in the middle of a ramp does not hide a hysteresis beside a rate. On
+/// `plan`'s 1.5 C/min sweep (10-min holds) the unit's power-off (8400-9000 s) falls in the
+/// cooling ramp; the diagnosis's rate regressor once stayed at 0 for 20 s after the
+/// power-on, as the firmware's flight estimator does, though the unit feels the ramp at
+/// once: the rate's whole effect left there (80x the floor) made the hysteresis look
+/// inadequate where it acts, and the diagnosis named the rate alone (3 of 3 seeds; the
+/// blob then flew 0.33 mg). Held by one seed here; the flights by the full tier below.
+#[test]
+fn a_power_on_in_a_ramp_leaves_the_hysteresis_beside_the_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let unit = production("hysteresis+temp_rate", 1);
+    let c = on_plan_sweep(&unit, 1.5, 10.0);
+    let off = c.schedule.power_offs[0][0];
+    let at = |t: f64| {
+        let k = c
+            .schedule
+            .program
+            .iter()
+            .rposition(|p| p.time_s <= t)
+            .unwrap();
+        c.schedule.program[k].setpoint_c
+    };
+    assert!(
+        at(off + 300.0) < at(off) - 5.0,
+        "the power-off falls in a ramp"
+    );
+    let (rec, _) = write(dir.path(), "sweep", &c);
+    let j = cli_json(&["diagnose", s(&rec), "--json"]);
+    let names = found(&j);
+    assert!(
+        names.iter().any(|n| n == "hysteresis") && names.iter().any(|n| n == "temp_rate"),
+        "found {names:?}"
+    );
+}
+
+/// The blobs diagnosed from `plan`'s 1.5 C/min sweep, the power cycled in its cooling
+/// ramp, fly within 0.05 mg on at least 2 of 3 seeds (3 of 3 when measured: 0.028,
+/// 0.034, 0.030 mg; 0.33 mg each before the rate regressor felt the ramp at a power-on).
+#[test]
+#[ignore = "full tier (cargo xtask test --full): 3 diagnoses and flights, 1 CPU-minute"]
+fn a_sweep_with_a_power_cycle_in_its_ramp_flies_within_the_aim() {
+    let dir = tempfile::tempdir().unwrap();
+    let effect = "hysteresis+temp_rate";
+    let mut line = Vec::new();
+    for seed in 1..=3u64 {
+        let unit = production(effect, seed);
+        let (flown, j) = diagnosed_in_flight(dir.path(), &on_plan_sweep(&unit, 1.5, 10.0), unit);
+        assert!(
+            found(&j).iter().any(|n| n == "hysteresis"),
+            "seed {seed}: found {:?}",
+            found(&j)
+        );
+        line.push(flown);
+    }
+    let (within, text) = within_aim(&line);
+    println!("{effect} on a 1.5 C/min sweep, a power cycle in its ramp: {text} mg");
+    assert!(within >= 2, "{within} of 3 within 0.05 mg ({text})");
 }
 
 /// How many of `line`'s flights (mg) are within the aim of 0.05 mg, and the line printed.

@@ -273,18 +273,29 @@ pub fn lagged(rec: &Recording, taus: &[[f64; 2]; 3]) -> [Vec<f64>; 3] {
     })
 }
 
-/// Per row, the firmware's rate estimate (C/s; 0 until it has settled after the start
-/// and after each stated power-on, `firmware_core::inflight::rate_settled`) with
-/// low-pass time constant `tau_s`
-/// (negative: the zero-lag estimator of time constant `|tau_s|`, as the blob's
-/// `rate_tau_s` says it, `firmware_core::temperature::Physics::rate_zero_lag`).
+/// Per row, the rate estimate (C/s) with low-pass time constant `tau_s`.
+///
+/// Negative: the firmware's flight estimator, the zero-lag one of time constant
+/// `|tau_s|` (as the blob's `rate_tau_s` says it,
+/// `firmware_core::temperature::Physics::rate_zero_lag`), row by row what the firmware
+/// gives: 0 until it has settled after the start and after each stated power-on
+/// (`firmware_core::inflight::rate_settled`). Positive: the low-pass the diagnosis
+/// describes the unit's physics with, 0 until settled after the start only. Across a
+/// stated power-off both step the gap as the firmware does, so after a power-on in a
+/// ramp the low-pass already holds the ramp's rate; the firmware's hold after a
+/// power-on is its own caution, not the unit's physics: a unit switched on in a ramp
+/// feels the rate at once, and a regressor held at 0 there leaves the rate's whole
+/// effect in the residual (20 s at 80x the floor on a 1.5 C/min sweep), enough to make
+/// a hysteresis beside it look inadequate where it acts.
 pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
-    let (mut m, mut x) = (Rate::<f64>::default(), 0.0);
+    let (mut m, mut x, mut run_s) = (Rate::<f64>::default(), 0.0, 0.0);
     drive(rec, |tick, age_s, _, t| {
         let out = match tick {
             Tick::Step(h) => {
+                run_s += h;
                 let r = m.step(Step::new(h, tau_s.abs()), t - x, h, tau_s < 0.0);
-                if rate_settled(age_s, tau_s) {
+                let since = if tau_s < 0.0 { age_s } else { run_s };
+                if rate_settled(since, tau_s) {
                     r
                 } else {
                     0.0
@@ -292,6 +303,7 @@ pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
             }
             _ => {
                 m.start();
+                run_s = 0.0;
                 0.0
             }
         };
@@ -501,6 +513,39 @@ mod tests {
                     r.t_s,
                     host[k]
                 );
+            }
+        }
+    }
+
+    /// The diagnosis's low-pass (a positive time constant) is the unit's physics, not the
+    /// firmware's caution: on the same ramp with the same power-off it is held at 0 after
+    /// the start only, and at the first row after the power-on it already gives the ramp's
+    /// slope (the gap stepped straight, the low-pass at the ramp's steady state), where the
+    /// flight's estimator above is held at 0 for 20 s.
+    #[test]
+    fn the_diagnosis_low_pass_feels_a_ramp_at_once_after_a_power_on() {
+        let ramp = |t: f64| -10.0 + 0.02 * t;
+        let times: Vec<f64> = (0..600)
+            .map(|i| 2.0 * f64::from(i))
+            .filter(|t| !(300.0..700.0).contains(t))
+            .collect();
+        let rec = recording_of("# power_off_s=300-700\n", &times, ramp);
+        let tau = 40.0;
+        let host = rates(&rec, tau);
+        let flight = rates(&rec, -4.0);
+        for (k, r) in rec.rows.iter().enumerate() {
+            if r.t_s < 19.0 {
+                assert_eq!(host[k], 0.0, "{} s: settling after the start", r.t_s);
+            }
+            if (700.0..720.0).contains(&r.t_s) {
+                // the gap (400 s, ten time constants) leaves e^-10 of the start's deficit
+                assert!(
+                    (host[k] - 0.02).abs() < 1e-3 * 0.02,
+                    "{} s: {}",
+                    r.t_s,
+                    host[k]
+                );
+                assert_eq!(flight[k], 0.0, "{} s: the flight's estimator holds", r.t_s);
             }
         }
     }

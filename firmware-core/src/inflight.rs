@@ -50,7 +50,9 @@
 //! across it. After a start and after a power-on the rate is taken as 0 until its
 //! estimator has averaged [`RATE_SETTLE_TAUS`] time constants ([`rate_settled`]): its
 //! low-passes then hold one reading, whose noise they would otherwise read as a rate. The host does the same at the first row of a recording and at each stated
-//! power-on, but for the lag, which its fits carry along the sensor's bend across a gap. (What a power-off during a fast temperature
+//! power-on, but for the lag, which its fits carry along the sensor's bend across a gap,
+//! and for the diagnosis's own rate low-pass, held after the start only (a unit switched
+//! on in a ramp feels the rate at once). (What a power-off during a fast temperature
 //! change does to an MCU that loses its state cannot be known: its lag starts again at
 //! the sensor's temperature.)
 use crate::real::Real;

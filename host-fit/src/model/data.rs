@@ -30,8 +30,8 @@ pub struct Data<'a> {
     /// order: the stops of [`crate::data::stops::stops`], dwells within 3 C of the
     /// first of their stop, ramps between them.
     pub stop_starts: Vec<f64>,
-    /// Each observation's temperature rate (the firmware's estimate, over
-    /// [`Rules::rate_tau_s`]), C/s: where the temperature moves (for locating and for the
+    /// Each observation's temperature rate (a low-pass over [`Rules::rate_tau_s`], held
+    /// after the start, [`regressors::rates`]), C/s: where the temperature moves (for locating and for the
     /// static dg).
     pub rate: Vec<f64>,
     /// Each observation's direction of the last change of more than

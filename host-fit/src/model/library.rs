@@ -537,8 +537,9 @@ fn ramp_end(rec: &Recording, anchor: usize, level: f64, step: f64) -> Option<f64
     Some(t_x - tau_c)
 }
 
-/// The rate estimator's time constant for `dTdt` terms, s: the firmware's own rate
-/// estimate for locating (a minute smooths the sensor's steps and follows a ramp).
+/// The rate estimator's time constant for `dTdt` terms, s: the low-pass the diagnosis
+/// locates with (a minute smooths the sensor's steps and follows a ramp; held after the
+/// start only, where the firmware's rate is also held after a power-on).
 pub const RATE_TAU_S: f64 = 60.0;
 
 impl Series {

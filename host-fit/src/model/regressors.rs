@@ -3,8 +3,9 @@
 //! row's time step, the stated power-ons), with the firmware's discretisation, so the
 //! diagnosis fits what the firmware will apply on any row spacing, except across an
 //! unlogged gap: there the lag is carried along the sensor's bend ([`Cubic`]), which the
-//! host sees in the rows on both sides and the firmware in flight cannot; plus the
-//! recording's restart events.
+//! host sees in the rows on both sides and the firmware in flight cannot, and the rate
+//! of the diagnosis's own low-pass after a power-on, which is not held at 0 as the
+//! firmware's is ([`rates`]); plus the recording's restart events.
 use crate::data::recording::Recording;
 use crate::model::rules::Rules;
 use firmware_core::inflight::{
@@ -283,10 +284,15 @@ pub fn lagged(rec: &Recording, taus: &[[f64; 2]; 3]) -> [Vec<f64>; 3] {
 /// describes the unit's physics with, 0 until settled after the start only. Across a
 /// stated power-off both step the gap as the firmware does, so after a power-on in a
 /// ramp the low-pass already holds the ramp's rate; the firmware's hold after a
-/// power-on is its own caution, not the unit's physics: a unit switched on in a ramp
-/// feels the rate at once, and a regressor held at 0 there leaves the rate's whole
-/// effect in the residual (20 s at 80x the floor on a 1.5 C/min sweep), enough to make
-/// a hysteresis beside it look inadequate where it acts.
+/// power-on is its caution against one reading's noise, not the unit's physics: a unit
+/// switched on in a ramp feels the rate at once, and a regressor held at 0 there leaves
+/// the rate's whole effect in the residual (20 s at 80x the floor on a 1.5 C/min sweep),
+/// enough to make a hysteresis beside it look inadequate where it acts. The price: after
+/// a power-on in a soak the low-pass reads the settling of one quantised reading as a
+/// small rate, and across a gap on a bend it starts from the gap's mean rate. A positive
+/// time constant reaches a blob only when the refit with the flight's estimator fails
+/// (`model::flashed::rate_for_flight`); the firmware then holds where this does not, as
+/// it does for the `dTdt` of a discovered term ([`crate::model::library`]).
 pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
     let (mut m, mut x, mut run_s) = (Rate::<f64>::default(), 0.0, 0.0);
     drive(rec, |tick, age_s, _, t| {

@@ -2,6 +2,7 @@
 //! on an uneven logger clock and its flight, a diagnosed blob verified on both, through
 //! the CLI. Shared by `tests/tests/time_true.rs` and the book's `time-true` figure.
 use crate::{cli, cli_json};
+use host_fit::model::effects::EffectId;
 use host_fit::simulate::{
     simulate, Curvature, Fixture, Flight, Logger, PerAxis, SimConfig, Warmup,
 };
@@ -229,13 +230,15 @@ pub fn diagnosed_in_flight(
     (verify(&f, pos.as_deref(), &blob).0, j)
 }
 
-/// The effects a `diagnose --json` found, by name, in its order.
-pub fn found(j: &serde_json::Value) -> Vec<String> {
+/// The effects a `diagnose --json` found, in its order (an effect the contract does not
+/// know fails the test that reads it, naming it).
+pub fn found(j: &serde_json::Value) -> Vec<EffectId> {
     j["findings"]
         .as_array()
         .map(|a| {
             a.iter()
-                .filter_map(|f| f["effect"].as_str().map(String::from))
+                .filter_map(|f| f["effect"].as_str())
+                .map(|e| EffectId::parse(e).unwrap_or_else(|| panic!("unknown effect {e:?}")))
                 .collect()
         })
         .unwrap_or_default()
@@ -243,20 +246,20 @@ pub fn found(j: &serde_json::Value) -> Vec<String> {
 
 /// The production test of `unit` replaced by `plan`'s continuous sweep at `c_per_min`
 /// with holds of `hold_min` at each end, on the default chamber and tilter (-40..70 C,
-/// the 12 positions, 50-s dwells, 10-s moves); the unit starts soaked at the cold end
+/// the 12 built-in positions, 50-s dwells, 10-s moves); the unit starts soaked at the cold end
 /// after cooling there (hysteresis branch -1), its power-offs where the unit's schedule
 /// has them.
 pub fn on_plan_sweep(unit: &SimConfig, c_per_min: f64, hold_min: f64) -> SimConfig {
-    use host_fit::plan::{program, Kind, Limits};
+    use host_fit::data::positions::{Positions, Role};
+    use host_fit::plan::{program, Kind, Limits, DEFAULT_MAX_RAMP_C_PER_MIN};
+    let builtin = Positions::default();
+    let mut positions = builtin.names_with(Role::Calibration);
+    positions.extend(builtin.names_with(Role::Verification));
     let l = Limits {
         lo_c: -40.0,
         hi_c: 70.0,
-        max_ramp_c_per_min: 3.0,
-        positions: ["TP1", "TP2", "TP3", "TP4", "TP5", "TP6"]
-            .iter()
-            .chain(&["PP1", "PP2", "PP3", "PP4", "PP5", "PP6"])
-            .map(|p| p.to_string())
-            .collect(),
+        max_ramp_c_per_min: DEFAULT_MAX_RAMP_C_PER_MIN,
+        positions,
         dwell_s: 50.0,
         move_s: 10.0,
         rate_hz: 1.0,

@@ -5,6 +5,7 @@
 //! or says that none can within the hours; the written plan, run on the twin with
 //! `simulate --plan`, fitted and verified, covers the range and is within its predicted
 //! accuracy.
+use host_fit::model::effects::EffectId;
 use serde_json::Value;
 use tests::time_true::{s, verify};
 use tests::{cli, cli_json};
@@ -510,7 +511,7 @@ fn plan_separates_the_coupled_effects_a_diagnosis_found() {
     let found: Value = serde_json::from_str(&diag).unwrap();
     let names = tests::time_true::found(&found);
     assert!(
-        names.iter().any(|n| n == "hysteresis") && names.iter().any(|n| n == "temp_rate"),
+        names.contains(&EffectId::Hysteresis) && names.contains(&EffectId::TempRate),
         "the diagnosis found {names:?}"
     );
     let dj = d.join("d.json");

@@ -7,6 +7,7 @@
 //! writes a flight-like recording of the same unit (a cold power-on, fast warming and
 //! cooling both ways, a second power cycle, 24 attitudes over the sphere held 40 s, at
 //! an MCU rate).
+use host_fit::model::effects::EffectId;
 use host_fit::simulate::{PerAxis, SimConfig, Warmup};
 use tests::time_true::{
     diagnosed_in_flight, found, noiseless_flight, on_plan_sweep, production, s, table, verify,
@@ -338,7 +339,7 @@ fn a_power_on_in_a_ramp_leaves_the_hysteresis_beside_the_rate() {
     let j = cli_json(&["diagnose", s(&rec), "--json"]);
     let names = found(&j);
     assert!(
-        names.iter().any(|n| n == "hysteresis") && names.iter().any(|n| n == "temp_rate"),
+        names.contains(&EffectId::Hysteresis) && names.contains(&EffectId::TempRate),
         "found {names:?}"
     );
 }
@@ -357,7 +358,7 @@ fn a_sweep_with_a_power_cycle_in_its_ramp_flies_within_the_aim() {
         let unit = production(effect, seed);
         let (flown, j) = diagnosed_in_flight(dir.path(), &on_plan_sweep(&unit, 1.5, 10.0), unit);
         assert!(
-            found(&j).iter().any(|n| n == "hysteresis"),
+            found(&j).contains(&EffectId::Hysteresis),
             "seed {seed}: found {:?}",
             found(&j)
         );

@@ -31,8 +31,8 @@ pub struct Data<'a> {
     /// first of their stop, ramps between them.
     pub stop_starts: Vec<f64>,
     /// Each observation's temperature rate (a low-pass over [`Rules::rate_tau_s`], held
-    /// after the start, [`regressors::rates`]), C/s: where the temperature moves (for locating and for the
-    /// static dg).
+    /// after the start, [`regressors::rates`]), C/s: where the temperature moves (for
+    /// locating and for the static dg).
     pub rate: Vec<f64>,
     /// Each observation's direction of the last change of more than
     /// [`Rules::direction_threshold_c`] (0 before the first), for locating.

@@ -486,12 +486,7 @@ mod tests {
     /// (within 5 % at once, to 1e-6 after 100 s).
     #[test]
     fn the_rate_regressor_settles_as_the_firmware_does() {
-        let ramp = |t: f64| -10.0 + 0.02 * t;
-        let times: Vec<f64> = (0..400)
-            .map(|i| 2.0 * f64::from(i))
-            .filter(|t| !(300.0..400.0).contains(t))
-            .collect();
-        let rec = recording_of("# power_off_s=300-400\n", &times, ramp);
+        let rec = ramp_with_a_power_off((0..400).map(|i| 2.0 * f64::from(i)), [300.0, 400.0]);
         let tau = -4.0;
         let host = rates(&rec, tau);
         let p = Physics::<f64> {
@@ -523,19 +518,29 @@ mod tests {
         }
     }
 
+    /// The ramp of [`the_rate_regressor_settles_as_the_firmware_does`] (0.02 C/s from
+    /// -10 C) logged at `times`, the unit powered off over `off` (s; no rows there, the
+    /// span stated).
+    fn ramp_with_a_power_off(times: impl Iterator<Item = f64>, off: [f64; 2]) -> Recording {
+        let times: Vec<f64> = times.filter(|t| !(off[0]..off[1]).contains(t)).collect();
+        let header = format!("# power_off_s={}-{}\n", off[0], off[1]);
+        recording_of(&header, &times, |t| -10.0 + 0.02 * t)
+    }
+
     /// The diagnosis's low-pass (a positive time constant) is the unit's physics, not the
-    /// firmware's caution: on the same ramp with the same power-off it is held at 0 after
-    /// the start only, and at the first row after the power-on it already gives the ramp's
-    /// slope (the gap stepped straight, the low-pass at the ramp's steady state), where the
-    /// flight's estimator above is held at 0 for 20 s.
+    /// firmware's caution: on the same ramp, logged unevenly (1-s rows jittered by up to
+    /// 0.3 s in 50-s dwells, a row every 10 s between them) with a power-off, it is held at
+    /// 0 after the start only, and at the first row after the power-on it already gives the
+    /// ramp's slope (the gap stepped straight, the low-pass at the ramp's steady state),
+    /// where the flight's estimator is held at 0 for 20 s.
     #[test]
     fn the_diagnosis_low_pass_feels_a_ramp_at_once_after_a_power_on() {
-        let ramp = |t: f64| -10.0 + 0.02 * t;
-        let times: Vec<f64> = (0..600)
-            .map(|i| 2.0 * f64::from(i))
-            .filter(|t| !(300.0..700.0).contains(t))
-            .collect();
-        let rec = recording_of("# power_off_s=300-700\n", &times, ramp);
+        let uneven = (0..1200u32).filter_map(|i| {
+            let t = f64::from(i);
+            let logged = t % 60.0 < 50.0 || i % 10 == 0;
+            logged.then(|| t + 0.3 * (1.7 * t).sin())
+        });
+        let rec = ramp_with_a_power_off(uneven, [300.0, 700.0]);
         let tau = 40.0;
         let host = rates(&rec, tau);
         let flight = rates(&rec, -4.0);
@@ -544,7 +549,8 @@ mod tests {
                 assert_eq!(host[k], 0.0, "{} s: settling after the start", r.t_s);
             }
             if (700.0..720.0).contains(&r.t_s) {
-                // the gap (400 s, ten time constants) leaves e^-10 of the start's deficit
+                // the start's deficit is e^-7 of the rate at the power-off; the gap, ten
+                // time constants, leaves none of it
                 assert!(
                     (host[k] - 0.02).abs() < 1e-3 * 0.02,
                     "{} s: {}",

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 
 /// Every figure of the README and the book, and the test file that checks it
 /// (`tests/tests/FILE`).
-pub const FIGURES: [(&str, &str); 16] = [
+pub const FIGURES: [(&str, &str); 17] = [
     ("demo", "readme.rs"),
     ("coverage", "production.rs"),
     ("model-choice", "production.rs"),
@@ -29,6 +29,7 @@ pub const FIGURES: [(&str, &str); 16] = [
     ("plan-done", "plan_done.rs"),
     ("demo-plan", "readme.rs"),
     ("demo-plan-program", "readme.rs"),
+    ("discovered-flight", "discovered_flight.rs"),
 ];
 
 /// The files that may hold figures: README.md and every `docs/*.md`, in name order.

@@ -11,6 +11,7 @@ use crate::model::basis::{Basis, POLY_SCALE_C};
 use crate::model::cache::Cache;
 use crate::model::data::Data;
 use crate::model::effects::Extra;
+use crate::model::library::Timed;
 use crate::model::params::{Param, Term};
 use crate::model::profile::{time_constant, Grid};
 use crate::model::solve::{Depth, Fit};
@@ -170,7 +171,28 @@ impl Flashed {
                 | Extra::Discovered { .. } => {}
             }
         }
+        // A discovered term's `dTdt` is read from the block's rate estimator. Without a
+        // rate effect (whose estimator is chosen for flight already) the firmware's neutral
+        // block differences the sensor per step: a quantised reading at 20 Hz is a spike of
+        // tens of C/min, and a dwell's mean rate is off by a quantum over the dwell (the
+        // scale-with-rate blind unit flew at 4x the clean unit's error). The flight's
+        // estimator is flashed instead, as for the catalogue's rate: the host found the
+        // term with a half-minute zero-lag estimator (`library::RATE_TAU_S`), which smooths a
+        // chamber recording's quantised steps; the estimator only measures the rate the
+        // term multiplies.
+        if ph.rate_tau_s == 0.0 && self.rate_terms() {
+            ph.rate_tau_s = -FLIGHT_RATE_TAU_S;
+            any = true;
+        }
         Ok(any.then_some(ph))
+    }
+
+    /// Whether a discovered term of the unit's state multiplies the temperature's rate.
+    fn rate_terms(&self) -> bool {
+        self.fit.spec.extras.iter().any(|x| {
+            matches!(x, Extra::Discovered { term, .. }
+                if term.of_unit() && term.timed.contains(&Timed::Rate))
+        })
     }
 
     /// The model's polynomial itself, when its temperature dependence is one (no bend,

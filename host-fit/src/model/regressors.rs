@@ -292,15 +292,44 @@ pub fn lagged(rec: &Recording, taus: &[[f64; 2]; 3]) -> [Vec<f64>; 3] {
 /// small rate, and across a gap on a bend it starts from the gap's mean rate. A positive
 /// time constant reaches a blob only when the refit with the flight's estimator fails
 /// (`model::flashed::rate_for_flight`); the firmware then holds where this does not, as
-/// it does for the `dTdt` of a discovered term ([`crate::model::library`]).
+/// it does for the `dTdt` of a discovered term (found with the zero-lag estimator held
+/// after the start only, [`crate::model::library::RATE_TAU_S`], flown with the
+/// flight's).
 pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
+    let flight = tau_s < 0.0;
+    let hold = if flight {
+        Settle::AfterEachPowerOn
+    } else {
+        Settle::AfterStart
+    };
+    rates_of(rec, tau_s.abs(), flight, hold)
+}
+
+/// Where a rate regressor is held at 0 until its estimator has settled
+/// (`firmware_core::inflight::rate_settled`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Settle {
+    /// After the recording's start only: the unit's physics, felt at once after a
+    /// power-on (see [`rates`]).
+    AfterStart,
+    /// After the start and after each stated power-on, as the firmware holds it.
+    AfterEachPowerOn,
+}
+
+/// Per row, the rate estimate (C/s) of time constant `tau_s` (not negative): the
+/// zero-lag estimator (`zero_lag`) or the low-pass, stepped as the firmware steps them
+/// (`firmware_core::inflight::Rate`), 0 until settled where `settle` says.
+pub fn rates_of(rec: &Recording, tau_s: f64, zero_lag: bool, settle: Settle) -> Vec<f64> {
     let (mut m, mut x, mut run_s) = (Rate::<f64>::default(), 0.0, 0.0);
     drive(rec, |tick, age_s, _, t| {
         let out = match tick {
             Tick::Step(h) => {
                 run_s += h;
-                let r = m.step(Step::new(h, tau_s.abs()), t - x, h, tau_s < 0.0);
-                let since = if tau_s < 0.0 { age_s } else { run_s };
+                let r = m.step(Step::new(h, tau_s), t - x, h, zero_lag);
+                let since = match settle {
+                    Settle::AfterEachPowerOn => age_s,
+                    Settle::AfterStart => run_s,
+                };
                 if rate_settled(since, tau_s) {
                     r
                 } else {

@@ -124,7 +124,8 @@ pub enum Factor {
     /// `dT`: the sensor temperature minus T0, C.
     DT = 7,
     /// `dTdt`: the rate of the sensor temperature, C/min (the firmware's rate estimate:
-    /// the physics section's rate low-pass, [`crate::inflight::Rate`]).
+    /// the physics section's rate estimator, [`crate::inflight::Rate`], zero-lag when
+    /// its `rate_tau_s` is negative).
     DTdt = 8,
     /// `decay(power_on,TAU)`: `exp(-t_on / TAU)`, `t_on` the time since power-on; TAU is
     /// the term's ([`Term::tau`]).

@@ -39,7 +39,8 @@ impl Event {
 pub enum Timed {
     /// `dT`: temp_c - T0, C.
     DT,
-    /// `dTdt`: the rate of temp_c, C/min (the firmware's estimate).
+    /// `dTdt`: the rate of temp_c, C/min (the zero-lag estimator over
+    /// [`RATE_TAU_S`], held after the start only).
     Rate,
     /// `t`: hours since the recording's first row.
     Hours,
@@ -543,8 +544,8 @@ fn ramp_end(rec: &Recording, anchor: usize, level: f64, step: f64) -> Option<f64
 /// see `regressors::rates`). Zero-lag, not the low-pass: a low-pass trails the rate by
 /// its time constant where the case turns a ramp, and the fit took that into the term's
 /// coefficient (the blind suite's scale-with-rate units, seeds 1-4, with a minute's
-/// low-pass: +2.2 % and +2.7 % on two, flying at 4-9x the clean unit's error; zero-lag
-/// over 30 s: within 0.7 %, over 60 s within 0.8 %, over 120 s off by up to 1.9 %:
+/// low-pass: +2.2 % and +2.7 % on two; zero-lag over 30 s: within 0.7 %, over 60 s
+/// within 0.8 %, over 120 s off by up to 1.9 %:
 /// the longer the estimator, the more of a turn it smears). The blob evaluates the term
 /// with the flight's estimator (`model::flashed::FLIGHT_RATE_TAU_S`), which measures
 /// the same rate faster; the coefficient is the unit's.

@@ -294,7 +294,8 @@ pub fn lagged(rec: &Recording, taus: &[[f64; 2]; 3]) -> [Vec<f64>; 3] {
 /// (`model::flashed::rate_for_flight`); the firmware then holds where this does not, as
 /// it does for the `dTdt` of a discovered term (found with the zero-lag estimator held
 /// after the start only, [`crate::model::library::RATE_TAU_S`], flown with the
-/// flight's).
+/// flight's, or with the catalogue rate's estimator where the unit has one, a positive
+/// time constant when that rate's refit fell back).
 pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
     let flight = tau_s < 0.0;
     let hold = if flight {
@@ -320,6 +321,8 @@ pub enum Settle {
 /// zero-lag estimator (`zero_lag`) or the low-pass, stepped as the firmware steps them
 /// (`firmware_core::inflight::Rate`), 0 until settled where `settle` says.
 pub fn rates_of(rec: &Recording, tau_s: f64, zero_lag: bool, settle: Settle) -> Vec<f64> {
+    // the sign is `rates`' flag for the flight's estimator, taken off before here
+    debug_assert!(tau_s >= 0.0, "rates_of: tau_s {tau_s} is negative");
     let (mut m, mut x, mut run_s) = (Rate::<f64>::default(), 0.0, 0.0);
     drive(rec, |tick, age_s, _, t| {
         let out = match tick {

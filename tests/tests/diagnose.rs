@@ -246,6 +246,45 @@ fn json_contract_on_a_clean_and_an_effect_recording() {
     }
 }
 
+/// A settling after each stop large enough that the catalogue's search leaves the
+/// baseline at a low order (the blind suite's seed 3: quadratic): the term explains the
+/// excess there but cannot leave its region at the floor, and is judged again at the
+/// order chosen with it (quartic), its time constant profiled again: named on its axis
+/// with the truth's time constant, the rest at the floor.
+#[test]
+fn a_term_is_judged_at_the_baseline_order_chosen_with_it() {
+    use host_fit::blind::beyond::Expressed;
+    let case = Case::of_form(Form::Expressed(Expressed::StopSettle), 3);
+    let truth = host_fit::blind::configure(&case)
+        .effects
+        .stop_settle
+        .unwrap();
+    let axis = (0..3).find(|&i| truth.d_v[i] != 0.0).unwrap();
+    let o = run(&case);
+    assert!(o.passed(), "{}", o.note);
+    let [claim] = o.discovered.as_slice() else {
+        panic!("one term: {:?}", o.discovered)
+    };
+    assert_eq!(claim.axes, [["x", "y", "z"][axis]], "{claim:?}");
+    let minutes: f64 = claim
+        .term
+        .strip_prefix("decay(stop,")
+        .and_then(|t| t.strip_suffix("min)"))
+        .and_then(|m| m.parse().ok())
+        .unwrap_or_else(|| panic!("a settling after stops, in minutes: {claim:?}"));
+    let ratio = minutes * 60.0 / truth.tau_s;
+    assert!(
+        (0.9..=1.1).contains(&ratio),
+        "{claim:?}: {ratio:.2} of the truth's {} s",
+        truth.tau_s
+    );
+    assert!(
+        o.final_over_noise <= 1.0,
+        "{:.2}x the floor",
+        o.final_over_noise
+    );
+}
+
 /// A sudden bias shift mid-test is not in the catalogue: no catalogue name, the verdict
 /// says so, and the residual is located on the shifted axis, after the shift.
 #[test]

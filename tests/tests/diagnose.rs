@@ -278,8 +278,9 @@ fn a_term_is_judged_at_the_baseline_order_chosen_with_it() {
         "{claim:?}: {ratio:.2} of the truth's {} s",
         truth.tau_s
     );
+    // at the floor (0.87x measured; the pass rule allows 1.5x, the miss was 10.7x)
     assert!(
-        o.final_over_noise <= 1.0,
+        o.final_over_noise <= 1.2,
         "{:.2}x the floor",
         o.final_over_noise
     );

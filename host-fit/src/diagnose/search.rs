@@ -43,6 +43,7 @@ use crate::diagnose::discover::{discover, Proposal, Unidentifiable};
 use crate::diagnose::findings::reproduced;
 use crate::diagnose::location::{locate, rows_of, Hotspot};
 use crate::model::baseline::reorder;
+use crate::model::basis::Basis;
 use crate::model::data::Data;
 use crate::model::effects::{EffectId, Extra};
 use crate::model::library::{Candidate, LibTerm, Reach};
@@ -1065,6 +1066,9 @@ impl Search<'_, '_> {
     /// rest; at order 4, re-profiled, 29 min and the residual at the floor). The term is judged against
     /// `current`'s own model at that order, so the order's change is not credited to it;
     /// the order is [`reorder`]'s, the rule every accepted step's order is chosen by.
+    /// Only a higher order: the base is then richer than `current` and the term's test
+    /// nested in it; at a lower one the base, never chosen without the term, would be
+    /// underfit and the term credited with the curvature it gave up.
     fn term_at_its_order(
         &self,
         current: &Fit,
@@ -1073,7 +1077,11 @@ impl Search<'_, '_> {
         axis: usize,
     ) -> Option<Fit> {
         let order = reorder(self.data, full, self.scope.max_order).spec.basis;
-        if order == current.spec.basis {
+        let rises = match (&current.spec.basis, &order) {
+            (Basis::Poly { order: was }, Basis::Poly { order: now }) => now > was,
+            _ => false,
+        };
+        if !rises {
             return None;
         }
         let mut spec = current.spec.clone();

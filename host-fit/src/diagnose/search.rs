@@ -1063,12 +1063,12 @@ impl Search<'_, '_> {
     /// a baseline that cannot bend takes the temperature's curve into its time constant
     /// (the blind suite's settling after each stop, seed 3: the order fell from 3 to 2,
     /// the term was profiled at 37 min for a truth of 29 and left its region above the
-    /// rest; at order 4, re-profiled, 29 min and the residual at the floor). The term is judged against
-    /// `current`'s own model at that order, so the order's change is not credited to it;
-    /// the order is [`reorder`]'s, the rule every accepted step's order is chosen by.
-    /// Only a higher order: the base is then richer than `current` and the term's test
-    /// nested in it; at a lower one the base, never chosen without the term, would be
-    /// underfit and the term credited with the curvature it gave up.
+    /// rest; at order 4, re-profiled, 29 min and the residual at the floor). The term is
+    /// judged against `current`'s own model at that order, so the order's change is not
+    /// credited to it; the order is [`reorder`]'s, the rule every accepted step's order
+    /// is chosen by. Only a higher order: the base is then richer than `current` and the
+    /// term's test nested in it; at a lower one the base, never chosen without the term,
+    /// would be underfit and the term credited with the curvature it gave up.
     fn term_at_its_order(
         &self,
         current: &Fit,

@@ -311,26 +311,51 @@ impl<R: Real> Rate<R> {
 }
 
 /// `hysteresis`: the direction of the last temperature change larger than a threshold
-/// (+1 heated to here, -1 cooled, the initial state until the first such change).
+/// (+1 heated to here, -1 cooled, the initial state until the first such change): a
+/// relay. With a negative threshold `-d`, a play operator (backlash) of half-width `d`
+/// instead: the state moves linearly from -1 to +1 over `2 d` C of travel after a
+/// reversal and holds where the temperature turns within that band (a gradual
+/// hysteresis; the same two numbers of state).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Direction<R> {
     dir: R,
+    /// The relay's reference (the turn), or the play operator's output.
     reference: R,
 }
 
 impl<R: Real> Direction<R> {
-    /// In state `initial` (+1, -1, or 0 for unknown), at temperature `t`.
-    pub fn start(&mut self, initial: R, t: R) {
+    /// In state `initial` (+1, -1, or 0 for unknown), at temperature `t`; `threshold` as
+    /// in [`Direction::step`] (a play operator's output starts `initial` half-widths
+    /// below `t`, so its state is `initial`).
+    pub fn start(&mut self, initial: R, t: R, threshold: R) {
         self.dir = initial;
-        self.reference = t;
+        self.reference = if threshold < R::ZERO {
+            t + initial * threshold
+        } else {
+            t
+        };
     }
 
     /// Step with temperature `t`; returns the direction. A change of more than
     /// `threshold` from the reference sets the direction; moving on in the same
     /// direction moves the reference with it (so a reversal is measured from the turn).
+    /// A negative threshold `-d` is a play operator: its output is held within `d` of
+    /// `t`, and the state is `(t - output) / d`, within [-1, 1] (two roundings: within
+    /// 2 ulp of 1 at the ends, where the relay's is exact).
     #[inline]
     pub fn step(&mut self, threshold: R, t: R) -> R {
+        if threshold < R::ZERO {
+            let d = -threshold;
+            // NaN-safe clamp: a NaN temperature leaves the output where it was
+            if t - self.reference > d {
+                self.reference = t - d;
+            } else if self.reference - t > d {
+                self.reference = t + d;
+            }
+            self.dir = (t - self.reference) / d;
+            return self.dir;
+        }
         if t - self.reference > threshold {
             self.dir = R::ONE;
             self.reference = t;
@@ -421,9 +446,11 @@ impl<R: Real> Elapsed<R> {
 /// the unit there from its reference `t0` when it is more than the threshold away from
 /// it (a cold start was cooled to), else the blob's initial direction.
 pub fn power_on_direction<R: Real>(p: &Physics<R>, x: R, t0: R) -> R {
-    if x - t0 > p.hysteresis_threshold_c {
+    // a play operator's half-width, like a relay's threshold: the travel that saturates it
+    let th = p.hysteresis_threshold_c.abs();
+    if x - t0 > th {
         R::ONE
-    } else if t0 - x > p.hysteresis_threshold_c {
+    } else if t0 - x > th {
         -R::ONE
     } else {
         p.hysteresis_initial
@@ -492,7 +519,8 @@ impl<R: Real> Machines<R> {
                 self.x = x;
                 self.lag.start();
                 self.rate.start();
-                self.dir.start(power_on_direction(p, x, t0), x);
+                self.dir
+                    .start(power_on_direction(p, x, t0), x, p.hysteresis_threshold_c);
                 self.power = -R::ONE;
                 #[cfg(feature = "terms")]
                 self.since_on.set(since_on);
@@ -699,10 +727,37 @@ mod tests {
     #[test]
     fn direction_follows_changes_beyond_the_threshold() {
         let mut d = Direction::<f64>::default();
-        d.start(-1.0, 20.0);
+        d.start(-1.0, 20.0, 0.5);
         let seq = [20.0, 20.3, 20.6, 21.0, 25.0, 24.8, 24.4, 23.0, 23.2];
         let got: Vec<f64> = seq.iter().map(|t| d.step(0.5, *t)).collect();
         assert_eq!(got, [-1.0, -1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0]);
+    }
+
+    /// A play operator of half-width 2 C (threshold -2): linear over 4 C after a
+    /// reversal, held where the temperature turns inside the band, saturated beyond;
+    /// the f32 machine within 2 ulp of 1 (its error bound) of the exact values.
+    #[test]
+    fn a_play_operator_moves_linearly_over_its_width() {
+        let seq = [
+            20.0, 21.0, 22.0, 23.0, 26.0, 25.0, 24.0, 24.5, 22.0, 20.0, 19.0,
+        ];
+        let want = [-1.0, -0.5, 0.0, 0.5, 1.0, 0.5, 0.0, 0.25, -1.0, -1.0, -1.0];
+        let mut d = Direction::<f64>::default();
+        d.start(-1.0, 20.0, -2.0);
+        let got: Vec<f64> = seq.iter().map(|t| d.step(-2.0, *t)).collect();
+        assert_eq!(got, want);
+        let mut f = Direction::<f32>::default();
+        f.start(-1.0, 20.0, -2.0);
+        for (t, w) in seq.iter().zip(want) {
+            let g = f.step(-2.0, *t as f32);
+            assert!(
+                (g as f64 - w).abs() <= 2.0 * f32::EPSILON as f64,
+                "{t}: {g} for {w}"
+            );
+        }
+        // a NaN temperature holds the output: the state is NaN for that step only
+        assert!(d.step(-2.0, f64::NAN).is_nan());
+        assert_eq!(d.step(-2.0, 19.0), -1.0);
     }
 
     #[test]
@@ -899,6 +954,14 @@ mod tests {
             ..p
         };
         assert_eq!(power_on_direction(&q, 20.3, 20.0), -1.0);
+        // a play operator (negative threshold): its half-width is the band
+        let play = Physics {
+            hysteresis_threshold_c: -4.0,
+            ..q
+        };
+        assert_eq!(power_on_direction(&play, 17.0, 20.0), -1.0);
+        assert_eq!(power_on_direction(&play, 23.0, 20.0), -1.0);
+        assert_eq!(power_on_direction(&play, 24.5, 20.0), 1.0);
     }
 
     /// The machines in f32 at 10 Hz, 100 Hz and 1 kHz against f64 at 10 Hz, on a fast

@@ -143,7 +143,10 @@ physics_terms! {
     rate_tau_s: one R = 0.0;
     /// `hysteresis`: offsets split `+-h/2` by the direction of the last change, per axis.
     hysteresis: axes [R; 3] = 0.0;
-    /// A change of more than this (C) sets the direction.
+    /// A change of more than this (C) sets the direction (a relay); negative `-d`: a
+    /// play operator of half-width `d`, the state linear over `2 d` C of travel after a
+    /// reversal ([`crate::inflight::Direction`]). A firmware that predates the play
+    /// operator refuses a negative threshold (out of its range), never misreads it.
     hysteresis_threshold_c: one R = 0.0;
     /// Direction at power-on (+1 heated, -1 cooled, 0 unknown), until the first change.
     hysteresis_initial: one R = 0.0;
@@ -180,14 +183,14 @@ impl<R: Real> Physics<R> {
     }
 
     /// The range checks of [`Physics::validate`] (values known to be finite): time
-    /// constants (but the rate's, whose sign chooses its estimator) and the threshold not
-    /// negative, the initial direction -1, 0 or +1.
+    /// constants (but the rate's and the hysteresis threshold's, whose signs choose the
+    /// estimator and the relay or play operator) not negative, the initial direction -1,
+    /// 0 or +1.
     pub fn validate_ranges(&self) -> Result<(), Error> {
         let z = R::ZERO;
         let initial = self.hysteresis_initial;
         if self.lag_tau_s < z
             || self.warmup_tau_s < z
-            || self.hysteresis_threshold_c < z
             || !(initial == z || initial == R::ONE || initial == -R::ONE)
         {
             return Err(Error::BadRange);
@@ -732,9 +735,11 @@ mod tests {
         assert_eq!(bad(&|p| p.rate_tau_s = -1.0), Ok(()));
         assert_eq!(bad(&|p| p.rate_tau_s = f64::NAN), Err(Error::NonFinite));
         assert_eq!(bad(&|p| p.warmup_tau_s = -1.0), Err(Error::BadRange));
+        // a negative threshold is a play operator, a NaN is refused
+        assert_eq!(bad(&|p| p.hysteresis_threshold_c = -0.1), Ok(()));
         assert_eq!(
-            bad(&|p| p.hysteresis_threshold_c = -0.1),
-            Err(Error::BadRange)
+            bad(&|p| p.hysteresis_threshold_c = f64::NAN),
+            Err(Error::NonFinite)
         );
         assert_eq!(bad(&|p| p.hysteresis_initial = 0.5), Err(Error::BadRange));
         assert_eq!(bad(&|p| p.k2 = [0.0, f64::NAN, 0.0]), Err(Error::NonFinite));

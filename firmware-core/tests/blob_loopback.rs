@@ -391,9 +391,9 @@ fn content_checks_behind_a_valid_crc() {
     let bytes = encode(&p);
     assert!(BlobView::new(&bytes).is_ok());
     let section = bytes.len() - 4 - 80;
-    for (word, value) in [(0, -1.0), (19, -1.0), (8, -0.5), (9, 0.5)] {
-        // lag and warm-up time constants negative; threshold negative; an initial
-        // direction that is none of -1, 0, +1
+    for (word, value) in [(0, -1.0), (19, -1.0), (9, 0.5)] {
+        // lag and warm-up time constants negative; an initial direction that is none of
+        // -1, 0, +1
         let mut b = bytes.clone();
         put(&mut b, section + 4 * word, value);
         assert_eq!(
@@ -402,18 +402,23 @@ fn content_checks_behind_a_valid_crc() {
             "word {word}"
         );
     }
+    // a physics word set to `value` behind a valid CRC, read back through the view
+    let read_with = |word: usize, value: f32| {
+        let mut b = bytes.clone();
+        put(&mut b, section + 4 * word, value);
+        let b = reseal(b);
+        let view = BlobView::new(&b).unwrap_or_else(|e| panic!("word {word} = {value}: {e}"));
+        view.to_blob()
+            .calibration
+            .physics
+            .expect("the physics section")
+    };
     // the rate's time constant negative is the zero-lag estimator, read as such
-    let mut b = bytes.clone();
-    put(&mut b, section + 4 * 4, -5.0);
-    let b = reseal(b);
-    let view = BlobView::new(&b).expect("a negative rate time constant is valid");
-    let read = view
-        .to_blob()
-        .calibration
-        .physics
-        .expect("the physics section");
+    let read = read_with(4, -5.0);
     assert!(read.rate_zero_lag());
     assert_eq!(read.rate_tau_s, -5.0);
+    // the hysteresis threshold negative is a play operator of that half-width, read as such
+    assert_eq!(read_with(8, -4.0).hysteresis_threshold_c, -4.0);
 }
 
 fn physics() -> Physics<f32> {

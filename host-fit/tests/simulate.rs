@@ -677,6 +677,8 @@ fn every_effect() -> Effects {
         }),
         hysteresis_initial: Some(-1.0),
         hysteresis_width_c: Some(5.0),
+        hysteresis_play_c: Some(8.0),
+        hysteresis_preisach_c: Some(12.0),
         scale_hysteresis: p(1e-4),
         warmup_drift2: Some(warmup),
         temp_bend: Some(Bend {

@@ -378,11 +378,25 @@ fn an_effect_outside_the_catalogue_is_unexplained_and_located() {
 /// recording with the catalogue's in-flight effects.
 #[test]
 fn the_flashed_model_reaches_the_fits_own_residual_in_firmware() {
-    use firmware_core::compensate::{Compensator, Method};
     let text = std::fs::read_to_string(repo().join("examples/sim/in-flight-effects.toml")).unwrap();
     let cfg = host_fit::simulate::parse_config(std::path::Path::new("x.toml"), &text).unwrap();
     let rec = recording(&cfg);
     let d = diagnose(&rec).unwrap();
+    let (n, rms_fw, rms_fit, worst) = in_firmware(&rec, &d);
+    println!("{n} windows: dg rms {rms_fw:.4} mg in firmware, {rms_fit:.4} mg by the fit; largest difference {worst:.4} mg");
+    assert!(n > 50);
+    assert!(
+        rms_fw <= 1.1 * rms_fit + 0.001,
+        "firmware {rms_fw} mg vs fit {rms_fit} mg"
+    );
+    assert!(worst < 0.005, "a window differs by {worst} mg");
+}
+
+/// The diagnosis's flashed model compensated by firmware-core sample by sample in f32
+/// over the recording `d` diagnosed: the static windows, the rms of their dg in firmware
+/// and by the fit (mg), and the largest difference of one window's.
+fn in_firmware(rec: &Recording, d: &host_fit::diagnose::Diagnosis<'_>) -> (usize, f64, f64, f64) {
+    use firmware_core::compensate::{Compensator, Method};
     let mut cal = d.calibration(rec.t0_c).unwrap().convert::<f32>();
     // the model itself: the cache of N(T) (0.1 C steps, a stated 0.03 mg) aside
     cal.update_step_c = 0.0;
@@ -421,13 +435,63 @@ fn the_flashed_model_reaches_the_fits_own_residual_in_firmware() {
         n += 1;
     }
     let (rms_fw, rms_fit) = ((ss_fw / n as f64).sqrt(), (ss_fit / n as f64).sqrt());
-    println!("{n} windows: dg rms {rms_fw:.4} mg in firmware, {rms_fit:.4} mg by the fit; largest difference {worst:.4} mg");
-    assert!(n > 50);
-    assert!(
-        rms_fw <= 1.1 * rms_fit + 0.001,
-        "firmware {rms_fw} mg vs fit {rms_fit} mg"
-    );
-    assert!(worst < 0.005, "a window differs by {worst} mg");
+    (n, rms_fw, rms_fit, worst)
+}
+
+/// A gradual hysteresis (a play operator: the offset moves linearly over 10 C after each
+/// reversal) is not a relay: the relay's best threshold left a triangle after each
+/// reversal, and on this unit a rate term took it (`temp_rate` named, partly explained).
+/// It is named `hysteresis` in its play form, with a width near the truth's, on an even
+/// and a logger's uneven clock; its blob flashes the play operator (a negative
+/// threshold) and firmware-core compensates the recording to the fit's own dg.
+#[test]
+fn a_gradual_hysteresis_is_named_and_flashed_as_a_play_operator() {
+    use host_fit::blind::forms::OtherForm;
+    use host_fit::diagnose::parameters::Quantity;
+    let case = Case::of_form(Form::Other(OtherForm::HysteresisPlay), 3);
+    let even = host_fit::blind::configure(&case);
+    let width = even.effects.hysteresis_play_c.unwrap();
+    let mut uneven = even.clone();
+    uneven.logger.rest_rate_hz = 0.1;
+    uneven.logger.jitter_s = 0.5;
+    uneven.logger.drop_rate = 0.01;
+    for (clock, cfg) in [("even", &even), ("uneven", &uneven)] {
+        let rec = recording(cfg);
+        let d = diagnose(&rec).unwrap();
+        let c = d.contract();
+        let [f] = c.findings.as_slice() else {
+            panic!("{clock}: one finding\n{}", c.text())
+        };
+        assert_eq!(
+            (f.effect, f.reproduced, c.verdict),
+            (EffectId::Hysteresis, true, Verdict::Explained),
+            "{clock}: {}",
+            c.text()
+        );
+        let w = f
+            .parameters
+            .get(Quantity::PlayWidth)
+            .unwrap_or_else(|| panic!("{clock}: a play width\n{}", c.text()))
+            .value;
+        // the width is profiled on a grid of octaves (2, 4, 8, 16 C): within one
+        assert!(
+            (0.5..=2.0).contains(&(w / width)),
+            "{clock}: {w} C for {width:.1} C"
+        );
+        let cal = d.calibration(rec.t0_c).unwrap();
+        let th = cal.physics.map(|p| p.hysteresis_threshold_c);
+        assert_eq!(th, Some(-w / 2.0), "{clock}: the flashed threshold");
+        let (n, rms_fw, rms_fit, worst) = in_firmware(&rec, &d);
+        println!(
+            "{clock}: play over {w} C (truth {width:.1} C); {n} windows, dg rms {rms_fw:.4} mg in firmware, {rms_fit:.4} mg by the fit, largest difference {worst:.4} mg"
+        );
+        assert!(n > 50);
+        assert!(
+            rms_fw <= 1.1 * rms_fit + 0.001,
+            "{clock}: firmware {rms_fw} mg vs fit {rms_fit} mg"
+        );
+        assert!(worst < 0.005, "{clock}: a window differs by {worst} mg");
+    }
 }
 
 /// Input forms users have: a dwell-averaged recording (one row per dwell) and a

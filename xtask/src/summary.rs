@@ -18,7 +18,7 @@ pub fn report(builds: &[Measured], c_harness: &str) -> String {
     for m in builds {
         let c = (m.build == Build::Terms).then_some(c_harness);
         s.push_str(&format!(
-            "\n### {} {}\n\n{}",
+            "\n### {}{}\n\n{}",
             m.build.label().get(..1).unwrap_or("").to_uppercase(),
             m.build.label().get(1..).unwrap_or(""),
             build(m, c)

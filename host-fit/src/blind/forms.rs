@@ -123,6 +123,10 @@ pub enum OtherForm {
     HysteresisWide,
     /// hysteresis of the scale factors.
     HysteresisOfScale,
+    /// hysteresis as a play operator: linear over 6-12 C of travel, holding in the band.
+    HysteresisPlay,
+    /// hysteresis as a Preisach ensemble of relays up to 8-16 C wide.
+    HysteresisPreisach,
     /// warmup_drift with two time constants.
     WarmupTwoTimeConstants,
     /// warmup_drift restarting after a power-off.
@@ -169,13 +173,15 @@ pub enum Nuisance {
 
 impl Form {
     /// Every form of the suite, in the order of its report.
-    pub const ALL: [Form; 22] = [
+    pub const ALL: [Form; 24] = [
         Form::Other(OtherForm::LagTwoPoles),
         Form::Other(OtherForm::LagPerAxis),
         Form::Other(OtherForm::RateGradient),
         Form::Other(OtherForm::HysteresisCooledFirst),
         Form::Other(OtherForm::HysteresisWide),
         Form::Other(OtherForm::HysteresisOfScale),
+        Form::Other(OtherForm::HysteresisPlay),
+        Form::Other(OtherForm::HysteresisPreisach),
         Form::Other(OtherForm::WarmupTwoTimeConstants),
         Form::Other(OtherForm::WarmupRestarts),
         Form::Other(OtherForm::CurvatureLocalBend),
@@ -320,6 +326,8 @@ impl OtherForm {
             OtherForm::HysteresisCooledFirst => "hysteresis: cooled before the first change",
             OtherForm::HysteresisWide => "hysteresis: switching over 2 C",
             OtherForm::HysteresisOfScale => "hysteresis: of the scale factors",
+            OtherForm::HysteresisPlay => "hysteresis: a play operator over 6-12 C",
+            OtherForm::HysteresisPreisach => "hysteresis: a Preisach model to 8-16 C",
             OtherForm::WarmupTwoTimeConstants => "warmup_drift: two time constants",
             OtherForm::WarmupRestarts => "warmup_drift: restarts after a power-off",
             OtherForm::CurvatureLocalBend => "temp_curvature: a local bend",
@@ -333,7 +341,9 @@ impl OtherForm {
             OtherForm::RateGradient => &[EffectId::TempRate],
             OtherForm::HysteresisCooledFirst
             | OtherForm::HysteresisWide
-            | OtherForm::HysteresisOfScale => &[EffectId::Hysteresis],
+            | OtherForm::HysteresisOfScale
+            | OtherForm::HysteresisPlay
+            | OtherForm::HysteresisPreisach => &[EffectId::Hysteresis],
             OtherForm::WarmupTwoTimeConstants | OtherForm::WarmupRestarts => {
                 &[EffectId::WarmupDrift]
             }
@@ -377,6 +387,18 @@ impl OtherForm {
                     value: axes3(rng, s, 1e-4),
                 });
                 e.hysteresis_width_c = Some(2.0);
+            }
+            OtherForm::HysteresisPlay => {
+                e.hysteresis = Some(PerAxis {
+                    value: axes3(rng, s, 1e-4),
+                });
+                e.hysteresis_play_c = Some(rng.range(6.0, 12.0));
+            }
+            OtherForm::HysteresisPreisach => {
+                e.hysteresis = Some(PerAxis {
+                    value: axes3(rng, s, 1e-4),
+                });
+                e.hysteresis_preisach_c = Some(rng.range(8.0, 16.0));
             }
             OtherForm::HysteresisOfScale => {
                 e.scale_hysteresis = Some(PerAxis {

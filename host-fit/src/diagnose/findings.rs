@@ -233,7 +233,12 @@ fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<Par
             initial,
             ..
         } => vec![
-            p(Quantity::Threshold, threshold_c, f64::NAN),
+            if threshold_c < 0.0 {
+                // a play operator of half-width -threshold_c: linear over twice that
+                p(Quantity::PlayWidth, -2.0 * threshold_c, f64::NAN)
+            } else {
+                p(Quantity::Threshold, threshold_c, f64::NAN)
+            },
             p(Quantity::InitialDirection, initial, f64::NAN),
         ],
         Extra::Bend { knot_c } => vec![p(

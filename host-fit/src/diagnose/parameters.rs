@@ -45,6 +45,9 @@ pub enum Quantity {
     RateTau,
     /// `hysteresis`: the change that sets the direction, C.
     Threshold,
+    /// `hysteresis` as a play operator: the travel over which the state moves from one
+    /// direction's value to the other's after a reversal, C.
+    PlayWidth,
     /// `hysteresis`: the direction before the first change.
     InitialDirection,
     /// `temp_curvature`: where the bend sits, C.
@@ -63,7 +66,7 @@ impl Quantity {
             Quantity::Delta { .. } => Unit::Relative,
             Quantity::Angle { .. } => Unit::Radian,
             Quantity::Tau { .. } | Quantity::RateTau => Unit::Second,
-            Quantity::Threshold | Quantity::Knot => Unit::Celsius,
+            Quantity::Threshold | Quantity::PlayWidth | Quantity::Knot => Unit::Celsius,
             Quantity::InitialDirection => Unit::Direction,
             Quantity::Breakpoints => Unit::Count,
             Quantity::FromStop => Unit::Ordinal,
@@ -87,6 +90,7 @@ impl fmt::Display for Quantity {
             Quantity::Tau { axis: Some(i), .. } => write!(f, "tau_{}_s", ax(i)),
             Quantity::RateTau => f.write_str("rate_tau_s"),
             Quantity::Threshold => f.write_str("threshold_c"),
+            Quantity::PlayWidth => f.write_str("play_width_c"),
             Quantity::InitialDirection => f.write_str("initial_direction"),
             Quantity::Knot => f.write_str("knot_c"),
             Quantity::Breakpoints => f.write_str("breakpoints"),
@@ -112,6 +116,7 @@ impl FromStr for Quantity {
             },
             Quantity::RateTau,
             Quantity::Threshold,
+            Quantity::PlayWidth,
             Quantity::InitialDirection,
             Quantity::Knot,
             Quantity::Breakpoints,
@@ -295,6 +300,7 @@ mod tests {
             },
             Quantity::RateTau,
             Quantity::Threshold,
+            Quantity::PlayWidth,
             Quantity::InitialDirection,
             Quantity::Knot,
             Quantity::Breakpoints,

@@ -42,7 +42,10 @@ pub enum Extra {
     /// `hysteresis`: a coefficient depends on the direction of the last temperature
     /// change: offsets (and, with `scale`, scale factors) shift by +-1/2 of a term.
     Hysteresis {
-        /// A change larger than this sets the direction, C.
+        /// A change larger than this sets the direction, C (a relay); negative `-d`: a
+        /// play operator of half-width `d`, the state linear over `2 d` C of travel after
+        /// a reversal (a gradual hysteresis; the firmware's encoding,
+        /// `firmware_core::inflight::Direction`).
         threshold_c: f64,
         /// The direction before the first such change.
         initial: f64,
@@ -240,11 +243,19 @@ impl Extra {
                 initial,
                 scale,
             } => format!(
-                "{} switch after {threshold_c} C; {} before the first change",
+                "{} {}; {} before the first change",
                 if *scale {
                     "offsets and scale factors"
                 } else {
                     "offsets"
+                },
+                if *threshold_c < 0.0 {
+                    format!(
+                        "switch linearly over {} C (a play operator)",
+                        -2.0 * threshold_c
+                    )
+                } else {
+                    format!("switch after {threshold_c} C")
                 },
                 if *initial > 0.0 { "heated" } else { "cooled" }
             ),

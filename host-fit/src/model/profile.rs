@@ -160,11 +160,16 @@ pub fn rate(data: &Data, spec: &Spec, base: &Fit) -> Option<Fit> {
     )
 }
 
-/// hysteresis: the switching threshold, the state before the first change, and whether
-/// the scale factors switch too.
+/// hysteresis: the switching threshold (a relay) or the width over which it switches
+/// linearly (a play operator: a negative threshold, half the width), the state before the
+/// first change, and whether the scale factors switch too. The play operator is the
+/// gradual form: a relay leaves a play of 10 C a triangle of half its size after each
+/// reversal, which a rate term took on one blind unit (host-fit blind --class
+/// other-forms --only "play operator").
 pub fn hysteresis(data: &Data, spec: &Spec, base: &Fit) -> Vec<Fit> {
+    const THRESHOLDS: [f64; 9] = [0.1, 0.25, 0.5, 1.0, 2.0, 4.0, -3.0, -4.0, -8.0];
     let form = |scale: bool| {
-        best([0.1, 0.25, 0.5, 1.0, 2.0, 4.0].iter().flat_map(|&th| {
+        best(THRESHOLDS.iter().flat_map(|&th| {
             [-1.0, 1.0].map(|initial| {
                 try_fit(
                     data,

@@ -363,7 +363,7 @@ pub fn directions(rec: &Recording, threshold_c: f64, initial: f64) -> Vec<f64> {
     drive(rec, |tick, _, _, t| match tick {
         Tick::Step(_) => m.step(threshold_c, t),
         _ => {
-            m.start(power_on_direction(&p, t, rec.t0_c), t);
+            m.start(power_on_direction(&p, t, rec.t0_c), t, threshold_c);
             m.value()
         }
     })

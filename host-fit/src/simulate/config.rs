@@ -350,6 +350,17 @@ pub struct Effects {
     /// `hysteresis` that switches smoothly: the state relaxes toward the new direction
     /// over this many C of travel after a reversal.
     pub hysteresis_width_c: Option<f64>,
+    /// `hysteresis` as a play operator (backlash): the state moves linearly from one
+    /// direction's value to the other's over this many C of travel after a reversal, and
+    /// holds wherever the temperature turns within that band (a gradual hysteresis that
+    /// also remembers partial reversals).
+    pub hysteresis_play_c: Option<f64>,
+    /// `hysteresis` as a Preisach ensemble of relays, their widths spread evenly up to
+    /// this many C (and their centres evenly over every temperature): the state changes
+    /// with the square of the travel after a reversal at first and saturates after this
+    /// many C (the mean of play operators of every width up to it, the Prandtl-Ishlinskii
+    /// form of a Preisach model).
+    pub hysteresis_preisach_c: Option<f64>,
     /// `hysteresis` of the scale factors: K_ii (1 +- s/2), relative.
     pub scale_hysteresis: Option<PerAxis>,
     /// A second warm-up with its own time constant.

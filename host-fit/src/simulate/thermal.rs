@@ -18,6 +18,9 @@ pub(super) fn follow(y: f64, x0: f64, x1: f64, h: f64, tau: f64) -> f64 {
     x1 + (y - x0) * d - (x1 - x0) * b
 }
 
+/// Play operators of a Preisach ensemble (their half-widths spread evenly).
+const PREISACH_PLAYS: usize = 24;
+
 /// Chamber air, case and sensing elements (first-order lags, a second pole where
 /// configured), the inner temperature of a gradient, and the hysteresis state: the
 /// direction of the last temperature change of more than 0.5 C, reached at once or, with
@@ -38,6 +41,9 @@ pub(super) struct Thermal {
     dir: f64,
     dir_ref: f64,
     width: Option<f64>,
+    /// Play operators: (half-width C, the operator's output), the state the mean of
+    /// `(case - output) / half-width` over them (one for a play, several for a Preisach).
+    plays: Vec<(f64, f64)>,
     pub(super) state: f64,
     turn: (f64, f64),
 }
@@ -47,6 +53,18 @@ impl Thermal {
         let start = cfg.chamber.start_c;
         let e = &cfg.effects;
         let initial = e.hysteresis_initial.unwrap_or(1.0);
+        // play operators of half-width d start with output start - initial d, so the
+        // state starts at `initial`
+        let plays: Vec<(f64, f64)> = match (e.hysteresis_play_c, e.hysteresis_preisach_c) {
+            (Some(w), _) if w > 0.0 => vec![(w / 2.0, start - initial * w / 2.0)],
+            (_, Some(w)) if w > 0.0 => (0..PREISACH_PLAYS)
+                .map(|k| {
+                    let d = w / 2.0 * (k as f64 + 0.5) / PREISACH_PLAYS as f64;
+                    (d, start - initial * d)
+                })
+                .collect(),
+            _ => Vec::new(),
+        };
         Thermal {
             tau_air: cfg.chamber.tau_air_s,
             tau_case: cfg.chamber.tau_case_s,
@@ -61,6 +79,7 @@ impl Thermal {
             dir: initial,
             dir_ref: start,
             width: e.hysteresis_width_c,
+            plays,
             state: initial,
             turn: (start, initial),
         }
@@ -97,6 +116,16 @@ impl Thermal {
         }
         if self.dir != before {
             self.turn = (self.case, self.state);
+        }
+        if !self.plays.is_empty() {
+            let x = self.case;
+            let mut sum = 0.0;
+            for (d, y) in self.plays.iter_mut() {
+                *y = y.clamp(x - *d, x + *d);
+                sum += (x - *y) / *d;
+            }
+            self.state = sum / self.plays.len() as f64;
+            return;
         }
         self.state = match self.width {
             Some(w) => {

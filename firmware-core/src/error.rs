@@ -32,8 +32,8 @@ pub enum Error {
     /// A value that must be finite is NaN or infinite.
     NonFinite,
     /// The valid temperature range is empty, the update step is negative, or a physics
-    /// term is out of its range (a negative time constant or threshold, an initial
-    /// direction other than -1, 0, +1).
+    /// term is out of its range (a negative lag or warm-up time constant, a play operator
+    /// narrower than 0.01 C, an initial direction other than -1, 0, +1).
     BadRange,
     /// The matrix K is singular (not invertible) at the reference temperature.
     Singular,

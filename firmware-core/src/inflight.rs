@@ -341,8 +341,12 @@ impl<R: Real> Direction<R> {
     /// `threshold` from the reference sets the direction; moving on in the same
     /// direction moves the reference with it (so a reversal is measured from the turn).
     /// A negative threshold `-d` is a play operator: its output is held within `d` of
-    /// `t`, and the state is `(t - output) / d`, within [-1, 1] (two roundings: within
-    /// 2 ulp of 1 at the ends, where the relay's is exact).
+    /// `t`, and the state is `(t - output) / d`, within [-1, 1] but for rounding: the
+    /// clamp's `t - d` or `t + d` and the difference each round once, so in f32 the state
+    /// is within about `2 ulp(|t| + d) / d` of the exact one (1.3e-5 at 60 C over 3 C;
+    /// it may leave [-1, 1] by that much, where the relay's is exact). A NaN temperature
+    /// leaves the output where it was and makes this step's state NaN (the compensator
+    /// refuses such a temperature before it gets here).
     #[inline]
     pub fn step(&mut self, threshold: R, t: R) -> R {
         if threshold < R::ZERO {
@@ -371,6 +375,25 @@ impl<R: Real> Direction<R> {
     /// The current direction.
     pub fn value(&self) -> R {
         self.dir
+    }
+
+    /// The state at power-on at temperature `x`, the reference temperature being `t0`: a
+    /// relay in [`power_on_direction`]'s direction; a play operator as if it had stood at
+    /// `t0` in the blob's initial state and moved straight to `x`, so its state is
+    /// continuous in `x` (the initial state at `t0`, +-1 only from `2 d` away), where a
+    /// relay's rule (the way from `t0` beyond the threshold) would jump by a whole state
+    /// at `d` from `t0`. Not inlined: it runs once per start, and inlined into the
+    /// machines' step it cost 26 bytes of flash and 7 instructions per step (measured by
+    /// `cargo xtask embedded`).
+    #[inline(never)]
+    pub fn power_on(&mut self, p: &Physics<R>, x: R, t0: R) {
+        let th = p.hysteresis_threshold_c;
+        if th < R::ZERO {
+            self.start(p.hysteresis_initial, t0, th);
+            let _ = self.step(th, x);
+        } else {
+            self.start(power_on_direction(p, x, t0), x, th);
+        }
     }
 }
 
@@ -444,10 +467,10 @@ impl<R: Real> Elapsed<R> {
 
 /// The hysteresis direction at power-on at temperature `x`: the direction that brought
 /// the unit there from its reference `t0` when it is more than the threshold away from
-/// it (a cold start was cooled to), else the blob's initial direction.
+/// it (a cold start was cooled to), else the blob's initial direction. For a relay; a
+/// play operator's state at power-on is [`Direction::power_on`]'s.
 pub fn power_on_direction<R: Real>(p: &Physics<R>, x: R, t0: R) -> R {
-    // a play operator's half-width, like a relay's threshold: the travel that saturates it
-    let th = p.hysteresis_threshold_c.abs();
+    let th = p.hysteresis_threshold_c;
     if x - t0 > th {
         R::ONE
     } else if t0 - x > th {
@@ -519,8 +542,7 @@ impl<R: Real> Machines<R> {
                 self.x = x;
                 self.lag.start();
                 self.rate.start();
-                self.dir
-                    .start(power_on_direction(p, x, t0), x, p.hysteresis_threshold_c);
+                self.dir.power_on(p, x, t0);
                 self.power = -R::ONE;
                 #[cfg(feature = "terms")]
                 self.since_on.set(since_on);
@@ -746,14 +768,24 @@ mod tests {
         d.start(-1.0, 20.0, -2.0);
         let got: Vec<f64> = seq.iter().map(|t| d.step(-2.0, *t)).collect();
         assert_eq!(got, want);
-        let mut f = Direction::<f32>::default();
-        f.start(-1.0, 20.0, -2.0);
-        for (t, w) in seq.iter().zip(want) {
-            let g = f.step(-2.0, *t as f32);
-            assert!(
-                (g as f64 - w).abs() <= 2.0 * f32::EPSILON as f64,
-                "{t}: {g} for {w}"
-            );
+        // f32 against f64 on temperatures no binary fraction holds: within the stated
+        // 2 ulp(|t| + d) / d
+        let seq = [
+            25.1, 23.7, 27.9, 84.7, 61.93, 58.3, 60.1, -37.3, -33.9, -35.2,
+        ];
+        for d in [3.0, 0.7] {
+            let mut f = Direction::<f32>::default();
+            let mut e = Direction::<f64>::default();
+            f.start(1.0, 25.1, -d as f32);
+            e.start(1.0, 25.1f32 as f64, -d);
+            for t in seq {
+                let (g, w) = (f.step(-d as f32, t as f32), e.step(-d, t as f32 as f64));
+                let ulp = f64::from(f32::EPSILON) * (t.abs() + d);
+                assert!(
+                    (g as f64 - w).abs() <= 2.0 * ulp / d,
+                    "{t} over {d}: {g} for {w}"
+                );
+            }
         }
         // a NaN temperature holds the output: the state is NaN for that step only
         assert!(d.step(-2.0, f64::NAN).is_nan());
@@ -954,14 +986,46 @@ mod tests {
             ..p
         };
         assert_eq!(power_on_direction(&q, 20.3, 20.0), -1.0);
-        // a play operator (negative threshold): its half-width is the band
-        let play = Physics {
+    }
+
+    /// A play operator (half-width 4 C, cooled before the first change) powered on as if
+    /// it had moved straight from T0: its state is continuous in the temperature (the
+    /// initial state at T0, +1 only from 8 C above), where the relay's rule would jump
+    /// from -1 to +1 at 4 C; a relay powers on as [`power_on_direction`] says.
+    #[test]
+    fn a_play_operator_powers_on_as_if_moved_from_t0() {
+        let play = Physics::<f64> {
             hysteresis_threshold_c: -4.0,
-            ..q
+            hysteresis_initial: -1.0,
+            ..Physics::neutral()
         };
-        assert_eq!(power_on_direction(&play, 17.0, 20.0), -1.0);
-        assert_eq!(power_on_direction(&play, 23.0, 20.0), -1.0);
-        assert_eq!(power_on_direction(&play, 24.5, 20.0), 1.0);
+        let on = |p: &Physics<f64>, x: f64| {
+            let mut d = Direction::default();
+            d.power_on(p, x, 20.0);
+            d.value()
+        };
+        let want = [
+            (20.0, -1.0),
+            (17.0, -1.0),
+            (10.0, -1.0),
+            (23.96, -0.01),
+            (24.04, 0.01),
+            (26.0, 0.5),
+            (28.0, 1.0),
+            (35.0, 1.0),
+        ];
+        for (x, w) in want {
+            let got = on(&play, x);
+            assert!((got - w).abs() < 1e-12, "{x}: {got} for {w}");
+        }
+        let relay = Physics {
+            hysteresis_threshold_c: 4.0,
+            ..play
+        };
+        for x in [17.0, 20.0, 23.96, 24.04, 35.0] {
+            assert_eq!(on(&relay, x), power_on_direction(&relay, x, 20.0), "{x}");
+        }
+        assert_eq!(on(&relay, 24.04), 1.0);
     }
 
     /// The machines in f32 at 10 Hz, 100 Hz and 1 kHz against f64 at 10 Hz, on a fast

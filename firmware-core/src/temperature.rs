@@ -145,8 +145,9 @@ physics_terms! {
     hysteresis: axes [R; 3] = 0.0;
     /// A change of more than this (C) sets the direction (a relay); negative `-d`: a
     /// play operator of half-width `d`, the state linear over `2 d` C of travel after a
-    /// reversal ([`crate::inflight::Direction`]). A firmware that predates the play
-    /// operator refuses a negative threshold (out of its range), never misreads it.
+    /// reversal ([`crate::inflight::Direction`]; `d` at least [`MIN_PLAY_HALF_WIDTH_C`]). A
+    /// firmware that predates the play operator refuses a negative threshold (out of its
+    /// range), never misreads it.
     hysteresis_threshold_c: one R = 0.0;
     /// Direction at power-on (+1 heated, -1 cooled, 0 unknown), until the first change.
     hysteresis_initial: one R = 0.0;
@@ -159,6 +160,11 @@ physics_terms! {
     /// The warm-up's time constant tau_w, s (0 = no warm-up term).
     warmup_tau_s: one R = 0.0;
 }
+
+/// The narrowest play operator a blob may carry, half-width in C: narrower, the clamp
+/// against a sensor's temperature in f32 (its ulp 4e-6 C at 60 C) leaves the state mostly
+/// rounding, and no diagnosis profiles one (its narrowest is 3 C).
+pub const MIN_PLAY_HALF_WIDTH_C: f32 = 0.01;
 
 impl<R: Real> Physics<R> {
     /// The inverse of [`Physics::to_words`].
@@ -183,14 +189,16 @@ impl<R: Real> Physics<R> {
     }
 
     /// The range checks of [`Physics::validate`] (values known to be finite): time
-    /// constants (but the rate's and the hysteresis threshold's, whose signs choose the
-    /// estimator and the relay or play operator) not negative, the initial direction -1,
-    /// 0 or +1.
+    /// constants (but the rate's, whose sign chooses the estimator) not negative, a
+    /// negative hysteresis threshold (a play operator) at least [`MIN_PLAY_HALF_WIDTH_C`]
+    /// wide, the initial direction -1, 0 or +1.
     pub fn validate_ranges(&self) -> Result<(), Error> {
         let z = R::ZERO;
         let initial = self.hysteresis_initial;
         if self.lag_tau_s < z
             || self.warmup_tau_s < z
+            || (self.hysteresis_threshold_c < z
+                && -self.hysteresis_threshold_c < R::from_f32(MIN_PLAY_HALF_WIDTH_C))
             || !(initial == z || initial == R::ONE || initial == -R::ONE)
         {
             return Err(Error::BadRange);
@@ -735,8 +743,13 @@ mod tests {
         assert_eq!(bad(&|p| p.rate_tau_s = -1.0), Ok(()));
         assert_eq!(bad(&|p| p.rate_tau_s = f64::NAN), Err(Error::NonFinite));
         assert_eq!(bad(&|p| p.warmup_tau_s = -1.0), Err(Error::BadRange));
-        // a negative threshold is a play operator, a NaN is refused
+        // a negative threshold is a play operator (at least 0.01 C wide), a NaN is refused
         assert_eq!(bad(&|p| p.hysteresis_threshold_c = -0.1), Ok(()));
+        assert_eq!(bad(&|p| p.hysteresis_threshold_c = -0.01), Ok(()));
+        assert_eq!(
+            bad(&|p| p.hysteresis_threshold_c = -0.009),
+            Err(Error::BadRange)
+        );
         assert_eq!(
             bad(&|p| p.hysteresis_threshold_c = f64::NAN),
             Err(Error::NonFinite)

@@ -200,7 +200,8 @@ pub struct PhysicsTerms {
     pub rate_tau_s: f32,
     /// `hysteresis`: the offset split, per axis.
     pub hysteresis: [f32; 3],
-    /// The change that sets the direction, C.
+    /// The change that sets the direction, C (a relay); negative: a play operator of
+    /// half-width `-hysteresis_threshold_c`, linear over twice that after a reversal.
     pub hysteresis_threshold_c: f32,
     /// The direction at power-on (+1 heated, -1 cooled, 0 unknown).
     pub hysteresis_initial: f32,
@@ -248,9 +249,17 @@ impl PhysicsTerms {
                 crate::model::effects::rate_estimator(f64::from(self.rate_tau_s))
             ),
             format!(
-                "  hysteresis       h {}, threshold {} C, direction at power-on {}",
+                "  hysteresis       h {}, {}, direction at power-on {}",
                 v(self.hysteresis),
-                self.hysteresis_threshold_c,
+                if self.hysteresis_threshold_c < 0.0 {
+                    format!(
+                        "a play operator over {} C (threshold {} C)",
+                        -2.0 * self.hysteresis_threshold_c,
+                        self.hysteresis_threshold_c
+                    )
+                } else {
+                    format!("threshold {} C", self.hysteresis_threshold_c)
+                },
                 self.hysteresis_initial
             ),
             format!("  nonlinearity_k2  k2 {}", v(self.k2)),

@@ -473,7 +473,7 @@ fn a_gradual_hysteresis_is_named_and_flashed_as_a_play_operator() {
             .get(Quantity::PlayWidth)
             .unwrap_or_else(|| panic!("{clock}: a play width\n{}", c.text()))
             .value;
-        // the width is profiled on a grid of octaves (2, 4, 8, 16 C): within one
+        // the width is profiled on a grid (6, 8, 16 C): within a factor 2
         assert!(
             (0.5..=2.0).contains(&(w / width)),
             "{clock}: {w} C for {width:.1} C"

@@ -95,7 +95,7 @@ impl Budget {
     /// offsets, 2 KiB over the build without; 6.5 KiB until the zero-lag rate estimator,
     /// its second low-pass, its settling after a power-on and the physics section read
     /// through an offset brought it from 6606 to 6768 bytes; 6.625 KiB until the
-    /// hysteresis's play operator, a gradual hysteresis, brought it to 6908); per sample no more than the
+    /// hysteresis's play operator, a gradual hysteresis, and its power-on brought it to 7002); per sample no more than the
     /// format-3 path (230); the machines' step at most 600 (three exponentials of about 40
     /// instructions, six divisions, the filters, the direction and the offsets: 464
     /// measured at format 4's introduction, 586 with the zero-lag rate and its settling);
@@ -264,7 +264,7 @@ impl Budget {
 /// the physics build's and the discovered terms' 1.6 KiB (the table's validation where it
 /// lies, the factor tables, the state parts with their decays, the per-sample pass;
 /// 8382 measured at format 5's introduction; 8.5 KiB until the hysteresis's play
-/// operator brought it to 8714).
+/// operator brought it to 8816).
 pub const TERMS_FLASH: u64 = 35 * 256;
 /// Method 1 per sample with the physics terms and a full table of 8 discovered terms:
 /// the physics path's 199 and about 38 per term (its word read where it lies, 2 + 1

@@ -8,9 +8,7 @@
 //! firmware's is ([`rates`]); plus the recording's restart events.
 use crate::data::recording::Recording;
 use crate::model::rules::Rules;
-use firmware_core::inflight::{
-    power_on_direction, rate_settled, Clock, Direction, Lag, Rate, Step, Tick, Warmup,
-};
+use firmware_core::inflight::{rate_settled, Clock, Direction, Lag, Rate, Step, Tick, Warmup};
 use firmware_core::temperature::Physics;
 
 /// Where a warm-up clock may restart: after gaps in the recording, and after handling.
@@ -350,9 +348,11 @@ pub fn rates_of(rec: &Recording, tau_s: f64, zero_lag: bool, settle: Settle) -> 
     })
 }
 
-/// Per row, the hysteresis direction (threshold in C; at the first row the state the
-/// firmware takes at power-on: `initial` within the threshold of the recording's T0, else
-/// the way from T0, `firmware_core::inflight::power_on_direction`).
+/// Per row, the hysteresis direction (threshold in C; negative: a play operator of
+/// half-width `-threshold_c`, its state in [-1, 1]; at the first row the state the
+/// firmware takes at power-on, `firmware_core::inflight::Direction::power_on`: a relay
+/// `initial` within the threshold of the recording's T0, else the way from T0; a play as
+/// if moved from T0 in state `initial`).
 pub fn directions(rec: &Recording, threshold_c: f64, initial: f64) -> Vec<f64> {
     let mut m = Direction::default();
     let p = Physics {
@@ -363,7 +363,7 @@ pub fn directions(rec: &Recording, threshold_c: f64, initial: f64) -> Vec<f64> {
     drive(rec, |tick, _, _, t| match tick {
         Tick::Step(_) => m.step(threshold_c, t),
         _ => {
-            m.start(power_on_direction(&p, t, rec.t0_c), t, threshold_c);
+            m.power_on(&p, t, rec.t0_c);
             m.value()
         }
     })

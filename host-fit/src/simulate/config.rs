@@ -355,11 +355,14 @@ pub struct Effects {
     /// holds wherever the temperature turns within that band (a gradual hysteresis that
     /// also remembers partial reversals).
     pub hysteresis_play_c: Option<f64>,
-    /// `hysteresis` as a Preisach ensemble of relays, their widths spread evenly up to
-    /// this many C (and their centres evenly over every temperature): the state changes
-    /// with the square of the travel after a reversal at first and saturates after this
-    /// many C (the mean of play operators of every width up to it, the Prandtl-Ishlinskii
-    /// form of a Preisach model).
+    /// `hysteresis` as a Preisach ensemble of relays (their centres spread evenly over
+    /// every temperature) up to this many C wide: the mean of 24 play operators of widths
+    /// spread evenly up to it, each normalised to [-1, 1] (the Prandtl-Ishlinskii form of
+    /// a Preisach model whose relay density falls as one over the width): after a
+    /// reversal the state moves fast at first, as the narrow plays turn, then ever more
+    /// slowly until the widest has turned after this many C. Of the three forms of a
+    /// gradual hysteresis, `hysteresis_play_c` wins over this, and this over
+    /// `hysteresis_width_c`; a value that is not positive is none.
     pub hysteresis_preisach_c: Option<f64>,
     /// `hysteresis` of the scale factors: K_ii (1 +- s/2), relative.
     pub scale_hysteresis: Option<PerAxis>,

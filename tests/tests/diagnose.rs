@@ -25,6 +25,15 @@ fn recording(cfg: &SimConfig) -> Recording {
     .unwrap()
 }
 
+/// `cfg` on a logger's uneven clock: 0.1 Hz at rest, rows up to 0.5 s late, 1 % lost.
+fn logged_unevenly(cfg: &SimConfig) -> SimConfig {
+    let mut c = cfg.clone();
+    c.logger.rest_rate_hz = 0.1;
+    c.logger.jitter_s = 0.5;
+    c.logger.drop_rate = 0.01;
+    c
+}
+
 /// The short suite, judged per class: the catalogue's own forms exactly (parameters within
 /// 3 sigma, residual at the floor), other forms named right, effects outside the
 /// catalogue never given a catalogue name, nuisances never called physics.
@@ -262,10 +271,7 @@ fn a_term_is_judged_at_the_baseline_order_chosen_with_it() {
     let axis = (0..3).find(|&i| truth.d_v[i] != 0.0).unwrap();
     let o = run(&case);
     assert!(o.passed(), "{}", o.note);
-    let mut uneven = even.clone();
-    uneven.logger.rest_rate_hz = 0.1;
-    uneven.logger.jitter_s = 0.5;
-    uneven.logger.drop_rate = 0.01;
+    let uneven = logged_unevenly(&even);
     for (clock, cfg) in [("even", &even), ("uneven", &uneven)] {
         let c = diagnose(&recording(cfg)).unwrap().contract();
         let [f] = c.findings.as_slice() else {
@@ -451,10 +457,7 @@ fn a_gradual_hysteresis_is_named_and_flashed_as_a_play_operator() {
     let case = Case::of_form(Form::Other(OtherForm::HysteresisPlay), 3);
     let even = host_fit::blind::configure(&case);
     let width = even.effects.hysteresis_play_c.unwrap();
-    let mut uneven = even.clone();
-    uneven.logger.rest_rate_hz = 0.1;
-    uneven.logger.jitter_s = 0.5;
-    uneven.logger.drop_rate = 0.01;
+    let uneven = logged_unevenly(&even);
     for (clock, cfg) in [("even", &even), ("uneven", &uneven)] {
         let rec = recording(cfg);
         let d = diagnose(&rec).unwrap();

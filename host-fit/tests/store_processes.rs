@@ -1,6 +1,6 @@
 //! The record store under real processes (the release of `host-fit` this crate builds),
 //! on SQLite and on a real PostgreSQL server (`tests/src/pg.rs`: `HOSTFIT_TEST_PG`, or
-//! a throwaway cluster of this binary's own): eight stations running `batch` on 50 units
+//! a throwaway cluster of this binary's own): eight stations running `batch` on 150 units
 //! each at once lose and duplicate nothing; a station killed mid-lot and run again with
 //! the same command resumes (the units recorded are kept, not recomputed, never
 //! `error`; the rest are done; the summary is whole); a new store is readable by the
@@ -23,6 +23,12 @@ const UNITS: usize = 50;
 const STATIONS: usize = 8;
 /// The killed station's lot: this many copies of the 50 units.
 const KILLED_COPIES: usize = 8;
+/// Each of the eight stations' lots: this many copies of the 50 units, more than two
+/// chunks of `batch::RECORD_CHUNK`, so that every station writes in at least three
+/// transactions however fast it fits (a lot written in one transaction, as 50 units in
+/// under a second, cannot interleave with another's, and the test would not show the
+/// stations writing at once).
+const STATION_COPIES: usize = 3;
 
 /// The recordings of 50 twin units (seeds 1..=50), fast ones (one row per dwell, as a
 /// voltmeter that averages each position), made once per test binary.
@@ -114,9 +120,11 @@ fn summary(out: &Path) -> Vec<(String, String)> {
 
 fn eight_stations_at_once(root: &Path, db: &str) {
     let mut procs = Vec::new();
+    const { assert!(STATION_COPIES * UNITS > 2 * host_fit::batch::RECORD_CHUNK) };
+    let per_station = STATION_COPIES * UNITS;
     for k in 0..STATIONS {
         let dir = root.join(format!("lot-{k}"));
-        lot(&dir, &format!("S{k}"));
+        lot_of(&dir, &format!("S{k}"), STATION_COPIES);
         let out = root.join(format!("out-{k}"));
         procs.push((
             k,
@@ -131,28 +139,28 @@ fn eight_stations_at_once(root: &Path, db: &str) {
             "station {k}: {}",
             String::from_utf8_lossy(&o.stderr)
         );
-        assert_eq!(summary(&out).len(), UNITS);
+        assert_eq!(summary(&out).len(), per_station);
     }
     let all = store(db).all().unwrap();
     assert_eq!(
         all.len(),
-        STATIONS * UNITS,
+        STATIONS * per_station,
         "every unit of every station recorded"
     );
     let mut runs: Vec<String> = all.iter().map(|r| r.run_id.to_string()).collect();
     runs.sort();
     runs.dedup();
-    assert_eq!(runs.len(), STATIONS * UNITS, "run ids are unique");
+    assert_eq!(runs.len(), STATIONS * per_station, "run ids are unique");
     let mut serials: Vec<&str> = all.iter().map(|r| r.serial.as_str()).collect();
     serials.sort();
     serials.dedup();
-    assert_eq!(serials.len(), STATIONS * UNITS, "no unit twice");
+    assert_eq!(serials.len(), STATIONS * per_station, "no unit twice");
     for k in 0..STATIONS {
         let mine: Vec<&Record> = all
             .iter()
             .filter(|r| r.lot.as_deref() == Some(&format!("lot-{k}")))
             .collect();
-        assert_eq!(mine.len(), UNITS);
+        assert_eq!(mine.len(), per_station);
         assert!(mine.iter().all(|r| r.serial.starts_with(&format!("S{k}-"))
             && r.trace.station.as_deref() == Some(&format!("ST-{k}"))));
     }

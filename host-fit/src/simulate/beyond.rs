@@ -15,7 +15,6 @@
 //! chamber reaches each new stop (the voltmeter's self-calibration, run by the test
 //! sequence at each stop, and its input stage settling back), and the tilter's position
 //! repeatability (each time it comes to rest, a fresh small rotation).
-use crate::error::{ErrorKind, HostError, Result};
 use crate::rng::Rng;
 use crate::simulate::beyond_config::Relaxation;
 use crate::simulate::config::Effects;
@@ -151,35 +150,6 @@ impl State {
             u += tg.value[i];
         }
         u
-    }
-}
-
-/// A configuration of this physics that cannot run, said plainly.
-// The negated comparisons are the point: NaN fails them.
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
-pub fn check(e: &Effects) -> Result<()> {
-    let taus = [
-        ("move_settle", e.move_settle.map(|r| r.tau_s)),
-        ("stop_settle", e.stop_settle.map(|r| r.tau_s)),
-        ("warmup_temp", e.warmup_temp.map(|w| w.tau_s)),
-        ("telegraph", e.telegraph.map(|g| g.mean_s)),
-    ];
-    for (name, v) in taus {
-        if let Some(v) = v {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(HostError::new(
-                    ErrorKind::Invalid,
-                    format!("effects.{name}: its time constant must be > 0 s"),
-                ));
-            }
-        }
-    }
-    match e.tilter_repeatability {
-        Some(r) if !(r.sigma_rad >= 0.0 && r.sigma_rad.is_finite()) => Err(HostError::new(
-            ErrorKind::Invalid,
-            "effects.tilter_repeatability.sigma_rad must be >= 0",
-        )),
-        _ => Ok(()),
     }
 }
 

@@ -362,7 +362,7 @@ pub struct Effects {
     /// reversal the state moves fast at first, as the narrow plays turn, then ever more
     /// slowly until the widest has turned after this many C. Of the three forms of a
     /// gradual hysteresis, `hysteresis_play_c` wins over this, and this over
-    /// `hysteresis_width_c`; a value that is not positive is none.
+    /// `hysteresis_width_c`; each must be > 0 C (refused otherwise, as every width).
     pub hysteresis_preisach_c: Option<f64>,
     /// `hysteresis` of the scale factors: K_ii (1 +- s/2), relative.
     pub scale_hysteresis: Option<PerAxis>,
@@ -667,17 +667,4 @@ impl Default for Flight {
             initial_direction: -1.0,
         }
     }
-}
-
-/// Parse a TOML configuration; the message names the file and the line.
-pub fn parse_config(path: &std::path::Path, text: &str) -> Result<SimConfig> {
-    toml::from_str(text).map_err(|e| {
-        let line = e
-            .span()
-            .map(|s| text.get(..s.start).unwrap_or(text).matches('\n').count() + 1);
-        match line {
-            Some(l) => HostError::at(ErrorKind::Malformed, path, l, e.message().to_string()),
-            None => HostError::in_file(ErrorKind::Malformed, path, e.message().to_string()),
-        }
-    })
 }

@@ -86,7 +86,7 @@ fn check(f: &Flight) -> Result<()> {
 pub fn simulate(cfg: &SimConfig, f: &Flight, mut progress: impl FnMut(f64)) -> Result<Simulation> {
     check(f)?;
     let unit = TrueUnit::new(cfg)?;
-    crate::simulate::beyond::check(&cfg.effects)?;
+    crate::simulate::checks::check(cfg)?;
     // the unit soaked at the cold start, in the hysteresis state that got it there; the
     // air and case follow the flight's own time constants
     let mut here = cfg.clone();

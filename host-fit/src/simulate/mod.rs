@@ -4,6 +4,7 @@
 //! model `U = K a + U0` of firmware-core).
 pub mod beyond;
 pub mod beyond_config;
+pub mod checks;
 pub mod config;
 pub mod flight;
 pub mod program;
@@ -14,10 +15,11 @@ pub mod unit;
 mod writer;
 
 pub use beyond_config::{Quadratic, Relaxation, Repeatability, Telegraph, TempWarmup, TurnOn};
+pub use checks::parse_config;
 pub use config::{
-    parse_config, Bend, BiasStep, Chamber, Curvature, Effects, Fixture, FixtureChange, Flight,
-    Gradient, Interp, Leg, Logger, Output, PerAxis, Periodic, Schedule, Sensor, Settle, SimConfig,
-    Stop, Sweep, Unit, UnitModel, Warmup,
+    Bend, BiasStep, Chamber, Curvature, Effects, Fixture, FixtureChange, Flight, Gradient, Interp,
+    Leg, Logger, Output, PerAxis, Periodic, Schedule, Sensor, Settle, SimConfig, Stop, Sweep, Unit,
+    UnitModel, Warmup,
 };
 pub use unit::{TrueUnit, PAPER_UNIT, PAPER_UNIT_TEMPS};
 pub use writer::Simulation;
@@ -341,7 +343,7 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
         return flight::simulate(cfg, f, progress);
     }
     let unit = TrueUnit::new(cfg)?;
-    beyond::check(&cfg.effects)?;
+    checks::check(cfg)?;
     let positions = positions(cfg)?;
     let sch = &cfg.schedule;
     if sch.rate_hz.is_nan()

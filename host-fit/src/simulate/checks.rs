@@ -64,13 +64,7 @@ pub fn check_file(cfg: &SimConfig, path: &Path, text: &str) -> Result<()> {
     match refusal(cfg) {
         None => Ok(()),
         Some(r) => Err(match line_of(text, &r.field) {
-            Some(l) => HostError::at_field(
-                ErrorKind::Invalid,
-                path,
-                l,
-                &r.field,
-                r.why,
-            ),
+            Some(l) => HostError::at_field(ErrorKind::Invalid, path, l, &r.field, r.why),
             None => r.error().within(path),
         }),
     }

@@ -14,6 +14,7 @@
 //! the flight's dwells within the blob's calibrated range, those near T0 included (the
 //! designs span -20..40 C; the flight's first minutes at -30 C and its hold at +45 C
 //! are an extrapolation of every blob alike, printed apart and not judged).
+use firmware_core::terms::Axis;
 use host_fit::blind::beyond::Expressed;
 use host_fit::blind::cases::Case;
 use host_fit::blind::config::configure;
@@ -21,6 +22,7 @@ use host_fit::blind::flight::flight_config;
 use host_fit::blind::forms::Form;
 use host_fit::diagnose::EffectId;
 use host_fit::simulate::{Effects, SimConfig};
+use host_fit::terms::{Factor, Term};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -65,8 +67,8 @@ struct Flown {
     diagnosed: (f64, f64),
     /// The plain `fit` blob, in range (mg); `None` when not asked for.
     fit: Option<f64>,
-    /// The discovered terms named (`term@axis`).
-    terms: Vec<String>,
+    /// The discovered terms named, each with its axes.
+    terms: Vec<(Term, Vec<Axis>)>,
     /// The effects of every finding (`discovered` for the terms).
     effects: Vec<EffectId>,
 }
@@ -84,17 +86,25 @@ fn fly(dir: &Path, prod: &SimConfig, flight: &SimConfig, plain: bool) -> Flown {
     };
     let diagnosed = dir.join("diagnosed.blob");
     let j = with_positions("diagnose", &diagnosed);
+    // each finding's term read back into the vocabulary's types: a term the contract
+    // writes that the vocabulary does not parse fails here, not in a string match
     let terms = j["findings"]
         .as_array()
         .into_iter()
         .flatten()
         .filter_map(|f| {
-            let axes = f["axes"].as_array()?.iter().filter_map(|a| a.as_str());
-            Some(format!(
-                "{}@{}",
-                f["term"].as_str()?,
-                axes.collect::<Vec<_>>().join("")
-            ))
+            let term = f["term"].as_str()?;
+            let parsed: Term = term
+                .parse()
+                .unwrap_or_else(|e| panic!("the finding's term `{term}`: {e}"));
+            let axes = f["axes"].as_array()?.iter().map(|a| {
+                let a = a.as_str().unwrap_or("");
+                *Axis::ALL
+                    .iter()
+                    .find(|x| x.name() == a)
+                    .unwrap_or_else(|| panic!("the finding's axis `{a}`"))
+            });
+            Some((parsed, axes.collect()))
         })
         .collect();
     let effects = found(&j);
@@ -131,7 +141,11 @@ fn a_rate_term_flies_with_the_flights_estimator() {
     std::fs::create_dir_all(&twin).unwrap();
     let r = fly(&unit, &configure(&c), &flight_config(&c), false);
     assert!(
-        r.terms.iter().any(|t| t.ends_with("*dTdt@z")),
+        r.terms.iter().any(|(t, axes)| {
+            t.factors().contains(&Factor::DTdt)
+                && t.factors().contains(&Factor::Az)
+                && axes == &[Axis::Z]
+        }),
         "the term found: {:?}",
         r.terms
     );
@@ -235,7 +249,14 @@ fn the_discovered_terms_fly_within_twice_the_noise_limited_reference() {
                 f.name(),
                 r.diagnosed.0,
                 r.diagnosed.1,
-                r.terms.join(" "),
+                r.terms
+                    .iter()
+                    .map(|(t, axes)| {
+                        let a: Vec<&str> = axes.iter().map(|a| a.name()).collect();
+                        format!("{t}@{}", a.join(""))
+                    })
+                    .collect::<Vec<_>>()
+                    .join(" "),
             );
             // no figure (NaN) is worse too
             let no_worse = matches!(

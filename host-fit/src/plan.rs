@@ -64,9 +64,10 @@ pub struct Limits {
 /// cold start, and from a rate only by the ramps: the split a flight, warming and cooling
 /// both ways, pays for). Sorted, each once; empty otherwise. A hysteresis alone, and a lag
 /// beside a rate alone, ask for nothing: a return was not measured to help there (the
-/// stops' soaks after their ramps already separate a lag from a rate; the first ramp's
-/// turn at the cold end shows a gradual hysteresis too: a play over 10 C is found and
-/// flies at 0.030 mg without the return, 0.033 mg with it, `tests/tests/time_true.rs`).
+/// stops' soaks after their ramps already separate a lag from a rate; the turn after
+/// the cold end shows a gradual hysteresis too: a play over 10 C is found and flies at
+/// 0.030 mg on the production test without a return, 0.033 mg with one, 0.034 mg on the
+/// sweep this module plans for it, `tests/tests/time_true.rs`).
 pub fn to_separate(found: &[EffectId], ambiguous: &[Vec<EffectId>]) -> Vec<EffectId> {
     use EffectId::{Hysteresis, TempRate, ThermalLag};
     let dynamic = [Hysteresis, ThermalLag, TempRate];

@@ -122,9 +122,16 @@ fn eight_stations_at_once(root: &Path, db: &str) {
     let mut procs = Vec::new();
     const { assert!(STATION_COPIES * UNITS > 2 * host_fit::batch::RECORD_CHUNK) };
     let per_station = STATION_COPIES * UNITS;
+    // every lot written before the first station starts, so they start together
+    for k in 0..STATIONS {
+        lot_of(
+            &root.join(format!("lot-{k}")),
+            &format!("S{k}"),
+            STATION_COPIES,
+        );
+    }
     for k in 0..STATIONS {
         let dir = root.join(format!("lot-{k}"));
-        lot_of(&dir, &format!("S{k}"), STATION_COPIES);
         let out = root.join(format!("out-{k}"));
         procs.push((
             k,

@@ -424,55 +424,92 @@ fn the_plan_for_a_hysteresis_and_rate_unit_flies_within_the_aim() {
 }
 
 /// A gradual hysteresis in flight (issue 27): a play operator over 10 C (the offsets move
-/// linearly over 10 C of travel after each reversal), on the production test as `plan`
-/// designs it for a hysteresis alone (no return: every stop reached from below, the one
-/// reversal at the cold end) and with a return from the hot end to 20 C. Both designs show
-/// the play's turn: the diagnosis names the hysteresis alone, in its play form; the blob
-/// flashes the play operator, and in flight (a cold start, warming and cooling both ways
-/// at 5-8 C/min) it compensates within the aim and better than the plain `fit` blob,
-/// which carries no hysteresis (measured: 0.030 mg without the return, 0.033 mg with it;
-/// the `fit` blob 0.228 and 0.186 mg). With the relay alone (the profile's grid without
-/// the play, a throwaway edit) the diagnosis named a relay at 4 C and its blob flew at
-/// 0.051 mg: a triangle after each reversal.
+/// linearly over 10 C of travel after each reversal) on three designs: the default
+/// production test (cooled from the room to its coldest stop, then every stop from
+/// below), the same with a return from the hot end to 20 C, and the program `plan
+/// --from-diagnosis` writes from the first's diagnosis (a hysteresis alone asks for no
+/// return; the twin starts soaked at the program's cold start after cooling there). Each
+/// design shows the play's turn (after the cold end, and after the return): the diagnosis
+/// names the hysteresis alone, in its play form; the blob flashes the play operator, and
+/// in flight (a cold start, warming and cooling both ways at 5-8 C/min) it compensates
+/// within the aim and better than the plain `fit` blob, which carries no hysteresis.
+/// Measured: 0.030, 0.033 and 0.034 mg (the plan is a 1.5 C/min sweep, 37-min holds);
+/// the `fit` blob 0.228, 0.186 and 0.329 mg. With the relay alone (the profile's grid without the play, a throwaway
+/// edit) the diagnosis named a relay at 4 C and its blob flew at 0.051 mg (with the
+/// return): a triangle after each reversal.
 #[test]
 fn a_play_hysteresis_flies_with_its_blob() {
     use host_fit::simulate::config::Stop;
-    for with_return in [false, true] {
+    for design in ["production", "with a return", "its plan"] {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
-        let mut c = production("hysteresis", 11);
-        c.effects.hysteresis_play_c = Some(10.0);
-        if with_return {
-            let back = c.schedule.stops[2].clone();
-            assert_eq!(back.temp_c, 20.0);
-            c.schedule.stops.push(Stop {
-                positions: None,
-                ..back
-            });
+        let unit = {
+            let mut c = production("hysteresis", 11);
+            c.effects.hysteresis_play_c = Some(10.0);
+            c
+        };
+        let mut c = unit.clone();
+        match design {
+            "with a return" => {
+                let back = c.schedule.stops[2].clone();
+                assert_eq!(back.temp_c, 20.0);
+                c.schedule.stops.push(Stop {
+                    positions: None,
+                    ..back
+                });
+            }
+            "its plan" => {
+                let (rec, _) = write(d, "first", &unit);
+                let dj = d.join("d.json");
+                let j = cli_json(&["diagnose", s(&rec), "--json"]);
+                std::fs::write(&dj, j.to_string()).unwrap();
+                let prog = d.join("program.csv");
+                let pj = cli_json(&[
+                    "plan",
+                    "--from-diagnosis",
+                    s(&dj),
+                    "--tau-s",
+                    "0",
+                    "--hours",
+                    "100",
+                    "--out",
+                    s(&prog),
+                    "--force",
+                    "--json",
+                ]);
+                println!("the plan: {}", pj["chosen"]["kind"]);
+                let text = std::fs::read_to_string(&prog).unwrap();
+                let steps = host_fit::simulate::program::parse_program(&prog, &text).unwrap();
+                c.chamber.start_c = steps[0].setpoint_c;
+                c.schedule.program = steps;
+                c.effects.hysteresis_initial = Some(-1.0);
+            }
+            _ => {}
         }
-        let (flown, j) = diagnosed_in_flight(d, &c, c.clone());
-        assert_eq!(found(&j), [EffectId::Hysteresis], "{j}");
+        // both blobs fly the unit's own flight (the design is the bench's, not the unit's)
+        let (flown, j) = diagnosed_in_flight(d, &c, unit.clone());
+        assert_eq!(found(&j), [EffectId::Hysteresis], "{design}: {j}");
         let params = &j["findings"][0]["parameters"];
         let width = params["play_width_c"].as_f64();
         let (rec, _) = write(d, "p", &c);
         let plain = d.join("plain.blob");
         cli_json(&["fit", s(&rec), "--out", s(&plain), "--json", "--force"]);
-        let (f, pos) = write(d, "f", &tests::time_true::in_flight(c));
+        let (f, pos) = write(d, "f", &tests::time_true::in_flight(unit));
         let (fit_flown, _) = verify(&f, pos.as_deref(), &plain);
         println!(
-            "play over 10 C, return {with_return}, found {width:?} C: the diagnosed blob in flight {flown:.4} mg, the fit blob {fit_flown:.4} mg"
+            "play over 10 C on {design}, found {width:?} C: the diagnosed blob in flight {flown:.4} mg, the fit blob {fit_flown:.4} mg"
         );
         assert!(
             width.is_some_and(|w| (5.0..=20.0).contains(&w)),
-            "return {with_return}: the play's width: {params}"
+            "{design}: the play's width: {params}"
         );
         assert!(
             flown <= PAIR_FLIGHT_BOUND_MG,
-            "return {with_return}: {flown} mg in flight"
+            "{design}: {flown} mg in flight"
         );
         assert!(
             flown < fit_flown,
-            "return {with_return}: {flown} mg, the fit blob {fit_flown} mg"
+            "{design}: {flown} mg, the fit blob {fit_flown} mg"
         );
     }
 }

@@ -1,7 +1,8 @@
 //! The twin's configuration read from TOML and checked before it runs: every number
-//! finite, every width, time constant and state in its range. A value out of range is
-//! refused with the field it is in (and, read from a file, its line), never taken
-//! silently as "none".
+//! finite, and every width, time constant and state of the effects (and the flight's
+//! initial state) in its range. A value out of range is refused with the field it is in
+//! (and, read from a file, its line), never taken silently as "none". The schedule's,
+//! logger's and flight's own ranges are checked where they are used, without a line.
 use crate::error::{ErrorKind, HostError, Result};
 use crate::simulate::config::SimConfig;
 use std::path::Path;
@@ -92,9 +93,16 @@ fn not_finite(cfg: &SimConfig) -> Option<Refusal> {
             _ => None,
         }
     }
-    // a configuration that does not serialise has nothing non-finite this walk could see
-    let v = toml::Value::try_from(cfg).ok()?;
-    walk(&v, "").map(|f| Refusal::new(f, "must be a finite number (not nan or inf)"))
+    // the seed is the one number TOML cannot hold above i64::MAX (and it is no float)
+    let mut c = cfg.clone();
+    c.seed = 0;
+    match toml::Value::try_from(&c) {
+        Ok(v) => walk(&v, "").map(|f| Refusal::new(f, "must be a finite number (not nan or inf)")),
+        Err(e) => Some(Refusal::new(
+            "(the whole configuration)",
+            format!("cannot be checked: {e}"),
+        )),
+    }
 }
 
 /// The effects' widths, time constants and states (the ranges each one's physics has).
@@ -111,6 +119,7 @@ fn effects(cfg: &SimConfig) -> Option<Refusal> {
         ("warmup_drift.tau_s", e.warmup_drift.map(|w| w.tau_s), "s"),
         ("warmup_drift2.tau_s", e.warmup_drift2.map(|w| w.tau_s), "s"),
         ("bias_settle.tau_s", e.bias_settle.map(|s| s.tau_s), "s"),
+        ("temp_gradient.tau_s", e.temp_gradient.map(|g| g.tau_s), "s"),
         ("periodic.period_s", e.periodic.map(|p| p.period_s), "s"),
         ("move_settle.tau_s", e.move_settle.map(|r| r.tau_s), "s"),
         ("stop_settle.tau_s", e.stop_settle.map(|r| r.tau_s), "s"),
@@ -127,21 +136,29 @@ fn effects(cfg: &SimConfig) -> Option<Refusal> {
             }
         }
     }
-    // a time constant of 0 on one axis is that axis without the lag; below 0 is nothing
+    // a time constant of 0 on one axis is that axis without the stage; below 0 is nothing
     let lags = [
-        ("thermal_lag.value", e.thermal_lag.map(|l| l.value)),
-        ("thermal_lag2.value", e.thermal_lag2.map(|l| l.value)),
+        (
+            "thermal_lag.value",
+            e.thermal_lag.map(|l| l.value),
+            "the case",
+        ),
+        (
+            "thermal_lag2.value",
+            e.thermal_lag2.map(|l| l.value),
+            "the first stage",
+        ),
     ];
-    for (name, v) in lags {
-        if let Some(i) = v.and_then(|v| v.iter().position(|&x| x < 0.0)) {
+    for (name, v, follows) in lags {
+        let Some(v) = v else { continue };
+        if let Some((i, x)) = v.iter().enumerate().find(|(_, &x)| x < 0.0) {
             return Some(Refusal::new(
                 format!("effects.{name}[{i}]"),
-                "a time constant must be >= 0 s (0: that axis follows the case)",
+                format!("a time constant must be >= 0 s (0: that axis follows {follows}), not {x}"),
             ));
         }
     }
     let non_negative = [
-        ("temp_gradient.tau_s", e.temp_gradient.map(|g| g.tau_s), "s"),
         ("bias_step.rise_s", e.bias_step.map(|b| b.rise_s), "s"),
         (
             "tilter_repeatability.sigma_rad",
@@ -163,39 +180,57 @@ fn effects(cfg: &SimConfig) -> Option<Refusal> {
             format!("the period of the shape must not be {p} C"),
         ));
     }
-    if let Some(s) = e.hysteresis_initial.filter(|s| !(-1.0..=1.0).contains(s)) {
-        return Some(Refusal::new(
-            "effects.hysteresis_initial",
-            format!(
-                "the state before the first change is +1 (heated), -1 (cooled) or between, not {s}"
-            ),
-        ));
+    let states = [
+        ("effects.hysteresis_initial", e.hysteresis_initial),
+        (
+            "flight.initial_direction",
+            cfg.flight.as_ref().map(|f| f.initial_direction),
+        ),
+    ];
+    for (field, v) in states {
+        if let Some(s) = v.filter(|s| !(-1.0..=1.0).contains(s)) {
+            return Some(Refusal::new(
+                field,
+                format!("the state before the first change is +1 (heated), -1 (cooled) or between, not {s}"),
+            ));
+        }
     }
     None
 }
 
-/// The 1-based line of `text` that sets `field` (a dotted TOML path, indices dropped):
-/// the line `key = ...` under its table, the line that opens its table (`[a.b]`), or an
-/// inline table (`b = { ... }`) that holds it. None when the field is not written (a
-/// default, or a form this simple reading does not follow).
+/// The 1-based line of `text` that sets `field` (a dotted TOML path as the checks name
+/// it, `schedule.stops[2].soak_s`, `effects.thermal_lag.value[1]`): the line `key = ...`
+/// under its table, the line that opens its table (`[a.b]`, the (i+1)-th `[[a.b]]` for
+/// `a.b[i]`), or the key whose value (an inline table or array, over one line or many)
+/// holds it. Keys may be quoted or dotted. None when the field is not written (a
+/// default).
 pub fn line_of(text: &str, field: &str) -> Option<usize> {
-    let field: String = field
-        .split('.')
-        .map(|k| k.split('[').next().unwrap_or(k))
-        .collect::<Vec<_>>()
-        .join(".");
     let mut table = String::new();
+    // how many `[[a.b]]` of each array of tables have been opened
+    let mut arrays: std::collections::HashMap<String, usize> = Default::default();
+    // brackets still open in a value written over several lines (its rows are not headers)
+    let mut depth: i64 = 0;
     let mut best: Option<(usize, usize)> = None;
     for (n, raw) in text.lines().enumerate() {
         let line = raw.split('#').next().unwrap_or("").trim();
-        let path = if let Some(h) = line.strip_prefix('[') {
-            let h = h.trim_start_matches('[');
-            table = h.split(']').next().unwrap_or("").trim().to_string();
+        if depth > 0 {
+            depth += balance(line);
+            continue;
+        }
+        let path = if let Some(h) = line.strip_prefix("[[") {
+            let name = key_path(h.split("]]").next().unwrap_or(""));
+            let seen = arrays.entry(name.clone()).or_insert(0);
+            table = format!("{name}[{seen}]");
+            *seen += 1;
             table.clone()
-        } else if let Some((k, _)) = line.split_once('=') {
-            let k = k.trim();
+        } else if let Some(h) = line.strip_prefix('[') {
+            table = key_path(h.split(']').next().unwrap_or(""));
+            table.clone()
+        } else if let Some((k, v)) = line.split_once('=') {
+            depth = balance(v).max(0);
+            let k = key_path(k);
             if table.is_empty() {
-                k.to_string()
+                k
             } else {
                 format!("{table}.{k}")
             }
@@ -203,12 +238,33 @@ pub fn line_of(text: &str, field: &str) -> Option<usize> {
             continue;
         };
         // the longest written path that is the field or holds it
-        let holds = field == path || field.starts_with(&format!("{path}."));
+        let holds = field == path
+            || field.starts_with(&format!("{path}."))
+            || field.starts_with(&format!("{path}["));
         if holds && best.is_none_or(|(len, _)| path.len() > len) {
             best = Some((path.len(), n + 1));
         }
     }
     best.map(|(_, n)| n)
+}
+
+/// A key as written (`a . "b"`) as a path (`a.b`).
+fn key_path(k: &str) -> String {
+    k.split('.')
+        .map(|p| p.trim().trim_matches(|c| c == '"' || c == '\''))
+        .collect::<Vec<_>>()
+        .join(".")
+}
+
+/// Brackets and braces opened minus those closed in `s`.
+fn balance(s: &str) -> i64 {
+    s.chars()
+        .map(|c| match c {
+            '[' | '{' => 1,
+            ']' | '}' => -1,
+            _ => 0,
+        })
+        .sum()
 }
 
 #[cfg(test)]
@@ -281,6 +337,21 @@ mod tests {
                 "effects.move_settle.tau_s",
                 3,
             ),
+            (
+                "[effects.temp_gradient]\nvalue = [1e-4, 0, 0]\ntau_s = 0\n",
+                "effects.temp_gradient.tau_s",
+                3,
+            ),
+            (
+                "[flight]\ninitial_direction = -2\n",
+                "flight.initial_direction",
+                2,
+            ),
+            (
+                "[[schedule.stops]]\ntemp_c = 0\nsoak_s = 600\n[[schedule.stops]]\ntemp_c = 20\nsoak_s = nan\n",
+                "schedule.stops[1].soak_s",
+                6,
+            ),
         ];
         for (text, field, line) in cases {
             let e = refused(text);
@@ -294,7 +365,7 @@ mod tests {
     }
 
     #[test]
-    fn every_setting_in_range_runs_and_the_shipped_examples_pass() {
+    fn every_setting_in_range_passes_the_shipped_examples_and_the_blind_suite_too() {
         // zero lag on an axis, a cooled initial state and a play are all meaningful
         let ok = "[effects]\nhysteresis = { value = [1e-4, 0, 0] }\nhysteresis_play_c = 8\n\
                   hysteresis_initial = -1\nthermal_lag = { value = [0, 300, 0] }\n";
@@ -321,6 +392,20 @@ mod tests {
     }
 
     #[test]
+    fn a_seed_beyond_what_toml_holds_still_has_its_numbers_checked() {
+        let mut c = SimConfig {
+            seed: u64::MAX,
+            ..SimConfig::default()
+        };
+        assert_eq!(check(&c), Ok(()));
+        c.chamber.tau_case_s = f64::INFINITY;
+        assert_eq!(
+            refusal(&c).map(|r| r.field),
+            Some("chamber.tau_case_s".to_string())
+        );
+    }
+
+    #[test]
     fn a_configuration_built_in_code_is_checked_too() {
         let mut c = SimConfig::default();
         c.effects.hysteresis_play_c = Some(-3.0);
@@ -340,5 +425,23 @@ mod tests {
         assert_eq!(line_of(t, "effects.lag.tau"), Some(4));
         assert_eq!(line_of(t, "effects.y"), Some(2));
         assert_eq!(line_of(t, "chamber.tau"), None);
+        // the second element of an array of tables, not the first's key
+        let t = "[[schedule.stops]]\ntemp_c = 0\nsoak_s = 10\n[[schedule.stops]]\ntemp_c = 5\nsoak_s = nan\n";
+        assert_eq!(line_of(t, "schedule.stops[1].soak_s"), Some(6));
+        assert_eq!(line_of(t, "schedule.stops[0].soak_s"), Some(3));
+        // rows of a value over several lines are not table headers
+        let t =
+            "[schedule]\npower_offs = [\n  [5000.0, 300.0],\n  [9000.0, 60.0],\n]\nrate_hz = 0\n";
+        assert_eq!(line_of(t, "schedule.rate_hz"), Some(6));
+        assert_eq!(line_of(t, "schedule.power_offs[1][0]"), Some(2));
+        // quoted and dotted keys, spaces around the dots
+        let t =
+            "[effects . \"thermal_lag\"]\n\"value\" = [1, 2, 3]\neffects.hysteresis_play_c = -1\n";
+        assert_eq!(line_of(t, "effects.thermal_lag.value[2]"), Some(2));
+        let t = "effects.hysteresis_play_c = -1\n";
+        assert_eq!(line_of(t, "effects.hysteresis_play_c"), Some(1));
+        // a comment with `=` or `[` is no key and no header
+        let t = "[effects] # see [docs] = here\n# x = 3\nx = 4\n";
+        assert_eq!(line_of(t, "effects.x"), Some(3));
     }
 }

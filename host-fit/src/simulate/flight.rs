@@ -85,8 +85,8 @@ fn check(f: &Flight) -> Result<()> {
 /// The flight recording of `cfg`'s unit, with the positions file of its attitudes.
 pub fn simulate(cfg: &SimConfig, f: &Flight, mut progress: impl FnMut(f64)) -> Result<Simulation> {
     check(f)?;
-    let unit = TrueUnit::new(cfg)?;
     crate::simulate::checks::check(cfg)?;
+    let unit = TrueUnit::new(cfg)?;
     // the unit soaked at the cold start, in the hysteresis state that got it there; the
     // air and case follow the flight's own time constants
     let mut here = cfg.clone();

@@ -342,8 +342,8 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
     if let Some(f) = &cfg.flight {
         return flight::simulate(cfg, f, progress);
     }
-    let unit = TrueUnit::new(cfg)?;
     checks::check(cfg)?;
+    let unit = TrueUnit::new(cfg)?;
     let positions = positions(cfg)?;
     let sch = &cfg.schedule;
     if sch.rate_hz.is_nan()

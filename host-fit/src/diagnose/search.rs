@@ -938,7 +938,13 @@ fn checked(data: &Data, mut current: Fit, regions: &[Region]) -> Fit {
 }
 
 /// Drop every effect that does not explain the data where it acts (its region is
-/// reported as unexplained instead); refits after each drop.
+/// reported as unexplained instead); refits after each drop. A discovered term is held
+/// here to the catalogue's rule ([`adequate`]), not to the one it joined by
+/// ([`adequate_term`]): the two do not nest, and judged by its own rule in this check a
+/// term survives where the rest of its axis is poorly fitted. Measured on the long blind
+/// suite: the forms the library does not express fell from 16/16 to 12/16 (a `dT*dTdt`
+/// kept on the tilter's repeatability), outside the catalogue 17/20 to 16/20, nothing
+/// gained.
 pub fn keep_adequate(data: &Data, mut current: Fit) -> Fit {
     'again: loop {
         for e in 0..current.spec.extras.len() {

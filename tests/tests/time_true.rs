@@ -376,6 +376,36 @@ fn within_aim(line: &[f64]) -> (usize, String) {
     (within, text.join(" "))
 }
 
+/// `unit`'s test replaced by the program `plan --from-diagnosis` writes from the
+/// diagnosis of its production recording (files in `d`), and the plan's JSON: the twin
+/// starts soaked at the program's cold start after cooling there (hysteresis branch -1).
+fn on_its_plan(d: &std::path::Path, unit: &SimConfig) -> (SimConfig, serde_json::Value) {
+    let (rec, _) = write(d, "first", unit);
+    let dj = d.join("d.json");
+    std::fs::write(&dj, cli_json(&["diagnose", s(&rec), "--json"]).to_string()).unwrap();
+    let prog = d.join("program.csv");
+    let pj = cli_json(&[
+        "plan",
+        "--from-diagnosis",
+        s(&dj),
+        "--tau-s",
+        "0",
+        "--hours",
+        "100",
+        "--out",
+        s(&prog),
+        "--force",
+        "--json",
+    ]);
+    let text = std::fs::read_to_string(&prog).unwrap();
+    let steps = host_fit::simulate::program::parse_program(&prog, &text).unwrap();
+    let mut c = unit.clone();
+    c.chamber.start_c = steps[0].setpoint_c;
+    c.schedule.program = steps;
+    c.effects.hysteresis_initial = Some(-1.0);
+    (c, pj)
+}
+
 /// `plan --from-diagnosis` for a hysteresis + rate unit (issue 27): the program it writes
 /// (a stop-and-soak one ending with its return; a sweep is not chosen), run on the unit's
 /// twin, diagnosed with `--out`: the blob flies within 0.05 mg on at least 6 of the 7
@@ -392,30 +422,8 @@ fn the_plan_for_a_hysteresis_and_rate_unit_flies_within_the_aim() {
     let mut line = Vec::new();
     for seed in 1..=7u64 {
         let unit = production(effect, seed);
-        let (rec, _) = write(d, "p", &unit);
-        let dj = d.join("d.json");
-        std::fs::write(&dj, cli_json(&["diagnose", s(&rec), "--json"]).to_string()).unwrap();
-        let prog = d.join("program.csv");
-        let pj = cli_json(&[
-            "plan",
-            "--from-diagnosis",
-            s(&dj),
-            "--tau-s",
-            "0",
-            "--hours",
-            "100",
-            "--out",
-            s(&prog),
-            "--force",
-            "--json",
-        ]);
+        let (c, pj) = on_its_plan(d, &unit);
         assert_eq!(pj["chosen"]["kind"]["kind"], "stop_soak", "seed {seed}");
-        let text = std::fs::read_to_string(&prog).unwrap();
-        let steps = host_fit::simulate::program::parse_program(&prog, &text).unwrap();
-        let mut c = unit.clone();
-        c.chamber.start_c = steps[0].setpoint_c;
-        c.schedule.program = steps;
-        c.effects.hysteresis_initial = Some(-1.0);
         line.push(diagnosed_in_flight(d, &c, unit).0);
     }
     let (within, text) = within_aim(&line);
@@ -434,13 +442,23 @@ fn the_plan_for_a_hysteresis_and_rate_unit_flies_within_the_aim() {
 /// in flight (a cold start, warming and cooling both ways at 5-8 C/min) it compensates
 /// within the aim and better than the plain `fit` blob, which carries no hysteresis.
 /// Measured: 0.030, 0.033 and 0.034 mg (the plan is a 1.5 C/min sweep, 37-min holds);
-/// the `fit` blob 0.228, 0.186 and 0.329 mg. With the relay alone (the profile's grid without the play, a throwaway
-/// edit) the diagnosis named a relay at 4 C and its blob flew at 0.051 mg (with the
-/// return): a triangle after each reversal.
+/// the `fit` blob 0.228, 0.186 and 0.329 mg. With the relay alone (the profile's grid
+/// without the play, a throwaway edit) the diagnosis named a relay at 4 C and its blob
+/// flew at 0.051 mg (with the return): a triangle after each reversal.
 #[test]
 fn a_play_hysteresis_flies_with_its_blob() {
     use host_fit::simulate::config::Stop;
-    for design in ["production", "with a return", "its plan"] {
+    /// The bench's designs the play is run on.
+    #[derive(Debug)]
+    enum Design {
+        /// The default production test.
+        Production,
+        /// The same with a return from the hot end to 20 C.
+        WithReturn,
+        /// The program `plan --from-diagnosis` writes.
+        Plan,
+    }
+    for design in [Design::Production, Design::WithReturn, Design::Plan] {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
         let unit = {
@@ -448,47 +466,27 @@ fn a_play_hysteresis_flies_with_its_blob() {
             c.effects.hysteresis_play_c = Some(10.0);
             c
         };
-        let mut c = unit.clone();
-        match design {
-            "with a return" => {
+        let c = match design {
+            Design::Production => unit.clone(),
+            Design::WithReturn => {
+                let mut c = unit.clone();
                 let back = c.schedule.stops[2].clone();
                 assert_eq!(back.temp_c, 20.0);
                 c.schedule.stops.push(Stop {
                     positions: None,
                     ..back
                 });
+                c
             }
-            "its plan" => {
-                let (rec, _) = write(d, "first", &unit);
-                let dj = d.join("d.json");
-                let j = cli_json(&["diagnose", s(&rec), "--json"]);
-                std::fs::write(&dj, j.to_string()).unwrap();
-                let prog = d.join("program.csv");
-                let pj = cli_json(&[
-                    "plan",
-                    "--from-diagnosis",
-                    s(&dj),
-                    "--tau-s",
-                    "0",
-                    "--hours",
-                    "100",
-                    "--out",
-                    s(&prog),
-                    "--force",
-                    "--json",
-                ]);
+            Design::Plan => {
+                let (c, pj) = on_its_plan(d, &unit);
                 println!("the plan: {}", pj["chosen"]["kind"]);
-                let text = std::fs::read_to_string(&prog).unwrap();
-                let steps = host_fit::simulate::program::parse_program(&prog, &text).unwrap();
-                c.chamber.start_c = steps[0].setpoint_c;
-                c.schedule.program = steps;
-                c.effects.hysteresis_initial = Some(-1.0);
+                c
             }
-            _ => {}
-        }
+        };
         // both blobs fly the unit's own flight (the design is the bench's, not the unit's)
         let (flown, j) = diagnosed_in_flight(d, &c, unit.clone());
-        assert_eq!(found(&j), [EffectId::Hysteresis], "{design}: {j}");
+        assert_eq!(found(&j), [EffectId::Hysteresis], "{design:?}: {j}");
         let params = &j["findings"][0]["parameters"];
         let width = params["play_width_c"].as_f64();
         let (rec, _) = write(d, "p", &c);
@@ -497,19 +495,19 @@ fn a_play_hysteresis_flies_with_its_blob() {
         let (f, pos) = write(d, "f", &tests::time_true::in_flight(unit));
         let (fit_flown, _) = verify(&f, pos.as_deref(), &plain);
         println!(
-            "play over 10 C on {design}, found {width:?} C: the diagnosed blob in flight {flown:.4} mg, the fit blob {fit_flown:.4} mg"
+            "play over 10 C on {design:?}, found {width:?} C: the diagnosed blob in flight {flown:.4} mg, the fit blob {fit_flown:.4} mg"
         );
         assert!(
             width.is_some_and(|w| (5.0..=20.0).contains(&w)),
-            "{design}: the play's width: {params}"
+            "{design:?}: the play's width: {params}"
         );
         assert!(
             flown <= PAIR_FLIGHT_BOUND_MG,
-            "{design}: {flown} mg in flight"
+            "{design:?}: {flown} mg in flight"
         );
         assert!(
             flown < fit_flown,
-            "{design}: {flown} mg, the fit blob {fit_flown} mg"
+            "{design:?}: {flown} mg, the fit blob {fit_flown} mg"
         );
     }
 }

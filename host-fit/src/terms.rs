@@ -519,6 +519,15 @@ impl serde::Serialize for Term {
     }
 }
 
+impl<'de> serde::Deserialize<'de> for Term {
+    /// From any text the vocabulary parses (normalised to the canonical term); a text
+    /// that is no term is refused with the parser's reason.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Term, D::Error> {
+        let text = String::deserialize(d)?;
+        text.parse().map_err(serde::de::Error::custom)
+    }
+}
+
 /// A term on one axis with its coefficient (output units per the term's units): what a
 /// `discovered` finding flashes.
 #[derive(Clone, Debug, PartialEq)]

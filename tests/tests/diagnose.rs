@@ -10,6 +10,7 @@ use host_fit::diagnose::location::Grouping;
 use host_fit::diagnose::quality::NoteKind;
 use host_fit::diagnose::{diagnose, EffectId, Rules};
 use host_fit::simulate::{simulate, SimConfig};
+use host_fit::terms::{Event, Factor};
 use serde_json::Value;
 use tests::{cli, real_diagnosis as real, repo};
 
@@ -281,7 +282,9 @@ fn a_term_is_judged_at_the_baseline_order_chosen_with_it() {
             (
                 f.effect,
                 f.reproduced,
-                f.term.as_deref().map(|t| t.starts_with("decay(stop,"))
+                f.term
+                    .as_ref()
+                    .map(|t| matches!(t.factors(), [Factor::Decay(Event::Stop, _)]))
             ),
             (EffectId::Discovered, true, Some(true)),
             "{clock}: {}",
@@ -305,7 +308,7 @@ fn a_term_is_judged_at_the_baseline_order_chosen_with_it() {
         );
         println!(
             "{clock}: {} {:.0} +- {:.0} s (truth {:.0} s), {:?}",
-            f.term.as_deref().unwrap_or(""),
+            f.term.as_ref().map(ToString::to_string).unwrap_or_default(),
             tau.value,
             tau.sigma,
             truth.tau_s,

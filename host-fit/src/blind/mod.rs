@@ -127,7 +127,7 @@ pub fn run_with(case: &Case, rules: Rules) -> Outcome {
             .filter(|f| f.effect == EffectId::Discovered)
             .filter_map(|f| {
                 Some(DiscoveredClaim {
-                    term: f.term.clone()?,
+                    term: f.term.as_ref()?.to_string(),
                     axes: f.axes.clone(),
                     reproduced: f.reproduced,
                 })

@@ -54,7 +54,7 @@ pub struct FixtureClaim {
 
 /// A `discovered` finding as the blind suite judges it, filled from the diagnosis's
 /// finding (`"effect": "discovered"`, its `"term"` in the catalogue's canonical text,
-/// its `"axes"` and `"reproduced"`): `DiscoveredClaim { term: f.term.clone()?, axes:
+/// its `"axes"` and `"reproduced"`): `DiscoveredClaim { term: f.term.as_ref()?.to_string(), axes:
 /// f.axes.clone(), reproduced: f.reproduced }`. The suite reads the term with its own
 /// parser ([`crate::blind::terms`]).
 #[derive(Debug, Clone, PartialEq)]

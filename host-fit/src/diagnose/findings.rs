@@ -45,9 +45,11 @@ pub struct Finding {
     /// The position, for fixture_error.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position: Option<String>,
-    /// The term in the catalogue's vocabulary, for a discovered term (`a_x*a_y`).
+    /// The term in the catalogue's vocabulary, for a discovered term (`a_x*a_y`); a
+    /// decay's time constant as its text rounds it (the fitted one is the `tau_s`
+    /// parameter).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub term: Option<String>,
+    pub term: Option<crate::terms::Term>,
     /// What a discovered term corrects: the unit in flight (the blob compensates it), or
     /// only the calibration (a term of the rig or of the test's time).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -319,8 +321,9 @@ pub fn finding(data: &Data, full: &Fit, reduced: &Fit, e: usize) -> Option<Findi
         } else {
             None
         },
+        // every term of the library is one of the vocabulary (a unit test holds it)
         term: if let Extra::Discovered { term, .. } = extra {
-            Some(term.to_string())
+            term.named().ok()
         } else {
             None
         },

@@ -127,7 +127,7 @@ pub struct LibraryRound {
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct ProposedTerm {
     /// The term in the catalogue's vocabulary.
-    pub term: String,
+    pub term: crate::terms::Term,
     /// The output axis.
     pub axis: &'static str,
     /// Share of the bootstrap resamples of the time chunks that chose it.
@@ -998,10 +998,13 @@ impl Search<'_, '_> {
             proposed: found
                 .proposals
                 .iter()
-                .map(|p| ProposedTerm {
-                    term: p.candidate.term.to_string(),
-                    axis: firmware_core::model::AXES[p.candidate.axis],
-                    inclusion: p.inclusion,
+                // every library term is one of the vocabulary (library.rs's tests)
+                .filter_map(|p| {
+                    Some(ProposedTerm {
+                        term: p.candidate.term.named().ok()?,
+                        axis: firmware_core::model::AXES[p.candidate.axis],
+                        inclusion: p.inclusion,
+                    })
                 })
                 .collect(),
             found: None,

@@ -89,11 +89,11 @@ impl Flashed {
             if !term.of_unit() {
                 continue;
             }
-            let text = term.to_string();
-            let parsed: crate::terms::Term = text.parse().map_err(|err| {
+            // typed, not through the report's text: the time constant as fitted
+            let parsed = term.term().map_err(|err| {
                 HostError::new(
                     ErrorKind::Internal,
-                    format!("the discovered term `{text}` is not in the blob's vocabulary: {err}"),
+                    format!("the discovered term `{term}` is not in the blob's vocabulary: {err}"),
                 )
             })?;
             let Some(&fw_axis) = Axis::ALL.get(*axis) else {

@@ -6,32 +6,14 @@
 use crate::data::recording::Recording;
 use crate::model::data::Data;
 use crate::model::regressors::{self, Settle};
+use crate::terms::{Factor, Tau, Term, TermError, TermErrorKind};
 use firmware_core::model::AXES;
 use std::fmt;
 
-/// An event a `decay` or a `step` counts from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Event {
-    /// The recording's start and the end of every stated power-off.
-    PowerOn,
-    /// A new temperature stop begins: the chamber's ramp to it ends (see
-    /// [`stop_arrivals`]).
-    Stop,
-    /// The unit was turned to another position: a dwell begins at a position other
-    /// than the previous dwell's (see [`moves`]).
-    Position,
-}
-
-impl Event {
-    /// The vocabulary's name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Event::PowerOn => "power_on",
-            Event::Stop => "stop",
-            Event::Position => "position",
-        }
-    }
-}
+/// An event a `decay` or a `step` counts from: the vocabulary's own ([`crate::terms`]),
+/// here found on a recording's rows (the start and the end of every stated power-off,
+/// [`stop_arrivals`], [`moves`]).
+pub use crate::terms::Event;
 
 /// The part of a term that varies in time (everything but the specific force), at most
 /// two factors of it.
@@ -95,14 +77,22 @@ impl fmt::Display for Timed {
     }
 }
 
-/// A time constant as the vocabulary writes it: whole minutes from 10 min on, else
-/// seconds.
-fn tau_text(tau_s: f64) -> String {
+/// A time constant as a report names it: to whole minutes from 10 min on, else to
+/// whole seconds (a fitted one is known to a few per cent at best).
+fn reported_tau_s(tau_s: f64) -> f64 {
     if tau_s >= 600.0 {
-        format!("{:.0}min", tau_s / 60.0)
+        (tau_s / 60.0).round_ties_even() * 60.0
     } else {
-        format!("{:.0}s", tau_s)
+        tau_s.round_ties_even()
     }
+}
+
+/// A time constant as the vocabulary writes it ([`reported_tau_s`] in
+/// `firmware_core::terms::Tau`'s canonical text: `7min` for 420 s, `25s`); a time
+/// constant that is no TAU (0, a family's placeholder) in seconds.
+fn tau_text(tau_s: f64) -> String {
+    let s = reported_tau_s(tau_s);
+    Tau::from_seconds(s as f32).map_or_else(|| format!("{s}s"), |t| t.to_string())
 }
 
 /// A discovered term: a product of at most three factors entering one output axis
@@ -143,6 +133,60 @@ impl LibTerm {
             }
         }
         t
+    }
+
+    /// The vocabulary's term ([`crate::terms::Term`]) with the decay's time constant as
+    /// fitted (to the blob's f32): what a blob's term table carries, so that the firmware
+    /// compensates the very term the coefficients were fitted with (the report's text
+    /// rounds a time constant to whole seconds or minutes: flashed from that text, a
+    /// decay fitted at 977 s ran on the MCU at 960 s, `16min`).
+    pub fn term(&self) -> Result<Term, TermError> {
+        self.typed(|tau_s| Tau::from_seconds(tau_s as f32))
+    }
+
+    /// The vocabulary's term as a report names it: the decay's time constant rounded as
+    /// its text is written (whole minutes from 10 min on, else whole seconds), so that
+    /// the finding's term and this term's canonical text are one value. The fitted time
+    /// constant is the finding's `tau_s` parameter, with its uncertainty.
+    pub fn named(&self) -> Result<Term, TermError> {
+        self.typed(|tau_s| Tau::from_seconds(reported_tau_s(tau_s) as f32))
+    }
+
+    /// The vocabulary's term, each decay's time constant made by `tau`.
+    fn typed(&self, tau: impl Fn(f64) -> Option<Tau>) -> Result<Term, TermError> {
+        let refuse = |kind| TermError {
+            term: self.to_string(),
+            kind,
+        };
+        let force = [
+            (Factor::Ax, Factor::AbsAx),
+            (Factor::Ay, Factor::AbsAy),
+            (Factor::Az, Factor::AbsAz),
+        ];
+        let mut factors = Vec::new();
+        if let Some(j) = self.abs {
+            let (_, abs) = force
+                .get(j)
+                .ok_or_else(|| refuse(TermErrorKind::UnknownFactor(format!("abs of axis {j}"))))?;
+            factors.push(*abs);
+        }
+        for (&(plain, _), &p) in force.iter().zip(&self.powers) {
+            factors.extend(std::iter::repeat_n(plain, usize::from(p)));
+        }
+        for t in &self.timed {
+            factors.push(match *t {
+                Timed::DT => Factor::DT,
+                Timed::Rate => Factor::DTdt,
+                Timed::Hours => Factor::Hours,
+                Timed::Decay(e, tau_s) => Factor::Decay(
+                    e,
+                    tau(tau_s)
+                        .ok_or_else(|| refuse(TermErrorKind::BadTau(format!("{tau_s} s"))))?,
+                ),
+                Timed::Step(e) => Factor::Step(e),
+            });
+        }
+        Term::new(factors)
     }
 
     /// The same term with any decay's time constant left out: what identifies a family.
@@ -679,6 +723,72 @@ mod tests {
         for (t, want) in cases {
             assert_eq!(t.to_string(), want);
         }
+    }
+
+    /// Every term the library can propose is one of the vocabulary's, at any time
+    /// constant: its text is the canonical text of its report name, and the term a blob
+    /// flashes keeps the fitted time constant to f32 (not the text's rounding).
+    #[test]
+    fn every_library_term_is_a_vocabulary_term_and_flashes_its_fitted_tau() {
+        let mut terms: Vec<LibTerm> = force_parts(false)
+            .into_iter()
+            .map(|(powers, abs)| term(powers, abs, vec![]))
+            .collect();
+        for timed in timed_parts(true) {
+            // as `library` makes them: at most three factors
+            for (powers, abs) in force_parts(true) {
+                terms.push(term(powers, abs, timed.clone()));
+            }
+            terms.push(term([0; 3], None, timed));
+            terms.retain(|t| t.factors() <= 3);
+        }
+        // the grid, and between its points (a profiled time constant is anywhere)
+        let taus: Vec<f64> = (0..=120)
+            .map(|i| 10.0 * 2000.0_f64.powf(f64::from(i) / 120.0))
+            .chain(DECAY_GRID_S)
+            // whole minutes below 10 min, and either side of 10 min
+            .chain([60.0, 420.0, 599.4, 599.6, 600.0, 630.0])
+            .collect();
+        let mut decays = 0;
+        for t in &terms {
+            let at: Vec<LibTerm> = match t.tau_s() {
+                Some(_) => taus.iter().map(|&s| t.with_tau(s)).collect(),
+                None => vec![t.clone()],
+            };
+            for t in at {
+                let text = t.to_string();
+                let named = t.named().unwrap_or_else(|e| panic!("{text}: {e}"));
+                // one text: the library's, the named term's canonical one, read strictly
+                assert_eq!(named.to_string(), text);
+                assert_eq!(Ok(named.clone()), Term::parse_canonical(&text), "{text}");
+                let flashed = t.term().unwrap_or_else(|e| panic!("{text}: {e}"));
+                let tau = flashed.factors().iter().find_map(|f| {
+                    if let Factor::Decay(_, tau) = f {
+                        Some(tau.seconds())
+                    } else {
+                        None
+                    }
+                });
+                assert_eq!(tau, t.tau_s().map(|s| s as f32), "{text}");
+                decays += usize::from(tau.is_some());
+                // the same term but for the time constant
+                let same: Vec<_> = flashed
+                    .factors()
+                    .iter()
+                    .zip(named.factors())
+                    .filter(|(a, b)| {
+                        a == b || matches!((a, b), (Factor::Decay(x, _), Factor::Decay(y, _)) if x == y)
+                    })
+                    .collect();
+                assert_eq!(same.len(), named.factors().len(), "{text}");
+                assert_eq!(flashed.factors().len(), named.factors().len(), "{text}");
+            }
+        }
+        assert!(
+            terms.len() > 100 && decays > 1000,
+            "{} terms, {decays} decays",
+            terms.len()
+        );
     }
 
     /// A move is a dwell at another position than the one before: none at the

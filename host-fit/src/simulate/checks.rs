@@ -1,10 +1,10 @@
 //! The twin's configuration read from TOML and checked before it runs: every number
 //! finite, and every width, time constant and state of the effects (and the flight's
 //! initial state) in its range. A value out of range is refused with the field it is in
-//! (and, read from a file, its line), never taken silently as "none". The schedule's,
-//! logger's and flight's own ranges are checked where they are used, without a line.
+//! (and, read from a file, its line), never taken silently as "none"; so are the
+//! schedule's, the logger's and the flight's rates, durations and legs.
 use crate::error::{ErrorKind, HostError, Result};
-use crate::simulate::config::SimConfig;
+use crate::simulate::config::{Flight, Leg, SimConfig};
 use std::path::Path;
 
 /// Why a setting cannot be run: the TOML path of the field, and what it must be.
@@ -35,7 +35,10 @@ impl Refusal {
 
 /// The first setting of `cfg` that cannot be run, if any.
 pub fn refusal(cfg: &SimConfig) -> Option<Refusal> {
-    not_finite(cfg).or_else(|| effects(cfg))
+    not_finite(cfg)
+        .or_else(|| effects(cfg))
+        .or_else(|| schedule(cfg))
+        .or_else(|| cfg.flight.as_ref().and_then(flight))
 }
 
 /// `cfg` as it will run, or the error naming the first field that cannot.
@@ -194,6 +197,186 @@ fn effects(cfg: &SimConfig) -> Option<Refusal> {
                 format!("the state before the first change is +1 (heated), -1 (cooled) or between, not {s}"),
             ));
         }
+    }
+    None
+}
+
+/// The first of `legs` (at `field[i]`) that does not ramp (`c_per_min` > 0) or holds
+/// for a negative time, or goes nowhere finite.
+// The negated comparisons are the point: NaN fails them.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+fn legs(field: &str, legs: &[Leg]) -> Option<Refusal> {
+    legs.iter().enumerate().find_map(|(i, l)| {
+        if !l.to_c.is_finite() {
+            Some(Refusal::new(
+                format!("{field}[{i}].to_c"),
+                format!("must be a finite temperature, not {}", l.to_c),
+            ))
+        } else if !(l.c_per_min > 0.0 && l.c_per_min.is_finite()) {
+            Some(Refusal::new(
+                format!("{field}[{i}].c_per_min"),
+                format!(
+                    "a leg ramps at > 0 C/min (a hold is `hold_s` after it), not {}",
+                    l.c_per_min
+                ),
+            ))
+        } else if !(l.hold_s >= 0.0 && l.hold_s.is_finite()) {
+            Some(Refusal::new(
+                format!("{field}[{i}].hold_s"),
+                format!("must be >= 0 s, not {}", l.hold_s),
+            ))
+        } else {
+            None
+        }
+    })
+}
+
+/// The schedule's rates and durations, its stops' ramps and soaks, its sweep's legs, its
+/// extra positions, and the logger's clock (every number is finite by now).
+// The negated comparisons are the point: NaN fails them.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+fn schedule(cfg: &SimConfig) -> Option<Refusal> {
+    let s = &cfg.schedule;
+    let refuse = |field: &str, why: String| Some(Refusal::new(field, why));
+    if s.rate_hz <= 0.0 {
+        return refuse(
+            "schedule.rate_hz",
+            format!("must be > 0 Hz, not {}", s.rate_hz),
+        );
+    }
+    // what runs: a program (its own steps), else a sweep, else the stops
+    let program = !s.program.is_empty();
+    let sweep = s.sweep.as_ref().filter(|_| !program);
+    let stops = if program || sweep.is_some() {
+        &[][..]
+    } else {
+        &s.stops[..]
+    };
+    if (sweep.is_some() || !stops.is_empty()) && s.dwell_s <= 0.0 {
+        return refuse(
+            "schedule.dwell_s",
+            format!("must be > 0 s, not {}", s.dwell_s),
+        );
+    }
+    if s.move_s < 0.0 {
+        return refuse(
+            "schedule.move_s",
+            format!("must be >= 0 s, not {}", s.move_s),
+        );
+    }
+    for (i, stop) in stops.iter().enumerate() {
+        if stop.ramp_c_per_min <= 0.0 {
+            return refuse(
+                &format!("schedule.stops[{i}].ramp_c_per_min"),
+                format!(
+                    "the ramp to {} C must be > 0 C/min, not {}",
+                    stop.temp_c, stop.ramp_c_per_min
+                ),
+            );
+        }
+        if stop.soak_s < 0.0 {
+            return refuse(
+                &format!("schedule.stops[{i}].soak_s"),
+                format!(
+                    "the soak at {} C must be >= 0 s, not {}",
+                    stop.temp_c, stop.soak_s
+                ),
+            );
+        }
+    }
+    if let Some(r) = sweep.and_then(|w| legs("schedule.sweep.legs", &w.legs)) {
+        return Some(r);
+    }
+    for (i, (name, v)) in s.extra_positions.iter().enumerate() {
+        // its length divides it: one that under- or overflows is no direction either
+        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !(norm > 0.0 && norm.is_finite()) {
+            return refuse(
+                &format!("schedule.extra_positions[{i}]"),
+                format!(
+                    "position `{name}`: the direction of gravity needs a vector other than zero"
+                ),
+            );
+        }
+    }
+    let l = &cfg.logger;
+    if l.rest_rate_hz < 0.0 {
+        return refuse(
+            "logger.rest_rate_hz",
+            format!("must be >= 0 Hz (0: every tick), not {}", l.rest_rate_hz),
+        );
+    }
+    if !(0.0..1.0).contains(&l.drop_rate) {
+        return refuse(
+            "logger.drop_rate",
+            format!(
+                "a probability from 0 up to (not including) 1, not {}",
+                l.drop_rate
+            ),
+        );
+    }
+    // the logger takes the schedule's ticks (a flight writes every one of its own)
+    let rate = s.rate_hz;
+    if !(l.jitter_s >= 0.0 && l.jitter_s < 1.0 / rate) {
+        return refuse(
+            "logger.jitter_s",
+            format!(
+                "must be >= 0 s and less than one tick (1 / {rate} Hz), not {}",
+                l.jitter_s
+            ),
+        );
+    }
+    None
+}
+
+/// A flight's rate, legs, attitudes and holds, each finite (also for a flight given
+/// apart from a configuration, which the finiteness walk does not see).
+// The negated comparisons are the point: NaN fails them.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn flight(f: &Flight) -> Option<Refusal> {
+    let refuse = |field: &str, why: String| Some(Refusal::new(field, why));
+    let numbers = [
+        ("flight.start_c", f.start_c),
+        ("flight.tau_air_s", f.tau_air_s),
+        ("flight.tau_case_s", f.tau_case_s),
+        ("flight.initial_direction", f.initial_direction),
+    ];
+    if let Some((field, v)) = numbers.iter().find(|(_, v)| !v.is_finite()) {
+        return refuse(field, format!("must be a finite number, not {v}"));
+    }
+    if let Some(i) = f
+        .power_offs
+        .iter()
+        .position(|s| !s.iter().all(|x| x.is_finite()))
+    {
+        return refuse(
+            &format!("flight.power_offs[{i}]"),
+            "must be finite numbers".to_string(),
+        );
+    }
+    if !(f.rate_hz > 0.0 && f.rate_hz.is_finite()) {
+        return refuse(
+            "flight.rate_hz",
+            format!("must be > 0 Hz, not {}", f.rate_hz),
+        );
+    }
+    if f.legs.is_empty() {
+        return refuse("flight.legs", "a flight needs at least one leg".to_string());
+    }
+    if let Some(r) = legs("flight.legs", &f.legs) {
+        return Some(r);
+    }
+    if f.attitudes == 0 {
+        return refuse(
+            "flight.attitudes",
+            "a flight needs at least one attitude".to_string(),
+        );
+    }
+    if !(f.hold_s > 0.0 && f.hold_s.is_finite()) {
+        return refuse("flight.hold_s", format!("must be > 0 s, not {}", f.hold_s));
+    }
+    if !(f.move_s >= 0.0 && f.move_s.is_finite()) {
+        return refuse("flight.move_s", format!("must be >= 0 s, not {}", f.move_s));
     }
     None
 }
@@ -362,6 +545,103 @@ mod tests {
                 "{text}: {e}"
             );
         }
+    }
+
+    /// `cases` (text, field, line) each refused as invalid, naming the field and line.
+    fn refused_on_their_lines(cases: &[(&str, &str, usize)]) {
+        for &(text, field, line) in cases {
+            let e = refused(text);
+            assert_eq!(e.kind(), ErrorKind::Invalid, "{text}");
+            assert_eq!(
+                (e.field.as_deref(), e.line),
+                (Some(field), Some(line)),
+                "{text}: {e}"
+            );
+        }
+    }
+
+    /// The schedule's and the logger's rates, durations and legs: refused on their line,
+    /// in every form they are written (a key, the n-th `[[array]]`, a value over several
+    /// lines: the line of its key).
+    #[test]
+    fn schedule_and_logger_settings_out_of_range_are_refused_on_their_line() {
+        refused_on_their_lines(&[
+            ("[schedule]\nrate_hz = 0\n", "schedule.rate_hz", 2),
+            (
+                "[[schedule.stops]]\ntemp_c = 0\n[[schedule.stops]]\ntemp_c = 20\nramp_c_per_min = 0\n",
+                "schedule.stops[1].ramp_c_per_min",
+                5,
+            ),
+            (
+                "[[schedule.stops]]\ntemp_c = -20\nsoak_s = -60\n",
+                "schedule.stops[0].soak_s",
+                3,
+            ),
+            (
+                "[schedule]\ndwell_s = 0\n[[schedule.stops]]\ntemp_c = 0\n",
+                "schedule.dwell_s",
+                2,
+            ),
+            ("[schedule]\nmove_s = -1\n", "schedule.move_s", 2),
+            (
+                "[schedule.sweep]\nlegs = [\n  { to_c = -20, c_per_min = 1 },\n  { to_c = 40, c_per_min = 0 },\n]\n",
+                "schedule.sweep.legs[1].c_per_min",
+                2,
+            ),
+            (
+                "[schedule]\nextra_positions = [[\"E1\", [0.7, 0.7, 0]], [\"E2\", [0, 0, 0]]]\n",
+                "schedule.extra_positions[1]",
+                2,
+            ),
+            ("[logger]\ndrop_rate = 1\n", "logger.drop_rate", 2),
+            ("[logger]\nrest_rate_hz = -0.1\n", "logger.rest_rate_hz", 2),
+            (
+                "[schedule]\nrate_hz = 10\n[logger]\njitter_s = 0.2\n",
+                "logger.jitter_s",
+                4,
+            ),
+        ]);
+    }
+
+    /// The flight's rate, legs, attitudes and holds, on their line.
+    #[test]
+    fn flight_settings_out_of_range_are_refused_on_their_line() {
+        refused_on_their_lines(&[
+            ("[flight]\nrate_hz = 0\n", "flight.rate_hz", 2),
+            ("[flight]\nlegs = []\n", "flight.legs", 2),
+            (
+                "[flight]\nrate_hz = 20\n[[flight.legs]]\nto_c = 40\nc_per_min = 6\n[[flight.legs]]\nto_c = 0\nc_per_min = 5\nhold_s = -1\n",
+                "flight.legs[1].hold_s",
+                9,
+            ),
+            ("[flight]\nattitudes = 0\n", "flight.attitudes", 2),
+            ("[flight]\nhold_s = 0\n", "flight.hold_s", 2),
+        ]);
+    }
+
+    /// A flight given apart from a configuration (which the finiteness walk does not
+    /// see), a direction too short to divide by, and what does not run.
+    #[test]
+    fn a_flight_apart_a_vanishing_direction_and_settings_that_do_not_run() {
+        let f = Flight {
+            move_s: -2.0,
+            ..Flight::default()
+        };
+        assert_eq!(flight(&f).map(|r| r.field), Some("flight.move_s".into()));
+        // an infinite rate would never end
+        let f = Flight {
+            rate_hz: f64::INFINITY,
+            ..Flight::default()
+        };
+        assert_eq!(flight(&f).map(|r| r.field), Some("flight.rate_hz".into()));
+        assert_eq!(flight(&Flight::default()), None);
+        // a vector whose length underflows is no direction
+        let e = refused("[schedule]\nextra_positions = [[\"E1\", [1e-200, 0, 0]]]\n");
+        assert_eq!(e.field.as_deref(), Some("schedule.extra_positions[0]"));
+        // what does not run is not judged: the stops under a sweep
+        let sweep = "[schedule.sweep]\nlegs = [{ to_c = 40, c_per_min = 1 }]\n\
+                     [[schedule.stops]]\ntemp_c = 0\nramp_c_per_min = 0\n";
+        parse_config(Path::new("sweep.toml"), sweep).unwrap();
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! second power cycle, static attitudes all over the sphere), sampled at an MCU rate.
 //! What a blob diagnosed from the production recording must compensate, on a temperature
 //! history it was not fitted on.
-use crate::error::{ErrorKind, HostError, Result};
+use crate::error::Result;
 use crate::simulate::config::{Flight, SimConfig};
 use crate::simulate::readings::{sample, within, Disturbance};
 use crate::simulate::thermal::Thermal;
@@ -57,29 +57,10 @@ fn duration(f: &Flight) -> f64 {
     total
 }
 
-// The negated comparisons are the point: NaN fails them.
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
+/// The flight's own ranges and finiteness ([`crate::simulate::checks::flight`]): a
+/// flight given apart from its configuration is checked as one read with it.
 fn check(f: &Flight) -> Result<()> {
-    let bad = |what: &str| {
-        Err(HostError::new(
-            ErrorKind::Invalid,
-            format!("flight: {what}"),
-        ))
-    };
-    if !(f.rate_hz > 0.0 && f.rate_hz.is_finite()) {
-        return bad("rate_hz must be > 0");
-    }
-    if f.legs.is_empty()
-        || f.legs
-            .iter()
-            .any(|l| !(l.c_per_min > 0.0) || l.hold_s < 0.0)
-    {
-        return bad("needs legs, each with c_per_min > 0 and hold_s >= 0");
-    }
-    if f.attitudes == 0 || !(f.hold_s > 0.0) || f.move_s < 0.0 {
-        return bad("needs attitudes > 0, hold_s > 0 and move_s >= 0");
-    }
-    Ok(())
+    crate::simulate::checks::flight(f).map_or(Ok(()), |r| Err(r.error()))
 }
 
 /// The flight recording of `cfg`'s unit, with the positions file of its attitudes.

@@ -51,13 +51,8 @@ struct Segment {
 fn positions(cfg: &SimConfig) -> Result<Positions> {
     let mut positions = Positions::default();
     for (n, v) in &cfg.schedule.extra_positions {
+        // a zero or non-finite vector is refused with the configuration (`checks`)
         let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        if norm == 0.0 || !norm.is_finite() {
-            return Err(HostError::new(
-                ErrorKind::Invalid,
-                format!("schedule.extra_positions `{n}` has a zero-length vector"),
-            ));
-        }
         positions.set(n, v.map(|x| x / norm), None);
     }
     Ok(positions)
@@ -85,12 +80,6 @@ fn plan(cfg: &SimConfig, positions: &Positions, rest: usize) -> Result<Vec<Segme
         phase,
     };
     for stop in &sch.stops {
-        if stop.ramp_c_per_min.is_nan() || stop.ramp_c_per_min <= 0.0 {
-            return Err(HostError::new(
-                ErrorKind::Invalid,
-                format!("stop at {} C: ramp_c_per_min must be > 0", stop.temp_c),
-            ));
-        }
         let ramp_s = (stop.temp_c - set).abs() / stop.ramp_c_per_min * 60.0;
         segs.push(Segment {
             duration_s: ramp_s,
@@ -126,15 +115,8 @@ fn sweep_plan(
 ) -> Result<Vec<Segment>> {
     let sch = &cfg.schedule;
     let mut knots = vec![(0.0, cfg.chamber.start_c)];
-    for (i, leg) in sweep.legs.iter().enumerate() {
-        if !(leg.c_per_min > 0.0 && leg.hold_s >= 0.0 && leg.to_c.is_finite()) {
-            return Err(HostError::new(
-                ErrorKind::Invalid,
-                format!(
-                    "schedule.sweep.legs[{i}]: needs c_per_min > 0, hold_s >= 0 and a finite to_c"
-                ),
-            ));
-        }
+    // the legs' ranges are checked with the configuration (`checks`)
+    for leg in &sweep.legs {
         let (t, from) = knots[knots.len() - 1];
         let t1 = t + (leg.to_c - from).abs() / leg.c_per_min * 60.0;
         knots.push((t1, leg.to_c));
@@ -222,6 +204,7 @@ fn program_plan(
 /// the end of its last move back to rest (a blind case places a fixture change between
 /// two stops by it).
 pub fn stop_spans(cfg: &SimConfig) -> Result<Vec<[f64; 2]>> {
+    checks::check(cfg)?;
     let positions = positions(cfg)?;
     let rest = position_index(&positions, &cfg.schedule.rest_position)?;
     let segs = plan(cfg, &positions, rest)?;
@@ -254,19 +237,8 @@ struct Clock {
 
 impl Clock {
     fn new(cfg: &SimConfig, rate_hz: f64) -> Result<Self> {
+        // the logger's ranges are checked with the configuration (`checks`)
         let l = &cfg.logger;
-        if !(l.rest_rate_hz >= 0.0 && l.drop_rate >= 0.0 && l.drop_rate < 1.0) {
-            return Err(HostError::new(
-                ErrorKind::Invalid,
-                "logger needs rest_rate_hz >= 0 and 0 <= drop_rate < 1",
-            ));
-        }
-        if !(l.jitter_s >= 0.0 && l.jitter_s < 1.0 / rate_hz) {
-            return Err(HostError::new(
-                ErrorKind::Invalid,
-                format!("logger.jitter_s must be >= 0 and less than one tick (1 / {rate_hz} Hz)"),
-            ));
-        }
         let rest_every = if l.rest_rate_hz > 0.0 {
             ((rate_hz / l.rest_rate_hz).round() as u64).max(1)
         } else {

@@ -156,6 +156,20 @@ pub fn figures(effect: &str, dir: &Path) -> [f64; 4] {
             println!("{effect}: named {} {}", f["effect"], f["parameters"]);
         }
     }
+    // this test reaches every stop from below: the split of a hysteresis beside a rate
+    // rests on its ramps, and the diagnosis says so (of that pair only)
+    let coupled: Vec<String> = d["coupled"]
+        .as_array()
+        .unwrap_or_else(|| panic!("{effect}: no `coupled` in the diagnosis"))
+        .iter()
+        .map(|c| c["effects"].to_string())
+        .collect();
+    let want: &[&str] = if effect == "hysteresis+temp_rate" {
+        &[r#"["hysteresis","temp_rate"]"#]
+    } else {
+        &[]
+    };
+    assert_eq!(coupled, want, "{effect}: coupled {}", d["coupled"]);
     cli_json(&["fit", s(&rec), "--out", s(&plain), "--json", "--force"]);
     let (fw, _) = verify(&rec, None, &diagnosed);
     let (flight, pos) = write(dir, &format!("{effect}-flight"), &in_flight(cfg));

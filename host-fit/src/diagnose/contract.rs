@@ -92,6 +92,10 @@ pub struct Contract {
     pub findings: Vec<Finding>,
     /// Candidates the data cannot tell apart.
     pub ambiguous: Vec<Ambiguity>,
+    /// Effects found together whose split the design pins only through its ramps (a
+    /// hysteresis beside a rate or a lag, no temperature seen at rest from both
+    /// directions): the correlation of their coefficients and what separates them.
+    pub coupled: Vec<crate::diagnose::coupled::Coupling>,
     /// What this recording cannot identify.
     pub not_identifiable: Vec<String>,
     /// Notes on the data (spikes, gaps, coloured noise, sensor against chamber, ...).
@@ -297,6 +301,7 @@ impl Diagnosis<'_> {
             located: self.hotspots.iter().take(12).cloned().collect(),
             findings: self.findings.clone(),
             ambiguous: self.ambiguous.clone(),
+            coupled: self.coupled.clone(),
             not_identifiable: self.not_identifiable.clone(),
             quality: self.quality.clone(),
             unexplained: (!self.unexplained.is_empty()).then(|| Unexplained {
@@ -380,6 +385,23 @@ impl Contract {
             s.push_str(&format!(
                 "ambiguous: {what} cannot be told apart; needed: {}\n",
                 x.needed
+            ));
+        }
+        for x in &self.coupled {
+            let r: Vec<String> = x
+                .correlation
+                .iter()
+                .zip(["x", "y", "z"])
+                .filter_map(|(r, a)| r.map(|r| format!("{r:.2} on {a}")))
+                .collect();
+            let r = if r.is_empty() {
+                String::new()
+            } else {
+                format!(" (correlation of their coefficients {})", r.join(", "))
+            };
+            s.push_str(&format!(
+                "coupled: {} and {}{r}: {}; needed: {}\n",
+                x.effects[0], x.effects[1], x.why, x.needed
             ));
         }
         if let Some(u) = &self.unexplained {

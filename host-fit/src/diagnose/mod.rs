@@ -16,6 +16,7 @@
 //! [`crate::model::flashed`]'s. With a logger at debug level (`HOSTFIT_DEBUG=1` for the
 //! command), every candidate's judgement is logged.
 pub mod contract;
+pub mod coupled;
 pub mod discover;
 pub mod findings;
 pub mod location;
@@ -58,6 +59,8 @@ pub struct Diagnosis<'a> {
     pub findings: Vec<Finding>,
     /// Ambiguities.
     pub ambiguous: Vec<Ambiguity>,
+    /// Effects found together whose split the design pins only through its ramps.
+    pub coupled: Vec<coupled::Coupling>,
     /// Where the baseline residual exceeds the floor.
     pub hotspots: Vec<Hotspot>,
     /// Where the final residual still exceeds the floor (empty when at the floor).
@@ -169,6 +172,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
             .filter(|t| !t.named && final_fit.spec.extras.contains(&t.extra))
             .filter_map(|t| findings::term_set(&t.extra, &t.others)),
     );
+    let coupled = coupled::coupled(&data, &final_fit, &findings);
     let unexplained = if metrics::normalized_rms(&data, &final_fit) > rules.at_floor_rms {
         let z = metrics::z(&data, &final_fit);
         locate(&data, &z, &final_fit.resid, rules.located_sigmas)
@@ -193,6 +197,7 @@ pub fn diagnose_with(rec: &Recording, rules: Rules) -> Result<Diagnosis<'_>> {
         final_fit,
         findings,
         ambiguous,
+        coupled,
         hotspots,
         unexplained,
         research,

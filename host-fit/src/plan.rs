@@ -67,7 +67,9 @@ pub struct Limits {
 /// stops' soaks after their ramps already separate a lag from a rate; the turn after
 /// the cold end shows a gradual hysteresis too: a play over 10 C is found and flies at
 /// 0.030 mg on the production test without a return, 0.033 mg with one, 0.034 mg on the
-/// sweep this module plans for it, `tests/tests/time_true.rs`).
+/// sweep this module plans for it, `tests/tests/time_true.rs`). This is the unit type's
+/// rule, whatever test found the pair; the diagnosis's `coupled` report
+/// ([`crate::diagnose::coupled`]) says when its own recording left the split to the ramps.
 pub fn to_separate(found: &[EffectId], ambiguous: &[Vec<EffectId>]) -> Vec<EffectId> {
     use EffectId::{Hysteresis, TempRate, ThermalLag};
     let dynamic = [Hysteresis, ThermalLag, TempRate];

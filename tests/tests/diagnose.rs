@@ -199,6 +199,7 @@ fn json_contract_on_a_clean_and_an_effect_recording() {
             "baseline",
             "findings",
             "ambiguous",
+            "coupled",
             "quality",
             "unexplained",
             "final",

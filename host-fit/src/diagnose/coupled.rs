@@ -1,15 +1,15 @@
 //! Effects found together whose split the design pins only in part: a hysteresis beside
-//! a rate or a lag on a test that shows no temperature from both directions at rest.
-//! Their sum is measured; how it divides between them rests on the ramps alone, and a
-//! flight (faster ramps, turns at any temperature) pays for a wrong division. Reported
-//! with the correlation of their coefficients in the final joint fit (the joint
-//! uncertainty, beside each finding's own 1-sigma) and the measurement that separates
-//! them.
+//! a rate or a lag on a test that shows no temperature at rest on both of the
+//! hysteresis's branches. Their sum is measured; how it divides between them rests on
+//! the ramps, and a flight (faster ramps, turns at any temperature) pays for a wrong
+//! division. Reported with the correlation of their estimates in the final joint fit
+//! (beside each finding's own 1-sigma) and the measurement that separates them.
 use crate::data::recording::MAX_DWELL_DRIFT_C;
 use crate::diagnose::findings::{needed, Finding};
 use crate::model::data::Data;
-use crate::model::effects::EffectId;
+use crate::model::effects::{EffectId, Extra};
 use crate::model::params::{Param, Term};
+use crate::model::regressors;
 use crate::model::solve::Fit;
 use serde::Serialize;
 
@@ -18,9 +18,11 @@ use serde::Serialize;
 pub struct Coupling {
     /// The two effects (the hysteresis first).
     pub effects: [EffectId; 2],
-    /// Per axis (x, y, z): the correlation of the two effects' coefficients on that axis
-    /// in the final joint fit; null where one of them has no coefficient there (a lag
-    /// acts through the temperature slopes, by its time constant).
+    /// Per axis (x, y, z): the correlation of the two effects' estimates on that axis in
+    /// the final joint fit (its formal covariance; a hysteresis's offset term, a rate's
+    /// coefficient), on the axes where both findings matter; null elsewhere, and where
+    /// one of them has no coefficient of its own (a lag acts through the temperature
+    /// slopes, by its time constant).
     pub correlation: [Option<f64>; 3],
     /// Why the design leaves their split to the ramps.
     pub why: String,
@@ -28,30 +30,37 @@ pub struct Coupling {
     pub needed: String,
 }
 
-/// Temperatures of two static windows closer than this are one temperature here, C.
+/// Temperatures of two windows at rest closer than this are one temperature here, C.
 const SAME_TEMPERATURE_C: f64 = 2.0;
 
-/// Whether some temperature is seen at rest (in a static dwell, one that drifts no
-/// more than [`MAX_DWELL_DRIFT_C`]: the dwells at a stop, not the ramps) after heating
-/// and after cooling.
-fn seen_both_ways(data: &Data) -> bool {
-    let r = &data.rules;
-    let at_rest = |k: usize, sign: f64| {
-        let static_dwell = data
-            .rec
-            .dwells
-            .get(data.obs[k].dwell)
-            .is_some_and(|d| d.temp_span_c <= MAX_DWELL_DRIFT_C);
-        static_dwell
-            && data
-                .dir
-                .get(k)
-                .is_some_and(|d| d * sign > r.direction_majority)
-    };
+/// Whether some temperature is seen at rest (in a dwell that drifts no more than
+/// [`MAX_DWELL_DRIFT_C`]; a ramp's dwell drifts more) on both of the fitted
+/// hysteresis's branches: its own state (`threshold_c`, `initial`: the column the fit
+/// used) averaged over each window, beyond the rules' direction majority either way.
+fn seen_both_ways(data: &Data, threshold_c: f64, initial: f64) -> bool {
+    let majority = data.rules.direction_majority;
+    let state = regressors::directions(data.rec, threshold_c, initial);
+    let branch: Vec<f64> = data
+        .obs
+        .iter()
+        .map(|o| {
+            let rows = state.get(o.start..o.end).unwrap_or_default();
+            rows.iter().sum::<f64>() / rows.len().max(1) as f64
+        })
+        .collect();
     let temps = |sign: f64| -> Vec<f64> {
-        (0..data.obs.len())
-            .filter(|&k| at_rest(k, sign))
-            .map(|k| data.obs[k].temp_c)
+        data.obs
+            .iter()
+            .zip(&branch)
+            .filter(|(o, b)| {
+                *b * sign > majority
+                    && data
+                        .rec
+                        .dwells
+                        .get(o.dwell)
+                        .is_some_and(|d| d.temp_span_c <= MAX_DWELL_DRIFT_C)
+            })
+            .map(|(o, _)| o.temp_c)
             .collect()
     };
     let (heated, cooled) = (temps(1.0), temps(-1.0));
@@ -60,14 +69,18 @@ fn seen_both_ways(data: &Data) -> bool {
         .any(|h| cooled.iter().any(|c| (h - c).abs() < SAME_TEMPERATURE_C))
 }
 
-/// The correlation of the effect terms of extras `a` and `b` on each axis in `f`.
-fn correlation(f: &Fit, a: usize, b: usize) -> [Option<f64>; 3] {
+/// The correlation of the estimates of extras `a` and `b` on each axis of `on` in `f`
+/// (the first term of each on the axis).
+fn correlation(f: &Fit, a: usize, b: usize, on: [bool; 3]) -> [Option<f64>; 3] {
     let column = |e: usize, axis: usize| {
         f.labels.iter().position(|l| {
             matches!(l, Param::Effect { extra, axis: i, term } if *extra == e && *i == axis && *term != Term::Discovered)
         })
     };
     std::array::from_fn(|axis| {
+        if !on[axis] {
+            return None;
+        }
         let (i, j) = (column(a, axis)?, column(b, axis)?);
         let c = f.cov.as_ref()?;
         let r = c[(i, j)] / (c[(i, i)] * c[(j, j)]).sqrt();
@@ -76,29 +89,45 @@ fn correlation(f: &Fit, a: usize, b: usize) -> [Option<f64>; 3] {
 }
 
 /// The couplings of `findings` in the final fit `f` of `data`: a hysteresis beside a
-/// rate or a lag where no temperature is seen at rest from both directions (every stop
-/// reached from one side: after the first turn the hysteresis is one constant in every
-/// dwell, which the temperature model takes; the ramps, where the rate and the lag act,
-/// are what is left to tell it from them).
+/// rate or a lag where no temperature is seen at rest on both of the hysteresis's
+/// branches (every stop reached from one side: after the first turn the hysteresis is one
+/// constant in every dwell, which the temperature model takes; the ramps, where the rate
+/// and the lag act, are what is left to tell it from them).
 pub fn coupled(data: &Data, f: &Fit, findings: &[Finding]) -> Vec<Coupling> {
-    let has = |id: EffectId| findings.iter().any(|x| x.effect == id);
-    if !has(EffectId::Hysteresis) || seen_both_ways(data) {
+    let finding = |id: EffectId| findings.iter().find(|x| x.effect == id);
+    let fitted = f.spec.extras.iter().enumerate().find_map(|(e, x)| {
+        if let Extra::Hysteresis {
+            threshold_c,
+            initial,
+            ..
+        } = x
+        {
+            Some((e, *threshold_c, *initial))
+        } else {
+            None
+        }
+    });
+    let (Some(h), Some((he, threshold_c, initial))) = (finding(EffectId::Hysteresis), fitted)
+    else {
+        return Vec::new();
+    };
+    if seen_both_ways(data, threshold_c, initial) {
         return Vec::new();
     }
     let extra = |id: EffectId| f.spec.extras.iter().position(|e| e.id() == id);
     [EffectId::TempRate, EffectId::ThermalLag]
         .into_iter()
-        .filter(|&id| has(id))
-        .map(|id| {
+        .filter_map(|id| Some((id, finding(id)?)))
+        .map(|(id, other)| {
             let pair = [EffectId::Hysteresis, id];
+            let on = ["x", "y", "z"].map(|a| {
+                h.axes.iter().any(|x| x == a) && other.axes.iter().any(|x| x == a)
+            });
             Coupling {
                 effects: pair,
-                correlation: match (extra(pair[0]), extra(id)) {
-                    (Some(a), Some(b)) => correlation(f, a, b),
-                    _ => [None; 3],
-                },
+                correlation: extra(id).map_or([None; 3], |b| correlation(f, he, b, on)),
                 why: format!(
-                    "no temperature is seen at rest after heating and after cooling: the hysteresis is one constant in the dwells after the first turn, which the temperature model takes, and is told from {id} by the ramps alone"
+                    "no temperature is seen at rest on both of the hysteresis's branches: it is one constant in the dwells after the first turn, which the temperature model takes, and is told from {id} by the ramps alone"
                 ),
                 needed: needed(&pair),
             }

@@ -183,22 +183,20 @@ fn effects(cfg: &SimConfig) -> Option<Refusal> {
             format!("the period of the shape must not be {p} C"),
         ));
     }
-    let states = [
-        ("effects.hysteresis_initial", e.hysteresis_initial),
-        (
-            "flight.initial_direction",
-            cfg.flight.as_ref().map(|f| f.initial_direction),
-        ),
-    ];
-    for (field, v) in states {
-        if let Some(s) = v.filter(|s| !(-1.0..=1.0).contains(s)) {
-            return Some(Refusal::new(
-                field,
-                format!("the state before the first change is +1 (heated), -1 (cooled) or between, not {s}"),
-            ));
-        }
-    }
-    None
+    e.hysteresis_initial
+        .and_then(|s| state("effects.hysteresis_initial", s))
+}
+
+/// A hysteresis state before the first change at `field` out of [-1, 1] (NaN too).
+fn state(field: &str, s: f64) -> Option<Refusal> {
+    (!(-1.0..=1.0).contains(&s)).then(|| {
+        Refusal::new(
+            field,
+            format!(
+                "the state before the first change is +1 (heated), -1 (cooled) or between, not {s}"
+            ),
+        )
+    })
 }
 
 /// The first of `legs` (at `field[i]`) that does not ramp (`c_per_min` > 0) or holds
@@ -339,10 +337,12 @@ pub fn flight(f: &Flight) -> Option<Refusal> {
         ("flight.start_c", f.start_c),
         ("flight.tau_air_s", f.tau_air_s),
         ("flight.tau_case_s", f.tau_case_s),
-        ("flight.initial_direction", f.initial_direction),
     ];
     if let Some((field, v)) = numbers.iter().find(|(_, v)| !v.is_finite()) {
         return refuse(field, format!("must be a finite number, not {v}"));
+    }
+    if let Some(r) = state("flight.initial_direction", f.initial_direction) {
+        return Some(r);
     }
     if let Some(i) = f
         .power_offs
@@ -536,15 +536,7 @@ mod tests {
                 6,
             ),
         ];
-        for (text, field, line) in cases {
-            let e = refused(text);
-            assert_eq!(e.kind(), ErrorKind::Invalid, "{text}");
-            assert_eq!(
-                (e.field.as_deref(), e.line),
-                (Some(field), Some(line)),
-                "{text}: {e}"
-            );
-        }
+        refused_on_their_lines(&cases);
     }
 
     /// `cases` (text, field, line) each refused as invalid, naming the field and line.

@@ -48,14 +48,14 @@ struct Segment {
 }
 
 /// The built-in positions plus the schedule's extra ones.
-fn positions(cfg: &SimConfig) -> Result<Positions> {
+fn positions(cfg: &SimConfig) -> Positions {
     let mut positions = Positions::default();
     for (n, v) in &cfg.schedule.extra_positions {
         // a zero or non-finite vector is refused with the configuration (`checks`)
         let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         positions.set(n, v.map(|x| x / norm), None);
     }
-    Ok(positions)
+    positions
 }
 
 fn position_index(positions: &Positions, n: &str) -> Result<usize> {
@@ -205,7 +205,7 @@ fn program_plan(
 /// two stops by it).
 pub fn stop_spans(cfg: &SimConfig) -> Result<Vec<[f64; 2]>> {
     checks::check(cfg)?;
-    let positions = positions(cfg)?;
+    let positions = positions(cfg);
     let rest = position_index(&positions, &cfg.schedule.rest_position)?;
     let segs = plan(cfg, &positions, rest)?;
     // per stop: a ramp, a soak, then a move and a dwell per position, and a move to rest
@@ -236,7 +236,7 @@ struct Clock {
 }
 
 impl Clock {
-    fn new(cfg: &SimConfig, rate_hz: f64) -> Result<Self> {
+    fn new(cfg: &SimConfig, rate_hz: f64) -> Self {
         // the logger's ranges are checked with the configuration (`checks`)
         let l = &cfg.logger;
         let rest_every = if l.rest_rate_hz > 0.0 {
@@ -244,12 +244,12 @@ impl Clock {
         } else {
             1
         };
-        Ok(Clock {
+        Clock {
             rest_every,
             jitter_s: l.jitter_s,
             drop_rate: l.drop_rate,
             rng: Rng::new(cfg.seed ^ 0xC10C),
-        })
+        }
     }
 
     /// Whether tick `k` becomes a row (`at_rest`: the unit rests through a ramp or soak).
@@ -316,7 +316,7 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
     }
     checks::check(cfg)?;
     let unit = TrueUnit::new(cfg)?;
-    let positions = positions(cfg)?;
+    let positions = positions(cfg);
     let sch = &cfg.schedule;
     if sch.rate_hz.is_nan()
         || sch.rate_hz <= 0.0
@@ -367,7 +367,7 @@ pub fn simulate(cfg: &SimConfig, mut progress: impl FnMut(f64)) -> Result<Simula
         }
         _ => vector(p),
     };
-    let mut clock = Clock::new(cfg, sch.rate_hz)?;
+    let mut clock = Clock::new(cfg, sch.rate_hz);
     let mut w = RecordingWriter::new(cfg, &sch.power_offs, clock.jitter_s > 0.0)?;
     let mut th = Thermal::new(cfg);
     let mut dist = Disturbance::new(cfg.seed, &cfg.effects);

@@ -94,7 +94,7 @@ pub struct Contract {
     pub ambiguous: Vec<Ambiguity>,
     /// Effects found together whose split the design pins only through its ramps (a
     /// hysteresis beside a rate or a lag, no temperature seen at rest from both
-    /// directions): the correlation of their coefficients and what separates them.
+    /// directions): the correlation of their estimates and what separates them.
     pub coupled: Vec<crate::diagnose::coupled::Coupling>,
     /// What this recording cannot identify.
     pub not_identifiable: Vec<String>,
@@ -397,7 +397,7 @@ impl Contract {
             let r = if r.is_empty() {
                 String::new()
             } else {
-                format!(" (correlation of their coefficients {})", r.join(", "))
+                format!(" (correlation of their estimates {})", r.join(", "))
             };
             s.push_str(&format!(
                 "coupled: {} and {}{r}: {}; needed: {}\n",

@@ -10,7 +10,7 @@ use crate::model::data::Data;
 use crate::model::effects::{EffectId, Extra};
 use crate::model::params::{Param, Term};
 use crate::model::regressors;
-use crate::model::solve::Fit;
+use crate::model::solve::{Depth, Fit};
 use serde::Serialize;
 
 /// Two effects of the findings whose split this recording pins only through its ramps.
@@ -19,10 +19,10 @@ pub struct Coupling {
     /// The two effects (the hysteresis first).
     pub effects: [EffectId; 2],
     /// Per axis (x, y, z): the correlation of the two effects' estimates on that axis in
-    /// the final joint fit (its formal covariance; a hysteresis's offset term, a rate's
-    /// coefficient), on the axes where both findings matter; null elsewhere, and where
-    /// one of them has no coefficient of its own (a lag acts through the temperature
-    /// slopes, by its time constant).
+    /// the final joint fit, at unit dispersion (a hysteresis's offset term with a rate's
+    /// coefficient from the formal covariance; with a lag's time constants, which are
+    /// profiled, from that profile), on the axes where both findings matter; null
+    /// elsewhere, and where the profile gives no variance.
     pub correlation: [Option<f64>; 3],
     /// Why the design leaves their split to the ramps.
     pub why: String,
@@ -69,23 +69,94 @@ fn seen_both_ways(data: &Data, threshold_c: f64, initial: f64) -> bool {
         .any(|h| cooled.iter().any(|c| (h - c).abs() < SAME_TEMPERATURE_C))
 }
 
+/// What a partner of the hysteresis is estimated by, and so how their correlation is
+/// found.
+#[derive(Debug, Clone, Copy)]
+enum Estimate {
+    /// A linear coefficient per axis (a rate's `r_i`): the fit's covariance.
+    Coefficient,
+    /// Profiled time constants (a lag's): the profile.
+    TimeConstant,
+}
+
+/// The column of extra `e`'s first term on `axis` in `f`.
+fn column(f: &Fit, e: usize, axis: usize) -> Option<usize> {
+    f.labels.iter().position(|l| {
+        matches!(l, Param::Effect { extra, axis: i, term } if *extra == e && *i == axis && *term != Term::Discovered)
+    })
+}
+
 /// The correlation of the estimates of extras `a` and `b` on each axis of `on` in `f`
 /// (the first term of each on the axis).
 fn correlation(f: &Fit, a: usize, b: usize, on: [bool; 3]) -> [Option<f64>; 3] {
-    let column = |e: usize, axis: usize| {
-        f.labels.iter().position(|l| {
-            matches!(l, Param::Effect { extra, axis: i, term } if *extra == e && *i == axis && *term != Term::Discovered)
-        })
-    };
     std::array::from_fn(|axis| {
         if !on[axis] {
             return None;
         }
-        let (i, j) = (column(a, axis)?, column(b, axis)?);
+        let (i, j) = (column(f, a, axis)?, column(f, b, axis)?);
         let c = f.cov.as_ref()?;
         let r = c[(i, j)] / (c[(i, i)] * c[(j, j)]).sqrt();
         r.is_finite().then_some(r)
     })
+}
+
+/// Relative step of a lag's time constants for its profile, as `findings` takes it.
+const LAG_STEP: f64 = 0.02;
+
+/// The correlation of extra `a`'s estimate on each axis of `on` with the lag `lag`'s
+/// time constants (all scaled together), in `f` of `data`. A lag has no linear
+/// coefficient: its time constant is profiled, so the joint covariance is taken from
+/// the profile at unit dispersion, as the linear one is: the chi-square's curvature in
+/// the scale `s` of the time constants gives `var(s)`, the refits at `s = 1 +- step`
+/// give the slope `b = d a / d s` of `a`'s estimate at a fixed lag, and with `a`'s
+/// variance at that lag `v`, `corr = b sd(s) / sqrt(v + b^2 var(s))` (a Gaussian's
+/// conditional mean and variance). Exact for a model linear in `s` near the fit; the
+/// step is 2 %, where the lag's profile is a parabola to well under that.
+fn lag_correlation(data: &Data, f: &Fit, a: usize, lag: usize, on: [bool; 3]) -> [Option<f64>; 3] {
+    let none = [None; 3];
+    let Some(Extra::Lag { taus }) = f.spec.extras.get(lag) else {
+        return none;
+    };
+    if !on.contains(&true) {
+        return none;
+    }
+    let at = |s: f64| {
+        let scaled = taus.map(|pair| pair.map(|t| t * s));
+        data.fit(
+            &f.spec.replaced(lag, Extra::Lag { taus: scaled }),
+            None,
+            Depth::Profile,
+        )
+    };
+    let (Some(up), Some(down), Some(cov)) = (at(1.0 + LAG_STEP), at(1.0 - LAG_STEP), &f.cov) else {
+        return none;
+    };
+    let curv = (up.chi2 + down.chi2 - 2.0 * f.chi2) / (LAG_STEP * LAG_STEP);
+    // a flat or bent-down profile (or NaN) gives no variance
+    if curv.is_nan() || curv <= 0.0 {
+        return none;
+    }
+    let var_s = 2.0 / curv;
+    std::array::from_fn(|axis| {
+        if !on[axis] {
+            return None;
+        }
+        let i = column(f, a, axis)?;
+        let (u, d) = (
+            up.x.get(column(&up, a, axis)?)?,
+            down.x.get(column(&down, a, axis)?)?,
+        );
+        let r = from_profile((u - d) / (2.0 * LAG_STEP), var_s, cov[(i, i)]);
+        r.is_finite().then_some(r)
+    })
+}
+
+/// The correlation of `a` and `s` in a Gaussian, from what a profile in `s` gives: the
+/// slope `b` of `a`'s estimate in `s`, the variance `var_s` of `s`, and `a`'s variance
+/// `v` at a fixed `s` (then `cov = b var_s`, `var(a) = v + b^2 var_s`). Exact in
+/// arithmetic; in floating point within a few ulps (`a_profile_gives_the_gaussians_correlation`).
+fn from_profile(b: f64, var_s: f64, v: f64) -> f64 {
+    b * var_s.sqrt() / (v + b * b * var_s).sqrt()
 }
 
 /// The couplings of `findings` in the final fit `f` of `data`: a hysteresis beside a
@@ -115,17 +186,23 @@ pub fn coupled(data: &Data, f: &Fit, findings: &[Finding]) -> Vec<Coupling> {
         return Vec::new();
     }
     let extra = |id: EffectId| f.spec.extras.iter().position(|e| e.id() == id);
-    [EffectId::TempRate, EffectId::ThermalLag]
-        .into_iter()
-        .filter_map(|id| Some((id, finding(id)?)))
-        .map(|(id, other)| {
+    [
+        (EffectId::TempRate, Estimate::Coefficient),
+        (EffectId::ThermalLag, Estimate::TimeConstant),
+    ]
+    .into_iter()
+    .filter_map(|(id, how)| Some((id, how, finding(id)?)))
+    .map(|(id, how, other)| {
             let pair = [EffectId::Hysteresis, id];
             let on = ["x", "y", "z"].map(|a| {
                 h.axes.iter().any(|x| x == a) && other.axes.iter().any(|x| x == a)
             });
             Coupling {
                 effects: pair,
-                correlation: extra(id).map_or([None; 3], |b| correlation(f, he, b, on)),
+                correlation: extra(id).map_or([None; 3], |b| match how {
+                    Estimate::TimeConstant => lag_correlation(data, f, he, b, on),
+                    Estimate::Coefficient => correlation(f, he, b, on),
+                }),
                 why: format!(
                     "no temperature is seen at rest on both of the hysteresis's branches: it is one constant in the dwells after the first turn, which the temperature model takes, and is told from {id} by the ramps alone"
                 ),
@@ -133,4 +210,28 @@ pub fn coupled(data: &Data, f: &Fit, findings: &[Finding]) -> Vec<Coupling> {
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    /// Any 2x2 covariance: the profile's slope and conditional variance give back its
+    /// correlation.
+    #[test]
+    fn a_profile_gives_the_gaussians_correlation() {
+        let mut rng = Rng::new(27);
+        for _ in 0..1000 {
+            let (sa, ss) = (
+                10f64.powf(4.0 * rng.uniform() - 6.0),
+                10f64.powf(4.0 * rng.uniform() - 2.0),
+            );
+            let rho = 1.98 * rng.uniform() - 0.99;
+            let c = rho * sa * ss;
+            let (b, v) = (c / (ss * ss), sa * sa - c * c / (ss * ss));
+            let r = from_profile(b, ss * ss, v);
+            assert!((r - rho).abs() < 1e-12, "{r} for {rho}");
+        }
+    }
 }

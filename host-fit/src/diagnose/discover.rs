@@ -17,7 +17,7 @@
 //! often it drew each chunk.
 use crate::model::data::Data;
 use crate::model::design::Row;
-use crate::model::library::{self, Candidate, LibTerm, Series, DECAY_GRID_S};
+use crate::model::library::{self, Candidate, LibTerm, Series, TimedKey, DECAY_GRID_S};
 use crate::model::lsq::Normal;
 use crate::model::solve::Fit;
 use crate::rng::Rng;
@@ -228,17 +228,13 @@ fn select(
 /// The window means of every distinct time-varying part, computed once.
 struct Timed<'s> {
     series: &'s Series,
-    cache: HashMap<String, Vec<f64>>,
+    cache: HashMap<Vec<TimedKey>, Vec<f64>>,
 }
 
 impl Timed<'_> {
     fn column(&mut self, data: &Data, term: &LibTerm) -> Vec<f64> {
-        let key: String = term
-            .timed
-            .iter()
-            .map(|t| format!("{t}"))
-            .collect::<Vec<_>>()
-            .join("*");
+        // Keyed by value, not by the printed text: the text rounds a TAU.
+        let key: Vec<_> = term.timed.iter().map(library::Timed::key).collect();
         let m = self
             .cache
             .entry(key)

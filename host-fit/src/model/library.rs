@@ -15,6 +15,18 @@ use std::fmt;
 /// [`stop_arrivals`], [`moves`]).
 pub use crate::terms::Event;
 
+/// A time-varying factor by value, to key a map: its kind, its event, the exact bits of
+/// its TAU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct TimedKey {
+    /// The kind's rank in the canonical order.
+    kind: u8,
+    /// The event it follows, if any.
+    event: Option<Event>,
+    /// The TAU's bits (0 without one).
+    tau_bits: u64,
+}
+
 /// The part of a term that varies in time (everything but the specific force), at most
 /// two factors of it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -41,6 +53,22 @@ impl Timed {
             Timed::Hours => 2,
             Timed::Decay(..) => 3,
             Timed::Step(_) => 4,
+        }
+    }
+
+    /// The factor as a value that can key a map: its kind, its event and the exact bits
+    /// of its TAU, so that two TAUs which print alike (the report rounds them) never
+    /// share a column.
+    pub fn key(&self) -> TimedKey {
+        let (event, tau_bits) = match self {
+            Timed::DT | Timed::Rate | Timed::Hours => (None, 0),
+            Timed::Decay(e, tau) => (Some(*e), tau.to_bits()),
+            Timed::Step(e) => (Some(*e), 0),
+        };
+        TimedKey {
+            kind: self.rank(),
+            event,
+            tau_bits,
         }
     }
 
@@ -692,6 +720,23 @@ mod tests {
 
     fn term(powers: [u8; 3], abs: Option<usize>, timed: Vec<Timed>) -> LibTerm {
         LibTerm { powers, abs, timed }
+    }
+
+    /// Two decays whose TAUs print alike (the text rounds to whole seconds, or minutes)
+    /// are two columns to the search's cache; the same factor is one.
+    #[test]
+    fn a_factor_keys_by_its_value_not_its_text() {
+        let [a, b, c] = [600.0, 600.4, 610.0].map(|t| Timed::Decay(Event::PowerOn, t));
+        assert_eq!(a.to_string(), b.to_string());
+        assert_ne!(a.key(), b.key());
+        assert_ne!(a.key(), c.key());
+        assert_eq!(a.key(), Timed::Decay(Event::PowerOn, 600.0).key());
+        assert_ne!(a.key(), Timed::Decay(Event::Stop, 600.0).key());
+        assert_ne!(
+            Timed::Step(Event::Stop).key(),
+            Timed::Step(Event::Position).key()
+        );
+        assert_ne!(Timed::DT.key(), Timed::Rate.key());
     }
 
     #[test]

@@ -30,6 +30,7 @@ fn holding_a_fit_at_its_optimum_changes_nothing_and_elsewhere_costs() {
     let data = &w.data;
     let spec = Spec {
         basis: Basis::Poly { order: 3 },
+        offset_order: None,
         cross: true,
         extras: vec![Extra::Rate { tau_s: 30.0 }],
     };

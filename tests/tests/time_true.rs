@@ -236,8 +236,9 @@ fn blobs_record_the_output_unit() {
 }
 
 /// The rate units over seeds 1-7 of the production twin (noise only differs), each
-/// diagnosed blob in flight: the rate alone within the aim of 0.05 mg on every seed, the
-/// lag + rate unit on all but one (seed 4: the fifth-order table the diagnosis chose, see
+/// diagnosed blob in flight: the rate alone and the lag + rate unit within the aim of
+/// 0.05 mg on every seed (the lag + rate unit's seed 4 flew at 0.073 mg while a quintic of
+/// all twelve coefficients was the only order above the stops' count, see
 /// docs/diagnosis.md); the hysteresis + rate unit is printed, not held (the split of `r`
 /// and the hysteresis on chamber ramps limits it to 0.036-0.059 mg).
 #[test]
@@ -248,7 +249,7 @@ fn rate_units_fly_within_the_aim_over_seeds() {
     let mut failed = Vec::new();
     for (effect, need) in [
         ("temp_rate", Some(7)),
-        ("thermal_lag+temp_rate", Some(6)),
+        ("thermal_lag+temp_rate", Some(7)),
         ("hysteresis+temp_rate", None),
     ] {
         let (mut line, mut rates) = (Vec::new(), Vec::new());

@@ -166,7 +166,8 @@ pub struct Dispersion {
 /// Figures of the baseline model.
 #[derive(Debug, Clone, Serialize)]
 pub struct ModelFigures {
-    /// e.g. `poly5, cross-sensitivities fixed at 0`.
+    /// e.g. `poly5, cross-sensitivities fixed at 0`, or `poly4, offsets poly5` (the
+    /// offsets one order above the K rows, which ramps logged at rest allow).
     pub temperature_model: String,
     /// Residual RMS (output units).
     pub residual_rms: f64,
@@ -188,7 +189,8 @@ pub struct Unexplained {
 /// Figures of the final model.
 #[derive(Debug, Clone, Serialize)]
 pub struct FinalFigures {
-    /// Its temperature model.
+    /// Its temperature model (as the baseline's: `poly4, offsets poly5` when the
+    /// offsets carry an order above the K rows').
     pub temperature_model: String,
     /// The effects in it, with their forms.
     pub model: Vec<String>,
@@ -287,7 +289,7 @@ impl Diagnosis<'_> {
             baseline: ModelFigures {
                 temperature_model: format!(
                     "{}{}",
-                    b.spec.basis.describe(),
+                    b.spec.temperature_model(),
                     if b.spec.cross {
                         ""
                     } else {
@@ -312,7 +314,7 @@ impl Diagnosis<'_> {
             library: self.library.clone(),
             search_ended: self.search_ended,
             final_model: FinalFigures {
-                temperature_model: f.spec.basis.describe(),
+                temperature_model: f.spec.temperature_model(),
                 model: f
                     .spec
                     .extras

@@ -42,8 +42,7 @@
 use crate::diagnose::discover::{discover, Proposal, Unidentifiable};
 use crate::diagnose::findings::reproduced;
 use crate::diagnose::location::{locate, rows_of, Hotspot};
-use crate::model::baseline::reorder;
-use crate::model::basis::Basis;
+use crate::model::baseline::{reorder, Orders};
 use crate::model::data::Data;
 use crate::model::effects::{EffectId, Extra};
 use crate::model::library::{Candidate, LibTerm, Reach};
@@ -62,8 +61,8 @@ pub struct Scope {
     pub dynamics: bool,
     /// The direction of temperature changes reverses (hysteresis).
     pub reversals: bool,
-    /// Highest polynomial order of the baseline the temperatures support.
-    pub max_order: usize,
+    /// Highest polynomial orders of the baseline the temperatures support.
+    pub orders: Orders,
     /// The floor is measured (time series can be judged).
     pub measured: bool,
 }
@@ -681,7 +680,7 @@ impl<'a> Search<'_, 'a> {
         if fit.spec.extras.iter().filter(|e| e.id() == id).count() >= id.max_count() {
             state.used.push(id);
         }
-        state.current = reorder(self.data, &fit, self.scope.max_order);
+        state.current = reorder(self.data, &fit, self.scope.orders);
     }
 
     /// Every catalogue effect has been used up: nothing is left to propose.
@@ -1034,7 +1033,7 @@ impl Search<'_, '_> {
             return Some(Termination::LibraryNothingPassed);
         };
         round.found = Some(extra.form().to_string());
-        state.current = reorder(data, &fit, self.scope.max_order);
+        state.current = reorder(data, &fit, self.scope.orders);
         state.current = checked(data, state.current.clone(), &state.regions);
         let kept = state.current.spec.extras.contains(&extra);
         if kept && !pick.others.is_empty() {
@@ -1085,16 +1084,17 @@ impl Search<'_, '_> {
         term: &LibTerm,
         axis: usize,
     ) -> Option<Fit> {
-        let order = reorder(self.data, full, self.scope.max_order).spec.basis;
-        let rises = match (&current.spec.basis, &order) {
-            (Basis::Poly { order: was }, Basis::Poly { order: now }) => now > was,
+        let chosen = reorder(self.data, full, self.scope.orders).spec;
+        let rises = match (current.spec.poly_orders(), chosen.poly_orders()) {
+            (Some(was), Some(now)) => now.0 + now.1 > was.0 + was.1,
             _ => false,
         };
         if !rises {
             return None;
         }
         let mut spec = current.spec.clone();
-        spec.basis = order;
+        spec.basis = chosen.basis;
+        spec.offset_order = chosen.offset_order;
         let base = self.data.fit(&spec, Some(current), Depth::Full)?;
         let (full, verdict) = self.term_on(&base, term, axis)?;
         log::debug!(

@@ -16,6 +16,10 @@ use nalgebra::DVector;
 pub struct Spec {
     /// Baseline temperature basis.
     pub basis: Basis,
+    /// The offsets' polynomial order when it is above the basis's (a polynomial basis
+    /// only): chamber ramps logged at rest show the offsets' direction at more
+    /// temperatures than the stops show the K rows' (see [`crate::model::baseline::Orders`]).
+    pub offset_order: Option<usize>,
     /// Whether the cross-sensitivities are fitted (else fixed at 0).
     pub cross: bool,
     /// Effects added.
@@ -42,6 +46,34 @@ impl Spec {
         let mut s = self.clone();
         s.extras[e] = extra;
         s
+    }
+
+    /// The spec with its polynomial orders set: `k` for the K rows (and the offsets),
+    /// `offsets` for the offsets when it is above `k`.
+    pub fn with_orders(&self, k: usize, offsets: usize) -> Spec {
+        Spec {
+            basis: Basis::Poly { order: k },
+            offset_order: (offsets > k).then_some(offsets),
+            ..self.clone()
+        }
+    }
+
+    /// The temperature model's text: the basis's (`poly4`), and the offsets' order when
+    /// it is above it (`poly4, offsets poly5`).
+    pub fn temperature_model(&self) -> String {
+        match self.offset_order {
+            Some(o) => format!("{}, offsets poly{o}", self.basis.describe()),
+            None => self.basis.describe(),
+        }
+    }
+
+    /// The K rows' and the offsets' polynomial orders; `None` for a piecewise-linear
+    /// basis.
+    pub fn poly_orders(&self) -> Option<(usize, usize)> {
+        match self.basis {
+            Basis::Poly { order } => Some((order, self.offset_order.unwrap_or(order))),
+            Basis::Pwl { .. } => None,
+        }
     }
 
     /// Structural unknowns profiled, over all extras.
@@ -321,7 +353,8 @@ impl Data<'_> {
     }
 }
 
-/// The offsets' temperature basis: a `Curvature` extra's fine one, else the baseline's.
+/// The offsets' temperature basis: a `Curvature` extra's fine one, else the offsets'
+/// own order, else the baseline's.
 pub fn offset_basis(spec: &Spec) -> Basis {
     spec.extras
         .iter()
@@ -334,6 +367,7 @@ pub fn offset_basis(spec: &Spec) -> Basis {
                 None
             }
         })
+        .or_else(|| spec.offset_order.map(|order| Basis::Poly { order }))
         .unwrap_or_else(|| spec.basis.clone())
 }
 

@@ -209,7 +209,10 @@ impl Flashed {
         {
             return None;
         }
-        let mut terms = vec![[0.0; 12]; (order + 1).max(2)];
+        // the offsets may carry an order above the K rows' (their terms beyond it are
+        // zero in the K slots)
+        let top = f.spec.offset_order.map_or(order, |o| o.max(order));
+        let mut terms = vec![[0.0; 12]; (top + 1).max(2)];
         for (c, l) in f.labels.iter().enumerate() {
             let (slot, k) = match *l {
                 Param::K { i, j, k } => (K_INDEX[i][j], k),

@@ -110,6 +110,7 @@ pub fn weigh(data: &mut Data, floor: &Floor) -> bool {
                     basis: Basis::Poly {
                         order: baseline::max_order(data),
                     },
+                    offset_order: None,
                     ..b.spec.clone()
                 };
                 data.fit(&spec, None, Depth::Profile)

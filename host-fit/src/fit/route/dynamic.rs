@@ -81,7 +81,7 @@ impl DynamicFit<'_> {
 }
 
 fn describe(f: &Fit) -> String {
-    let mut s = f.spec.basis.describe();
+    let mut s = f.spec.temperature_model();
     // only the in-flight terms this route fits (the lag and the rate) are in its specs
     for e in &f.spec.extras {
         if let Extra::Lag { taus } = e {
@@ -169,7 +169,8 @@ fn order_by_heldout(data: &Data, f: &Fit, cands: &mut Vec<Candidate>, tried: &mu
         .filter_map(|order| {
             let mut spec = f.spec.clone();
             spec.basis = Basis::Poly { order };
-            if spec.basis == f.spec.basis {
+            spec.offset_order = None;
+            if spec == f.spec {
                 return Some(f.clone());
             }
             data.fit(&spec, None, Depth::Full)
@@ -223,6 +224,7 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
         basis: Basis::Poly {
             order: baseline::max_order(&data),
         },
+        offset_order: None,
         ..base.spec.clone()
     };
     let mut f = data.fit(&top, None, Depth::Full).unwrap_or(base);

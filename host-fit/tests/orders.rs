@@ -5,12 +5,15 @@
 //! recording of the dwells alone gives both the same count and the same candidates as
 //! before; and a blob whose offsets carry an order above the K rows' holds that model
 //! exactly (its polynomial table against the fit's own coefficients, which the table
-//! grid reads through the design's `static_at`).
+//! grid reads through the design's `static_at`); under a broad `temp_curvature`, whose
+//! fine basis replaces the offsets' polynomial, the model's text and orders say so.
 use firmware_core::temperature::TempModel;
 use host_fit::data::positions::Positions;
 use host_fit::data::recording::Recording;
-use host_fit::model::baseline::{self, Orders};
+use host_fit::model::baseline;
+use host_fit::model::effects::Extra;
 use host_fit::model::flashed::Flashed;
+use host_fit::model::orders::Orders;
 use host_fit::model::rules::Rules;
 use host_fit::model::solve::Depth;
 use host_fit::model::weights::{weighed, Purpose};
@@ -80,9 +83,15 @@ fn an_offsets_order_above_the_k_rows_is_flashed_exactly() {
     let w = weighed(&rec, Rules::default(), Purpose::Diagnosis).unwrap();
     let data = &w.data;
     let (base, _) = baseline::required(data).unwrap();
-    let spec = base.spec.with_orders(3, 5);
-    assert_eq!(spec.poly_orders(), Some((3, 5)));
-    assert_eq!(spec.temperature_model(), "poly3, offsets poly5");
+    // the shape the candidates give: the K rows' count, the offsets one order up
+    let spec = base.spec.with_orders(4, 5);
+    assert_eq!(spec.poly_orders(), Some(Orders { k: 4, offsets: 5 }));
+    assert_eq!(spec.temperature_model(), "poly4, offsets poly5");
+    // a broad temp_curvature's fine basis replaces the offsets' polynomial: the text and
+    // the orders say what is fitted
+    let fine = spec.with(Extra::Curvature(vec![-40.0, 0.0, 40.0, 70.0]));
+    assert_eq!(fine.poly_orders(), Some(Orders { k: 4, offsets: 4 }));
+    assert_eq!(fine.temperature_model(), "poly4");
     let f = data.fit(&spec, None, Depth::Full).unwrap();
     // the offsets' terms beyond the K rows' order are in the design, and nonzero
     assert!(f
@@ -95,13 +104,13 @@ fn an_offsets_order_above_the_k_rows_is_flashed_exactly() {
         panic!("not the polynomial itself: {:?}", cal.model);
     };
     assert_eq!(terms.len(), 6, "quintic offsets");
-    // the K slots carry no term above the cubic; the offsets do
+    // the K slots carry no quintic term; the offsets do
     let top = &terms[5];
     assert!(
         firmware_core::model::K_INDEX
             .iter()
             .flatten()
-            .all(|s| top[*s] == 0.0 && terms[4][*s] == 0.0),
+            .all(|s| top[*s] == 0.0),
         "{top:?}"
     );
     assert!(firmware_core::model::U0_INDEX

@@ -19,6 +19,7 @@ use crate::model::data::Data;
 use crate::model::design::Row;
 use crate::model::library::{self, Candidate, LibTerm, Series, TimedKey, DECAY_GRID_S};
 use crate::model::lsq::Normal;
+use crate::model::orders::Orders;
 use crate::model::solve::Fit;
 use crate::rng::Rng;
 use nalgebra::{DMatrix, DVector};
@@ -297,10 +298,10 @@ fn inclusions(data: &Data, model: &Model, screened: &[Screened]) -> Vec<f64> {
     chosen.iter().map(|c| *c as f64 / bags).collect()
 }
 
-/// The sparse search on `current`'s residual (see the module doc); `order` is the
-/// baseline's temperature order (what the baseline already expresses), `reach` what the
-/// recording can judge.
-pub fn discover(data: &Data, current: &Fit, order: usize, reach: library::Reach) -> Discovery {
+/// The sparse search on `current`'s residual (see the module doc); `orders` are the
+/// baseline's temperature orders, the K rows' and the offsets' (what the baseline
+/// already expresses), `reach` what the recording can judge.
+pub fn discover(data: &Data, current: &Fit, orders: Orders, reach: library::Reach) -> Discovery {
     let rules = &data.rules;
     let model = Model::of(data, current);
     let chunks = model.n.len();
@@ -317,7 +318,7 @@ pub fn discover(data: &Data, current: &Fit, order: usize, reach: library::Reach)
     let mut alone: Vec<Alone> = Vec::new();
     let mut unidentifiable: Vec<Unidentifiable> = Vec::new();
     let mut tried = 0usize;
-    for cand in library::library(data, order, reach) {
+    for cand in library::library(data, orders, reach) {
         // decays that settle within the recording (longer ones are drifts, `t`)
         let limit = crate::model::profile::settling_limit_s(data);
         let taus: Vec<Option<f64>> = match cand.term.tau_s() {

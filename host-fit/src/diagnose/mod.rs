@@ -219,7 +219,7 @@ fn scope(data: &Data, measured: bool, n_temps: usize, notes: &mut Vec<String>) -
         temperature: n_temps > 1,
         dynamics: measured && moving && n_temps > 1,
         reversals,
-        orders: baseline::Orders::of(data),
+        orders: crate::model::orders::Orders::of(data),
         measured,
     };
     if !s.dynamics {

@@ -42,13 +42,14 @@
 use crate::diagnose::discover::{discover, Proposal, Unidentifiable};
 use crate::diagnose::findings::reproduced;
 use crate::diagnose::location::{locate, rows_of, Hotspot};
-use crate::model::baseline::{reorder, Orders};
+use crate::model::baseline::reorder;
 use crate::model::data::Data;
 use crate::model::effects::{EffectId, Extra};
 use crate::model::library::{Candidate, LibTerm, Reach};
 use crate::model::metrics::{
     adequate, adequate_term, dispersion, judge, normalized_rms, qbic, z, Judgement,
 };
+use crate::model::orders::Orders;
 use crate::model::profile;
 use crate::model::solve::{Depth, Fit};
 use serde::Serialize;
@@ -984,11 +985,13 @@ impl Search<'_, '_> {
             time: self.scope.measured,
             rate: self.scope.dynamics,
         };
-        let order = match state.current.spec.basis {
-            crate::model::basis::Basis::Poly { order } => order,
-            crate::model::basis::Basis::Pwl { .. } => 1,
-        };
-        let found = discover(data, &state.current, order, reach);
+        // a piecewise-linear baseline expresses a slope in every coefficient
+        let orders = state
+            .current
+            .spec
+            .poly_orders()
+            .unwrap_or(Orders { k: 1, offsets: 1 });
+        let found = discover(data, &state.current, orders, reach);
         if state.library.unidentifiable.is_empty() {
             state.library.unidentifiable = found.unidentifiable.clone();
         }
@@ -1086,7 +1089,7 @@ impl Search<'_, '_> {
     ) -> Option<Fit> {
         let chosen = reorder(self.data, full, self.scope.orders).spec;
         let rises = match (current.spec.poly_orders(), chosen.poly_orders()) {
-            (Some(was), Some(now)) => now.0 + now.1 > was.0 + was.1,
+            (Some(was), Some(now)) => now.k + now.offsets > was.k + was.offsets,
             _ => false,
         };
         if !rises {
@@ -1098,8 +1101,8 @@ impl Search<'_, '_> {
         let base = self.data.fit(&spec, Some(current), Depth::Full)?;
         let (full, verdict) = self.term_on(&base, term, axis)?;
         log::debug!(
-            "  library {term} on {axis} at {:?}: {verdict:?}",
-            spec.basis
+            "  library {term} on {axis} at {}: {verdict:?}",
+            spec.temperature_model()
         );
         (verdict == TermVerdict::Passed).then_some(full)
     }

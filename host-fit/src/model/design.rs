@@ -7,6 +7,7 @@ use crate::model::basis::Basis;
 use crate::model::data::Data;
 use crate::model::effects::{Extra, Restart};
 use crate::model::library;
+use crate::model::orders::Orders;
 use crate::model::params::{Param, Term};
 use crate::model::regressors;
 use nalgebra::DVector;
@@ -18,7 +19,7 @@ pub struct Spec {
     pub basis: Basis,
     /// The offsets' polynomial order when it is above the basis's (a polynomial basis
     /// only): chamber ramps logged at rest show the offsets' direction at more
-    /// temperatures than the stops show the K rows' (see [`crate::model::baseline::Orders`]).
+    /// temperatures than the stops show the K rows' (see [`crate::model::orders::Orders`]).
     pub offset_order: Option<usize>,
     /// Whether the cross-sensitivities are fitted (else fixed at 0).
     pub cross: bool,
@@ -61,17 +62,28 @@ impl Spec {
     /// The temperature model's text: the basis's (`poly4`), and the offsets' order when
     /// it is above it (`poly4, offsets poly5`).
     pub fn temperature_model(&self) -> String {
-        match self.offset_order {
+        match self.offsets_poly() {
             Some(o) => format!("{}, offsets poly{o}", self.basis.describe()),
             None => self.basis.describe(),
         }
     }
 
-    /// The K rows' and the offsets' polynomial orders; `None` for a piecewise-linear
-    /// basis.
-    pub fn poly_orders(&self) -> Option<(usize, usize)> {
+    /// The offsets' own polynomial order when it is the one fitted: a `Curvature`
+    /// extra's fine basis replaces it (see [`offset_basis`]).
+    fn offsets_poly(&self) -> Option<usize> {
+        let fine = self.extras.iter().any(|e| matches!(e, Extra::Curvature(_)));
+        self.offset_order.filter(|_| !fine)
+    }
+
+    /// The K rows' and the offsets' polynomial orders as fitted; `None` for a
+    /// piecewise-linear basis (the offsets' order is the K rows' under a `Curvature`
+    /// extra, whose fine basis replaces the polynomial's offsets).
+    pub fn poly_orders(&self) -> Option<Orders> {
         match self.basis {
-            Basis::Poly { order } => Some((order, self.offset_order.unwrap_or(order))),
+            Basis::Poly { order } => Some(Orders {
+                k: order,
+                offsets: self.offsets_poly().unwrap_or(order),
+            }),
             Basis::Pwl { .. } => None,
         }
     }

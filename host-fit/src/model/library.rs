@@ -5,6 +5,7 @@
 //! rows and clock and averaged into its windows as every other column is.
 use crate::data::recording::Recording;
 use crate::model::data::Data;
+use crate::model::orders::Orders;
 use crate::model::regressors::{self, Settle};
 use crate::terms::{Factor, Tau, Term, TermError, TermErrorKind};
 use firmware_core::model::AXES;
@@ -382,13 +383,19 @@ fn timed_parts(power_cycled: bool) -> Vec<Vec<Timed>> {
 }
 
 /// Whether a catalogue effect or the baseline already expresses `term` on `axis`: the
-/// baseline's offset and K row with their temperature polynomial (up to `order`),
-/// `temp_rate` (dTdt alone), `warmup_drift` (decay since power-on alone),
-/// `nonlinearity_k2` and `scale_asymmetry` (a_i^2 and |a_i| on axis i).
-fn catalogue_expresses(term: &LibTerm, axis: usize, order: usize) -> bool {
+/// baseline's offset and K row with their temperature polynomials (the offset's up to
+/// `orders.offsets`, the K row's up to `orders.k`), `temp_rate` (dTdt alone),
+/// `warmup_drift` (decay since power-on alone), `nonlinearity_k2` and
+/// `scale_asymmetry` (a_i^2 and |a_i| on axis i).
+fn catalogue_expresses(term: &LibTerm, axis: usize, orders: Orders) -> bool {
     let degree: u8 = term.powers.iter().sum();
     let only_dt = term.timed.iter().all(|t| matches!(t, Timed::DT));
     let dt_power = term.timed.len();
+    let order = if degree == 0 {
+        orders.offsets
+    } else {
+        orders.k
+    };
     if term.abs.is_none() && degree <= 1 && only_dt && dt_power <= order {
         return true;
     }
@@ -430,9 +437,9 @@ fn is_scale_drift(t: &LibTerm) -> bool {
 }
 
 /// The library for `data`: every term of at most three factors no catalogue effect
-/// expresses (given the baseline's temperature order `order`), on every axis, its
+/// expresses (given the baseline's temperature orders `orders`), on every axis, its
 /// decays at the first point of [`DECAY_GRID_S`] (the search tries the grid).
-pub fn library(data: &Data, order: usize, scope: Reach) -> Vec<Candidate> {
+pub fn library(data: &Data, orders: Orders, scope: Reach) -> Vec<Candidate> {
     let power_cycled = !data.rec.power_off.is_empty();
     let mut terms: Vec<LibTerm> = Vec::new();
     for (powers, abs) in force_parts(false) {
@@ -469,7 +476,7 @@ pub fn library(data: &Data, order: usize, scope: Reach) -> Vec<Candidate> {
     let mut out = Vec::new();
     for term in terms {
         for axis in 0..3 {
-            if !catalogue_expresses(&term, axis, order) {
+            if !catalogue_expresses(&term, axis, orders) {
                 out.push(Candidate {
                     term: term.clone(),
                     axis,
@@ -956,41 +963,77 @@ mod tests {
 
     #[test]
     fn the_catalogue_keeps_its_own_terms() {
+        let both = |n| Orders { k: n, offsets: n };
         // K2 and the asymmetry on their own axis, the baseline's temperature terms, the
         // rate and the warm-up alone are the catalogue's
-        assert!(catalogue_expresses(&term([2, 0, 0], None, vec![]), 0, 3));
-        assert!(!catalogue_expresses(&term([2, 0, 0], None, vec![]), 1, 3));
-        assert!(catalogue_expresses(&term([0; 3], Some(2), vec![]), 2, 3));
-        assert!(!catalogue_expresses(&term([0; 3], Some(2), vec![]), 0, 3));
+        assert!(catalogue_expresses(
+            &term([2, 0, 0], None, vec![]),
+            0,
+            both(3)
+        ));
+        assert!(!catalogue_expresses(
+            &term([2, 0, 0], None, vec![]),
+            1,
+            both(3)
+        ));
+        assert!(catalogue_expresses(
+            &term([0; 3], Some(2), vec![]),
+            2,
+            both(3)
+        ));
+        assert!(!catalogue_expresses(
+            &term([0; 3], Some(2), vec![]),
+            0,
+            both(3)
+        ));
         assert!(catalogue_expresses(
             &term([1, 0, 0], None, vec![Timed::DT]),
             1,
-            1
+            both(1)
         ));
         assert!(!catalogue_expresses(
             &term([1, 0, 0], None, vec![Timed::DT, Timed::DT]),
             1,
-            1
+            both(1)
         ));
         assert!(catalogue_expresses(
             &term([0; 3], None, vec![Timed::Rate]),
             0,
-            3
+            both(3)
         ));
         assert!(catalogue_expresses(
             &term([0; 3], None, vec![Timed::Decay(Event::PowerOn, 60.0)]),
             0,
-            3
+            both(3)
         ));
         assert!(!catalogue_expresses(
             &term([0; 3], None, vec![Timed::Decay(Event::Stop, 60.0)]),
             0,
-            3
+            both(3)
         ));
         assert!(!catalogue_expresses(
             &term([1, 0, 0], None, vec![Timed::Rate]),
             0,
-            3
+            both(3)
+        ));
+        // the offsets' own order: dT^2 alone is the offset's (order 2), a_x*dT^2 on x is
+        // not the K row's (order 1)
+        let split = Orders { k: 1, offsets: 2 };
+        let dt2 = vec![Timed::DT, Timed::DT];
+        assert!(catalogue_expresses(
+            &term([0; 3], None, dt2.clone()),
+            0,
+            split
+        ));
+        assert!(!catalogue_expresses(
+            &term([1, 0, 0], None, dt2.clone()),
+            0,
+            split
+        ));
+        assert!(!catalogue_expresses(
+            &term([0; 3], None, dt2),
+            0,
+            Orders { k: 2, offsets: 1 }
         ));
     }
 

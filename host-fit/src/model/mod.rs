@@ -27,6 +27,7 @@ pub mod lsq;
 pub mod metrics;
 pub mod normal_cache;
 pub mod observations;
+pub mod orders;
 pub mod params;
 pub mod precision;
 pub mod profile;

@@ -5,12 +5,12 @@
 //! division. Reported with the correlation of their estimates in the final joint fit
 //! (beside each finding's own 1-sigma) and the measurement that separates them.
 use crate::data::recording::MAX_DWELL_DRIFT_C;
-use crate::diagnose::findings::{needed, Finding};
+use crate::diagnose::findings::{needed, scaled_profile, Finding};
 use crate::model::data::Data;
 use crate::model::effects::{EffectId, Extra};
 use crate::model::params::{Param, Term};
 use crate::model::regressors;
-use crate::model::solve::{Depth, Fit};
+use crate::model::solve::Fit;
 use serde::Serialize;
 
 /// Two effects of the findings whose split this recording pins only through its ramps.
@@ -100,53 +100,27 @@ fn correlation(f: &Fit, a: usize, b: usize, on: [bool; 3]) -> [Option<f64>; 3] {
     })
 }
 
-/// Relative step of a lag's time constants for its profile, as `findings` takes it.
-const LAG_STEP: f64 = 0.02;
-
 /// The correlation of extra `a`'s estimate on each axis of `on` with the lag `lag`'s
 /// time constants (all scaled together), in `f` of `data`. A lag has no linear
 /// coefficient: its time constant is profiled, so the joint covariance is taken from
-/// the profile at unit dispersion, as the linear one is: the chi-square's curvature in
-/// the scale `s` of the time constants gives `var(s)`, the refits at `s = 1 +- step`
-/// give the slope `b = d a / d s` of `a`'s estimate at a fixed lag, and with `a`'s
-/// variance at that lag `v`, `corr = b sd(s) / sqrt(v + b^2 var(s))` (a Gaussian's
-/// conditional mean and variance). Exact for a model linear in `s` near the fit; the
-/// step is 2 %, where the lag's profile is a parabola to well under that.
+/// the profile at unit dispersion, as the linear one is ([`scaled_profile`]): the
+/// variance of the scale `s`, the slope `b = d a / d s` of `a`'s estimate at a fixed
+/// lag, and with `a`'s variance at that lag `v`, `corr = b sd(s) / sqrt(v + b^2 var(s))`
+/// (a Gaussian's conditional mean and variance).
 fn lag_correlation(data: &Data, f: &Fit, a: usize, lag: usize, on: [bool; 3]) -> [Option<f64>; 3] {
     let none = [None; 3];
-    let Some(Extra::Lag { taus }) = f.spec.extras.get(lag) else {
-        return none;
-    };
-    if !on.contains(&true) {
+    if !matches!(f.spec.extras.get(lag), Some(Extra::Lag { .. })) || !on.contains(&true) {
         return none;
     }
-    let at = |s: f64| {
-        let scaled = taus.map(|pair| pair.map(|t| t * s));
-        data.fit(
-            &f.spec.replaced(lag, Extra::Lag { taus: scaled }),
-            None,
-            Depth::Profile,
-        )
-    };
-    let (Some(up), Some(down), Some(cov)) = (at(1.0 + LAG_STEP), at(1.0 - LAG_STEP), &f.cov) else {
+    let (Some(p), Some(cov)) = (scaled_profile(data, f, lag, None), &f.cov) else {
         return none;
     };
-    let curv = (up.chi2 + down.chi2 - 2.0 * f.chi2) / (LAG_STEP * LAG_STEP);
-    // a flat or bent-down profile (or NaN) gives no variance
-    if curv.is_nan() || curv <= 0.0 {
-        return none;
-    }
-    let var_s = 2.0 / curv;
     std::array::from_fn(|axis| {
         if !on[axis] {
             return None;
         }
         let i = column(f, a, axis)?;
-        let (u, d) = (
-            up.x.get(column(&up, a, axis)?)?,
-            down.x.get(column(&down, a, axis)?)?,
-        );
-        let r = from_profile((u - d) / (2.0 * LAG_STEP), var_s, cov[(i, i)]);
+        let r = from_profile(*p.slope.get(i)?, p.var_s, cov[(i, i)]);
         r.is_finite().then_some(r)
     })
 }

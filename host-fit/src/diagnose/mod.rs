@@ -246,12 +246,13 @@ fn findings_of(
 ) -> (Fit, Vec<Finding>) {
     'again: loop {
         let mut out = Vec::new();
+        let added = findings::profiled_variance(data, &f);
         for e in 0..f.spec.extras.len() {
             let Some(reduced) = search::without(data, &f, e) else {
                 continue;
             };
             let id = f.spec.extras[e].id();
-            match findings::finding(data, &f, &reduced, e) {
+            match findings::finding(data, &f, &reduced, e, &added) {
                 None => {
                     f = reduced;
                     continue 'again;

@@ -32,7 +32,10 @@ fn holding_a_fit_at_its_optimum_changes_nothing_and_elsewhere_costs() {
         basis: Basis::Poly { order: 3 },
         offset_order: None,
         cross: true,
-        extras: vec![Extra::Rate { tau_s: 30.0 }],
+        extras: vec![Extra::Rate {
+            tau_s: 30.0,
+            centred: false,
+        }],
     };
     let free = data.fit(&spec, None, Depth::Full).unwrap();
     let rate: Vec<usize> = (0..free.labels.len())

@@ -239,19 +239,19 @@ fn blobs_record_the_output_unit() {
 /// diagnosed blob in flight: the rate alone and the lag + rate unit within the aim of
 /// 0.05 mg on every seed (the lag + rate unit's seed 4 flew at 0.073 mg while a quintic of
 /// all twelve coefficients was the only order above the stops' count, see
-/// docs/diagnosis.md); the hysteresis + rate unit is printed, not held (the split of `r`
-/// and the hysteresis on chamber ramps limits it to 0.036-0.059 mg).
+/// docs/diagnosis.md), and the hysteresis + rate unit too (it flew at 0.036-0.059 mg, 2 of
+/// 7, while the diagnosis described the rate through a causal low-pass, which trails the
+/// case where it turns a ramp: the fit took the trail into the hysteresis and `r_x` came
+/// out 0.9888 +- 0.0025 of the unit's; the centred slope, `regressors::centred_rates`,
+/// does not trail). On every unit the mean `r_x` over the seeds is within 3 sigma of the
+/// unit's.
 #[test]
 #[ignore = "full tier (cargo xtask test --full): 21 diagnoses and flights, 3 CPU-minutes"]
 fn rate_units_fly_within_the_aim_over_seeds() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let mut failed = Vec::new();
-    for (effect, need) in [
-        ("temp_rate", Some(7)),
-        ("thermal_lag+temp_rate", Some(7)),
-        ("hysteresis+temp_rate", None),
-    ] {
+    for effect in ["temp_rate", "thermal_lag+temp_rate", "hysteresis+temp_rate"] {
         let (mut line, mut rates) = (Vec::new(), Vec::new());
         for seed in 1..=7u64 {
             let unit = production(effect, seed);
@@ -266,14 +266,17 @@ fn rate_units_fly_within_the_aim_over_seeds() {
         }
         let (within, text) = within_aim(&line);
         println!("{effect}: {text} mg, {within} of 7 within 0.05 mg");
-        // printed, for the split (docs/diagnosis.md): the return's test holds it
+        // the split (docs/diagnosis.md), held below
         let (mean, sigma) = mean_and_sigma(&rates);
         println!(
             "{effect}: r_x / truth over {} seeds {mean:.4} +- {sigma:.4}",
             rates.len()
         );
-        if need.is_some_and(|n| within < n) {
+        if within < 7 {
             failed.push(format!("{effect}: {within} of 7 within 0.05 mg ({text})"));
+        }
+        if (mean - 1.0).abs() > 3.0 * sigma {
+            failed.push(format!("{effect}: r_x / truth {mean:.4} +- {sigma:.4}"));
         }
     }
     assert!(failed.is_empty(), "{}", failed.join("\n"));

@@ -352,7 +352,7 @@ fn structural_parameters(data: &Data, full: &Fit, e: usize, phi: f64) -> Vec<Par
                     .collect()
             }
         }
-        Extra::Rate { tau_s } => vec![p(Quantity::RateTau, tau_s, f64::NAN)],
+        Extra::Rate { tau_s, .. } => vec![p(Quantity::RateTau, tau_s, f64::NAN)],
         Extra::Hysteresis {
             threshold_c,
             initial,

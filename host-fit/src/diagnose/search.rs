@@ -428,12 +428,14 @@ impl<'a> Search<'_, 'a> {
     }
 
     /// The catalogue's search is over: its time constants estimated jointly (a lag
-    /// profiled before the rate beside it leaves a rest of its own making), then the
-    /// library's phase.
+    /// profiled before the rate beside it leaves a rest of its own making), a rate term
+    /// described by the centred slope where it fits better ([`profile::centred_rate`]),
+    /// then the library's phase.
     fn begin_library(&self, state: &mut State, reason: Termination) {
         state.catalogue_ended = Some(reason);
         state.ended = None;
         state.current = profile::refine_jointly(self.data, &state.current);
+        state.current = profile::centred_rate(self.data, &state.current);
         state.phase = Phase::Library;
     }
 

@@ -278,8 +278,12 @@ impl Data<'_> {
                 self.per_axis(d, Term::BendOffset, e, &|r, i| h[r][i]);
                 self.per_axis(d, Term::BendScale, e, &|r, i| obs[r].a[i] * h[r][i]);
             }
-            Extra::Rate { tau_s } => {
-                let m = self.means(&regressors::rates(self.rec, *tau_s));
+            Extra::Rate { tau_s, centred } => {
+                let m = self.means(&if *centred {
+                    regressors::centred_rates(self.rec, *tau_s)
+                } else {
+                    regressors::rates(self.rec, *tau_s)
+                });
                 self.per_axis(d, Term::Rate, e, &|r, _| m[r]);
             }
             Extra::Hysteresis {

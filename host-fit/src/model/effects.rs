@@ -34,10 +34,16 @@ pub enum Extra {
         /// Time constants per axis.
         taus: [[f64; 2]; 3],
     },
-    /// `temp_rate`: U0_i += r_i dT/dt, the rate estimated through a low-pass of `tau_s`.
+    /// `temp_rate`: U0_i += r_i dT/dt, the rate estimated as `tau_s` and `centred` say.
     Rate {
-        /// The rate estimator's time constant, s.
+        /// The rate estimator, s: negative, the firmware's zero-lag estimator of time
+        /// constant `-tau_s` that a blob flies with; positive, a low-pass of `tau_s`
+        /// (causal, as the search judges the effect) or, with `centred`, the slope over
+        /// `tau_s` on each side that the final model describes the unit's physics with
+        /// (`model::regressors::centred_rates`).
         tau_s: f64,
+        /// The centred slope (the host's, non-causal) rather than a causal estimator.
+        centred: bool,
     },
     /// `hysteresis`: a coefficient depends on the direction of the last temperature
     /// change: offsets (and, with `scale`, scale factors) shift by +-1/2 of a term.
@@ -235,8 +241,8 @@ impl Extra {
                     }
                 )
             }
-            Extra::Rate { tau_s } => {
-                format!("rate by the {}", rate_estimator(*tau_s))
+            Extra::Rate { tau_s, centred } => {
+                format!("rate by the {}", fitted_rate_estimator(*tau_s, *centred))
             }
             Extra::Hysteresis {
                 threshold_c,
@@ -287,12 +293,23 @@ impl Extra {
 
 /// The rate estimator a blob's `rate_tau_s` names, in words: `zero-lag estimator of 4 s`
 /// for a negative time constant (`firmware_core::temperature::Physics::rate_zero_lag`),
-/// else `4 s low-pass` (the one place that reads the sign for a person).
+/// else `4 s low-pass` (the firmware's reading of the sign).
 pub fn rate_estimator(tau_s: f64) -> String {
     if tau_s < 0.0 {
         format!("zero-lag estimator of {:.0} s", -tau_s)
     } else {
         format!("{tau_s:.0} s low-pass")
+    }
+}
+
+/// The rate estimator an [`Extra::Rate`] names, in words: the firmware's reading of its
+/// time constant ([`rate_estimator`]), or with `centred` the host's `centred slope over
+/// +-40 s` ([`crate::model::regressors::centred_rates`]).
+pub fn fitted_rate_estimator(tau_s: f64, centred: bool) -> String {
+    if centred {
+        format!("centred slope over +-{tau_s:.0} s")
+    } else {
+        rate_estimator(tau_s)
     }
 }
 
@@ -305,5 +322,15 @@ mod rate_estimator_tests {
     fn the_rate_estimator_is_named_by_its_sign() {
         assert_eq!(rate_estimator(-4.0), "zero-lag estimator of 4 s");
         assert_eq!(rate_estimator(40.0), "40 s low-pass");
+        // the final model's centred slope is not a low-pass
+        assert_eq!(
+            fitted_rate_estimator(40.0, true),
+            "centred slope over +-40 s"
+        );
+        assert_eq!(fitted_rate_estimator(40.0, false), "40 s low-pass");
+        assert_eq!(
+            fitted_rate_estimator(-4.0, false),
+            "zero-lag estimator of 4 s"
+        );
     }
 }

@@ -135,9 +135,11 @@ impl Flashed {
                     }
                     ph.lag_tau_s = taus[0][0];
                 }
-                Extra::Rate { tau_s } => {
+                // a centred slope never reaches here ([`rate_for_flight`]); if one did, the
+                // firmware would read it as a low-pass, so the flight's estimator is flown
+                Extra::Rate { tau_s, centred } => {
                     ph.rate = self.fit.term(e, Term::Rate);
-                    ph.rate_tau_s = *tau_s;
+                    ph.rate_tau_s = if *centred { -FLIGHT_RATE_TAU_S } else { *tau_s };
                 }
                 Extra::Hysteresis {
                     threshold_c,
@@ -231,9 +233,10 @@ impl Flashed {
 /// The rate estimator the blob carries, s: the zero-lag estimator of this time constant
 /// (flashed as `rate_tau_s = -4`), chosen for flight, not for the chamber (the other
 /// coefficients are refitted with it, `r` held). `r` is the unit's physics, an offset per
-/// C/s of its temperature's rate; the estimator only measures that rate. The low-pass
-/// estimator that fits a chamber recording best smooths its 10-s rows of a quantised
-/// sensor over tens of seconds, which in flight lags a fast change by as much (the twin's
+/// C/s of its temperature's rate; the estimator only measures that rate. A low-pass
+/// estimator fitted to a chamber recording (the search's; the final model's is a centred
+/// slope, `model::profile::centred_rate`) smooths its 10-s rows of a quantised sensor over
+/// tens of seconds, which in flight lags a fast change by as much (the twin's
 /// flight, warming and cooling at 5-8 C/min: 0.44 mg at the chamber's 40 s); a 2-s
 /// low-pass still trails by 2 s, `r` times 2 s times the temperature's acceleration as
 /// the case's 120-s time constant turns a ramp: 0.049 mg on the rate alone, 0.059 mg
@@ -253,8 +256,9 @@ impl Flashed {
 pub const FLIGHT_RATE_TAU_S: f64 = 4.0;
 
 /// `f` with its rate estimator the flight's ([`FLIGHT_RATE_TAU_S`], zero-lag), `r` held
-/// and every other coefficient refitted with it (`f` itself without a rate term, or when
-/// the refit is not determined). `r` is not refitted with the flight's estimator: on a
+/// and every other coefficient refitted with it (`f` at its own coefficients with the
+/// flight's estimator when the refit is not determined; `f` itself without a rate
+/// term). `r` is not refitted with the flight's estimator: on a
 /// chamber recording of a quantised sensor the fast estimator's noise dilutes the
 /// regression (the window means of a 2-s estimate scattered by a tenth of a 1 C/min ramp),
 /// so a refit shrinks `r`, by about 1 % alone and by 3-4 % beside a hysteresis, which
@@ -264,19 +268,28 @@ pub const FLIGHT_RATE_TAU_S: f64 = 4.0;
 /// hysteresis's coefficients) is refitted around it.
 fn rate_for_flight(data: &Data, f: Fit) -> Fit {
     let flight = -FLIGHT_RATE_TAU_S;
-    let at = f
-        .spec
-        .extras
-        .iter()
-        .position(|e| matches!(e, Extra::Rate { tau_s } if *tau_s != flight));
+    let at =
+        f.spec.extras.iter().position(
+            |e| matches!(e, Extra::Rate { tau_s, centred } if *centred || *tau_s != flight),
+        );
     let Some(i) = at else {
         return f;
     };
-    let spec = f.spec.replaced(i, Extra::Rate { tau_s: flight });
+    let spec = f.spec.replaced(
+        i,
+        Extra::Rate {
+            tau_s: flight,
+            centred: false,
+        },
+    );
     let held: Vec<usize> = (0..f.labels.len())
         .filter(|&j| f.labels[j].extra() == Some(i))
         .collect();
+    // never the host's centred slope in a blob: the firmware cannot look ahead, and it
+    // reads a positive time constant as a low-pass, which would trail by as much; where
+    // the refit is not determined the coefficients fly as estimated
     data.fit_holding(&spec, Some(&f.k_at), &f.x, &held)
+        .or_else(|| data.evaluate(&spec, Some(&f.k_at), &f.x))
         .unwrap_or(f)
 }
 

@@ -272,28 +272,26 @@ pub fn lagged(rec: &Recording, taus: &[[f64; 2]; 3]) -> [Vec<f64>; 3] {
     })
 }
 
-/// Per row, the rate estimate (C/s) with low-pass time constant `tau_s`.
+/// Per row, the rate estimate (C/s) of a causal estimator of time constant `tau_s`.
 ///
 /// Negative: the firmware's flight estimator, the zero-lag one of time constant
 /// `|tau_s|` (as the blob's `rate_tau_s` says it,
 /// `firmware_core::temperature::Physics::rate_zero_lag`), row by row what the firmware
 /// gives: 0 until it has settled after the start and after each stated power-on
-/// (`firmware_core::inflight::rate_settled`). Positive: the low-pass the diagnosis
-/// describes the unit's physics with, 0 until settled after the start only. Across a
-/// stated power-off both step the gap as the firmware does, so after a power-on in a
-/// ramp the low-pass already holds the ramp's rate; the firmware's hold after a
-/// power-on is its caution against one reading's noise, not the unit's physics: a unit
-/// switched on in a ramp feels the rate at once, and a regressor held at 0 there leaves
-/// the rate's whole effect in the residual (20 s at 80x the floor on a 1.5 C/min sweep),
-/// enough to make a hysteresis beside it look inadequate where it acts. The price: after
-/// a power-on in a soak the low-pass reads the settling of one quantised reading as a
-/// small rate, and across a gap on a bend it starts from the gap's mean rate. A positive
-/// time constant reaches a blob only when the refit with the flight's estimator fails
-/// (`model::flashed::rate_for_flight`); the firmware then holds where this does not, as
-/// it does for the `dTdt` of a discovered term (found with the zero-lag estimator held
-/// after the start only, [`crate::model::library::RATE_TAU_S`], flown with the
-/// flight's, or with the catalogue rate's estimator where the unit has one, a positive
-/// time constant when that rate's refit fell back).
+/// (`firmware_core::inflight::rate_settled`). Positive: a low-pass, 0 until settled
+/// after the start only: the estimator the search judges a `temp_rate` with, and which
+/// locates where the temperature moves ([`crate::model::data::Data::rate`]); the final
+/// model describes the unit's physics with [`centred_rates`]
+/// (`model::profile::centred_rate`). Across a stated power-off both step
+/// the gap as the firmware does, so after a power-on in a ramp the low-pass already
+/// holds the ramp's rate; the firmware's hold after a power-on is its caution against
+/// one reading's noise, not the unit's physics: a unit switched on in a ramp feels the
+/// rate at once, and a regressor held at 0 there leaves the rate's whole effect in the
+/// residual (20 s at 80x the floor on a 1.5 C/min sweep), enough to make a hysteresis
+/// beside it look inadequate where it acts. The `dTdt` of a discovered term is found
+/// with the zero-lag estimator held after the start only
+/// ([`crate::model::library::RATE_TAU_S`]) and flown with the flight's, or with the
+/// catalogue rate's estimator where the unit has one.
 pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
     let flight = tau_s < 0.0;
     let hold = if flight {
@@ -303,6 +301,82 @@ pub fn rates(rec: &Recording, tau_s: f64) -> Vec<f64> {
     };
     rates_of(rec, tau_s.abs(), flight, hold)
 }
+
+/// Per row, the temperature's rate (C/s) the unit's physics is described with: the
+/// slope of the least-squares line through the sensor's readings within `half_s` seconds
+/// of the row on both sides (on one side at the recording's ends and beside a gap longer
+/// than `half_s`; 0 where fewer than two readings differ in time).
+///
+/// Centred, not causal: the host has the whole recording, and a causal estimator trails
+/// the rate where the case turns a ramp (`model::profile::centred_rate` says what that
+/// cost). A centred slope does not trail: on a quadratic stretch of readings evenly
+/// spaced it is the derivative at the row, its error of the order of `half_s^2` times the
+/// third derivative, and its noise about `sigma sqrt(3 / n) / half_s` over `n` readings.
+/// The firmware cannot look ahead; it measures the same rate with its zero-lag estimator
+/// (`model::flashed::FLIGHT_RATE_TAU_S`), and `r` is the unit's, estimated here.
+///
+/// The sums run from an anchor moved every [`RESUM_ROWS`] rows and are then taken again,
+/// so that no rounding accumulates over a long recording: the slope holds to 1e-9
+/// relative of the direct sums (unit test).
+pub fn centred_rates(rec: &Recording, half_s: f64) -> Vec<f64> {
+    /// Least-squares sums of (time from the anchor, temperature).
+    #[derive(Default)]
+    struct Sums {
+        n: f64,
+        t: f64,
+        tt: f64,
+        y: f64,
+        ty: f64,
+    }
+    impl Sums {
+        fn add(&mut self, t: f64, y: f64, sign: f64) {
+            self.n += sign;
+            self.t += sign * t;
+            self.tt += sign * t * t;
+            self.y += sign * y;
+            self.ty += sign * t * y;
+        }
+        fn slope(&self) -> f64 {
+            if self.n < 2.0 {
+                return 0.0;
+            }
+            let sxx = self.tt - self.t * self.t / self.n;
+            let sxy = self.ty - self.t * self.y / self.n;
+            // readings at one instant (or within rounding of it) carry no slope
+            if sxx > 1e-9 * self.n {
+                sxy / sxx
+            } else {
+                0.0
+            }
+        }
+    }
+    let rows = &rec.rows;
+    let (mut lo, mut hi) = (0, 0);
+    let (mut sums, mut anchor) = (Sums::default(), 0.0);
+    let mut out = Vec::with_capacity(rows.len());
+    for (k, row) in rows.iter().enumerate() {
+        while let Some(r) = rows.get(hi).filter(|r| r.t_s <= row.t_s + half_s) {
+            sums.add(r.t_s - anchor, r.temp_c, 1.0);
+            hi += 1;
+        }
+        while let Some(r) = rows.get(lo).filter(|r| r.t_s < row.t_s - half_s) {
+            sums.add(r.t_s - anchor, r.temp_c, -1.0);
+            lo += 1;
+        }
+        if k % RESUM_ROWS == 0 {
+            anchor = row.t_s;
+            sums = Sums::default();
+            for r in rows.get(lo..hi).unwrap_or_default() {
+                sums.add(r.t_s - anchor, r.temp_c, 1.0);
+            }
+        }
+        out.push(sums.slope());
+    }
+    out
+}
+
+/// How often [`centred_rates`] takes its sums again from a new anchor, rows.
+const RESUM_ROWS: usize = 512;
 
 /// Where a rate regressor is held at 0 until its estimator has settled
 /// (`firmware_core::inflight::rate_settled`).
@@ -411,6 +485,72 @@ mod tests {
     use super::*;
     use crate::data::positions::Positions;
 
+    /// The centred slope is the derivative where the readings are even and the
+    /// temperature quadratic (no trail at a turn, where a causal estimator trails), exact
+    /// on a line however the rows fall (uneven, a gap longer than the window), and 0
+    /// where a window holds one reading.
+    #[test]
+    fn the_centred_slope_is_the_derivative_without_a_trail() {
+        let even: Vec<f64> = (0..400).map(|k| 10.0 * f64::from(k)).collect();
+        let quad = |t: f64| 20.0 + 0.01 * t - 2e-6 * t * t;
+        let r = centred_rates(&recording_of("", &even, quad), 60.0);
+        for (k, t) in even
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| (60.0..=3930.0).contains(*t))
+        {
+            let want = 0.01 - 4e-6 * t;
+            assert!((r[k] - want).abs() < 1e-9, "row {k}: {} for {want}", r[k]);
+        }
+        // the causal low-pass of 30 s trails a turning ramp by about its time constant
+        let lp = rates(&recording_of("", &even, quad), 30.0);
+        assert!(
+            (lp[200] - (0.01 - 4e-6 * 2000.0)).abs() > 6e-5,
+            "{}",
+            lp[200]
+        );
+        // uneven rows, a gap of 300 s, a line: exact wherever two readings are in reach
+        let mut uneven: Vec<f64> = (0..300)
+            .map(|k| 10.0 * f64::from(k) + 3.0 * (f64::from(k) * 1.7).sin())
+            .filter(|t| !(1000.0..1300.0).contains(t))
+            .collect();
+        uneven.push(5000.0);
+        let r = centred_rates(&recording_of("", &uneven, |t| -40.0 + 0.0167 * t), 40.0);
+        for (k, v) in r.iter().enumerate().take(uneven.len() - 1) {
+            assert!((v - 0.0167).abs() < 1e-9, "row {k} at {}: {v}", uneven[k]);
+        }
+        assert_eq!(r.last(), Some(&0.0), "one reading in its window: no slope");
+    }
+
+    /// Over a long recording far from t = 0 the running sums, taken again every
+    /// [`RESUM_ROWS`] rows, hold the slope of the direct sums to 1e-9 relative (a day at
+    /// 1 Hz starting at 1e6 s, a noisy sine).
+    #[test]
+    fn the_centred_slope_holds_over_a_long_recording() {
+        let ts: Vec<f64> = (0..86_400).map(|k| 1e6 + f64::from(k)).collect();
+        let temp = |t: f64| 20.0 + 30.0 * (t / 5000.0).sin() + 0.03 * (t * 12.9898).sin();
+        let rec = recording_of("", &ts, temp);
+        let r = centred_rates(&rec, 90.0);
+        let mut worst: f64 = 0.0;
+        for k in (0..ts.len()).step_by(997) {
+            let w: Vec<&crate::data::recording::Row> = rec
+                .rows
+                .iter()
+                .filter(|x| (x.t_s - rec.rows[k].t_s).abs() <= 90.0)
+                .collect();
+            let n = w.len() as f64;
+            let (mt, my) = (
+                w.iter().map(|x| x.t_s).sum::<f64>() / n,
+                w.iter().map(|x| x.temp_c).sum::<f64>() / n,
+            );
+            let sxy: f64 = w.iter().map(|x| (x.t_s - mt) * (x.temp_c - my)).sum();
+            let sxx: f64 = w.iter().map(|x| (x.t_s - mt).powi(2)).sum();
+            let direct = sxy / sxx;
+            worst = worst.max((r[k] - direct).abs() / direct.abs().max(1e-4));
+        }
+        assert!(worst < 1e-9, "worst relative departure {worst:e}");
+    }
+
     /// A case settling after a ramp (10 C below its set point, one time constant of
     /// 600 s), logged every 10 s, the unit powered off from 120 s to 720 s (no rows).
     /// With an element lagging the case by 600 s its temperature is
@@ -473,7 +613,7 @@ mod tests {
     fn recording_of(header: &str, times: &[f64], temp: impl Fn(f64) -> f64) -> Recording {
         let mut csv = format!("{header}t_s,position,temp_c,ux_v,uy_v,uz_v\n");
         for &t in times {
-            csv.push_str(&format!("{t:.1},TP1,{:.6},0.0,0.0,1.0\n", temp(t)));
+            csv.push_str(&format!("{t:.6},TP1,{:.12},0.0,0.0,1.0\n", temp(t)));
         }
         Recording::from_reader(
             std::path::Path::new("g.csv"),

@@ -86,10 +86,10 @@ fn describe(f: &Fit) -> String {
     for e in &f.spec.extras {
         if let Extra::Lag { taus } = e {
             s.push_str(&format!(" + thermal_lag {:.0} s", taus[0][0]));
-        } else if let Extra::Rate { tau_s } = e {
+        } else if let Extra::Rate { tau_s, centred } = e {
             s.push_str(&format!(
                 " + temp_rate ({})",
-                crate::model::effects::rate_estimator(*tau_s)
+                crate::model::effects::fitted_rate_estimator(*tau_s, *centred)
             ));
         }
     }
@@ -261,7 +261,7 @@ pub fn fit_dynamic(rec: &Recording) -> Result<DynamicFit<'_>> {
     for (e, x) in f.spec.extras.iter().enumerate() {
         if let Extra::Lag { taus } = x {
             lag_tau_s = Some(taus[0][0]);
-        } else if let Extra::Rate { tau_s } = x {
+        } else if let Extra::Rate { tau_s, .. } = x {
             rate = Some((f.term(e, Term::Rate), *tau_s));
         }
     }
